@@ -1,0 +1,372 @@
+"""The skiving setup: crossed-axes pair of cutter and workpiece, and its ideal kinematics.
+
+Machine frame (fixed): z along the work axis; the common perpendicular of the two axes along +x;
+the cutter centre (the rake-face centre) at (a, 0, s), s being the carriage position along z.
+The cutter axis is the work axis turned about x by ``tilt = -Sigma``, so that at the mesh point
+(x = r_2, y = 0) the cutter's tooth direction lies along the gear's (domain.md section 1:
+Sigma = beta2 + beta0 external, beta2 - beta0 internal; a rotation R_x(psi) turns a tooth direction
+of helix angle gamma in the y-z plane into gamma - psi).
+
+Ideal motion (domain.md section 1, "Kinematics"), with the signs of this frame:
+
+    phi2 = ratio * phi0 - 2 pi s / p_z2
+
+``ratio`` (signed, magnitude z0/z2) follows from equal velocity of both gears normal to the common
+tooth direction at the mesh point (the common rack); the helix term turns the work back as the
+cutter climbs so the same space stays under the cutter.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from cutting.errors import Problem
+from cutting.flank import SIDES, flank_points
+from cutting.gear import MIN_TIP_THICKNESS, Gear
+
+#: Below this shaft angle the sliding speed is under ~3.5 % of the cutter's peripheral speed:
+#: the edge rubs instead of cutting. Modern practice is 10-30 deg (domain.md section 1).
+MIN_SHAFT_ANGLE = math.radians(2.0)
+
+
+def rot_x(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def rot_z(angle: np.ndarray | float) -> np.ndarray:
+    """Rotation matrices about z, shape (..., 3, 3)."""
+    a = np.asarray(angle, dtype=float)
+    c, s = np.cos(a), np.sin(a)
+    zero, one = np.zeros_like(a), np.ones_like(a)
+    return np.stack([np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)], -2)
+
+
+def default_cutter_tip_diameter(gear: Gear, cutter: Gear, centre_distance: float) -> float:
+    """Tip diameter that makes the cutter cut the gear's root diameter at the finishing centre distance."""
+    if gear.internal:
+        return 2 * (gear.root_radius - centre_distance)
+    return 2 * (centre_distance - gear.root_radius)
+
+
+@dataclass(frozen=True)
+class SkivingSetup:
+    """Geometry and kinematics of skiving ``gear`` with ``cutter``.
+
+    Parameters
+    ----------
+    gear: the workpiece (z2)
+    cutter: the cutter as an external gear with the gear's normal basic rack (z0, beta0, x0);
+        its ``tip_diameter`` None means "cut exactly the gear's root at the finishing centre distance"
+    tool_speed: n0 [rpm]
+    axial_feed: s [mm per workpiece revolution], always > 0; ``feed_direction`` sets the sign
+    passes: radial infeed increments [mm] from first touch of the blank; the last is the finishing pass
+    feed_direction: "down" (cutter moves towards -z) or "up"
+    clearance: axial distance [mm] added before and after the engagement zone on every pass
+    """
+
+    gear: Gear
+    cutter: Gear
+    tool_speed: float
+    axial_feed: float
+    passes: tuple[float, ...]
+    feed_direction: str = "down"
+    clearance: float = 1.0
+    _cutter_tip: float | None = field(default=None, repr=False)
+
+    # ---- axes ---------------------------------------------------------------------------------
+    @cached_property
+    def shaft_angle(self) -> float:
+        """Sigma = beta2 + beta0 (external) or beta2 - beta0 (internal) [rad], signed."""
+        b2, b0 = self.gear.helix_angle, self.cutter.helix_angle
+        return b2 - b0 if self.gear.internal else b2 + b0
+
+    @cached_property
+    def tilt(self) -> float:
+        """Rotation of the cutter axis about the common perpendicular x [rad]."""
+        return -self.shaft_angle
+
+    @cached_property
+    def cutter_axis(self) -> np.ndarray:
+        return rot_x(self.tilt) @ np.array([0.0, 0.0, 1.0])
+
+    @cached_property
+    def final_centre_distance(self) -> float:
+        """Centre distance of the finishing pass [mm], through the common rack of crossed gears:
+
+        external a = r2 + r0 + (x2 + x0) mn;  internal a = r2 - r0 - (x2 + x0) mn.
+        At this distance the cutter generates the gear's nominal tooth thickness.
+        """
+        g, c = self.gear, self.cutter
+        shift = (g.x + c.x) * g.mn
+        if g.internal:
+            return g.reference_radius - c.reference_radius - shift
+        return g.reference_radius + c.reference_radius + shift
+
+    @cached_property
+    def cutter_tip_diameter(self) -> float:
+        """d_a0 [mm]: as given in the job, else the one that cuts the gear's root diameter."""
+        if self.cutter.tip_diameter is not None:
+            return float(self.cutter.tip_diameter)
+        return default_cutter_tip_diameter(self.gear, self.cutter, self.final_centre_distance)
+
+    @cached_property
+    def generated_root_diameter(self) -> float:
+        """Root diameter the cutter tip cuts at the finishing centre distance [mm].
+
+        The closest (external) / farthest (internal) point of the tilted tip circle from the work
+        axis lies on the common perpendicular, so it is a -/+ r_a0 exactly.
+        """
+        ra0 = self.cutter_tip_diameter / 2
+        a = self.final_centre_distance
+        return 2 * (a + ra0) if self.gear.internal else 2 * (a - ra0)
+
+    @cached_property
+    def touch_centre_distance(self) -> float:
+        """Centre distance at which the cutter tip first touches the blank (tip diameter) [mm]."""
+        ra0 = self.cutter_tip_diameter / 2
+        return self.gear.tip_radius - ra0 if self.gear.internal else self.gear.tip_radius + ra0
+
+    @cached_property
+    def full_depth(self) -> float:
+        """Radial infeed from first touch to the finishing centre distance [mm]."""
+        return abs(self.touch_centre_distance - self.final_centre_distance)
+
+    @cached_property
+    def pass_depths(self) -> tuple[float, ...]:
+        """Cumulative radial depth after each pass, measured from first touch [mm]."""
+        return tuple(float(v) for v in np.cumsum(self.passes))
+
+    @cached_property
+    def pass_centre_distances(self) -> tuple[float, ...]:
+        """Centre distance of every pass [mm]; the last equals the finishing one when the passes sum to the depth."""
+        sign = 1.0 if self.gear.internal else -1.0
+        return tuple(self.touch_centre_distance + sign * d for d in self.pass_depths)
+
+    # ---- kinematics ---------------------------------------------------------------------------
+    @cached_property
+    def speed_ratio(self) -> float:
+        """Signed omega2 / omega0 of the generating motion (magnitude z0/z2).
+
+        Equal velocity of both bodies at the mesh point along the direction that lies in the tangent
+        plane and is normal to the common tooth direction.
+        """
+        g = self.gear
+        p = np.array([g.reference_radius, 0.0, 0.0])
+        centre = np.array([self.final_centre_distance, 0.0, 0.0])
+        tooth_dir = np.array([0.0, math.sin(g.helix_angle), math.cos(g.helix_angle)])
+        n = np.cross([1.0, 0.0, 0.0], tooth_dir)
+        v_work = np.cross([0.0, 0.0, 1.0], p) @ n
+        v_tool = np.cross(self.cutter_axis, p - centre) @ n
+        return float(v_tool / v_work)
+
+    @cached_property
+    def differential_rotation_per_mm(self) -> float:
+        """Additional work rotation B4 per mm of carriage travel along +z: -2 pi / p_z2 [rad/mm] (0 spur)."""
+        return 0.0 if self.gear.helix_angle == 0.0 else -2 * math.pi / self.gear.lead
+
+    @cached_property
+    def work_speed(self) -> float:
+        """n2 = n0 z0 / z2 [rpm] (magnitude)."""
+        return self.tool_speed * self.cutter.teeth / self.gear.teeth
+
+    @cached_property
+    def cutting_speed(self) -> float:
+        """Cutting speed at the pitch point v = pi d0 n0 sin|Sigma| / cos(beta2) [m/min]."""
+        d0 = self.cutter.reference_diameter
+        return math.pi * d0 * self.tool_speed * math.sin(abs(self.shaft_angle)) / math.cos(self.gear.helix_angle) / 1000
+
+    def engagement_half_length(self, centre_distance: float) -> float:
+        """Axial half-extent [mm] of the part of the cutter tip circle inside the blank at ``centre_distance``.
+
+        Tip circle point t: (a -/+ r_a0 cos t, r_a0 sin t cos(Sigma), r_a0 sin t sin(Sigma)) in the frame
+        above; inside the blank where its distance to the work axis passes the blank's tip radius.
+        """
+        ra0 = self.cutter_tip_diameter / 2
+        t = np.linspace(0.0, math.pi, 20001)
+        sgn = 1.0 if self.gear.internal else -1.0
+        x = centre_distance + sgn * ra0 * np.cos(t)
+        y = ra0 * np.sin(t) * math.cos(self.shaft_angle)
+        r = np.hypot(x, y)
+        inside = r >= self.gear.tip_radius if self.gear.internal else r <= self.gear.tip_radius
+        if not inside.any():
+            return 0.0
+        return float(ra0 * np.sin(t[inside]).max() * abs(math.sin(self.shaft_angle)))
+
+    @cached_property
+    def pass_travel(self) -> tuple[float, ...]:
+        """Axial carriage travel of every pass: face width + engagement + 2 x clearance [mm]."""
+        return tuple(
+            self.gear.face_width + 2 * self.engagement_half_length(a) + 2 * self.clearance
+            for a in self.pass_centre_distances
+        )
+
+    @cached_property
+    def pass_times(self) -> tuple[float, ...]:
+        """Machine time of every pass [s] at feed s per work revolution and work speed n2."""
+        feed_rate = self.axial_feed * self.work_speed / 60.0  # mm/s
+        return tuple(travel / feed_rate for travel in self.pass_travel)
+
+    # ---- interference -------------------------------------------------------------------------
+    def edge_points(self, samples: int = 40) -> np.ndarray:
+        """Involute cutting edge of cutter tooth 0 in the cutter frame (rake plane z0 = 0), shape (n, 3).
+
+        Both flanks from the depth that reaches the gear's root up to the tip, plus the tip land.
+        """
+        c = self.cutter
+        ra0 = self.cutter_tip_diameter / 2
+        r_low = max(c.base_radius * 1.0000001, ra0 - self.full_depth - 0.25 * c.mn)
+        radii = np.linspace(r_low, ra0, samples)
+        xi = np.sqrt(radii**2 - c.base_radius**2) / c.base_radius
+        pts = [flank_points(c, side, xi, 0.0, 0) for side in SIDES]
+        half = float(c.half_thickness_angle(ra0))
+        ang = np.linspace(-half, half, max(3, samples // 4))
+        pts.append(np.stack([ra0 * np.cos(ang), ra0 * np.sin(ang), np.zeros_like(ang)], -1))
+        return np.concatenate(pts)
+
+    @cached_property
+    def cutter_phase(self) -> float:
+        """Cutter angle offset that points cutter tooth 0 at the mesh point when phi0 = 0 [rad]."""
+        return 0.0 if self.gear.internal else math.pi
+
+    @cached_property
+    def work_phase(self) -> float:
+        """Work angle offset that puts the centre of space 0 (between teeth 0 and 1) on +x when phi2 = 0 [rad]."""
+        return -math.pi / self.gear.teeth
+
+    def cutter_pose(self, phi0: np.ndarray, s: np.ndarray | float = 0.0, centre_distance: float | None = None):
+        """Ideal pose of the cutter frame in the rotating work frame.
+
+        Returns ``(R, t)`` with shapes (n, 3, 3) and (n, 3) such that a cutter-frame point p maps to
+        ``R @ p + t`` in the work frame, for cutter angles ``phi0`` [rad] and carriage positions ``s`` [mm].
+        phi2 = speed_ratio * phi0 + differential_rotation_per_mm * s + work_phase.
+        """
+        phi0 = np.atleast_1d(np.asarray(phi0, dtype=float))
+        s_arr = np.broadcast_to(np.asarray(s, dtype=float), phi0.shape)
+        a = self.final_centre_distance if centre_distance is None else centre_distance
+        phi2 = self.speed_ratio * phi0 + self.differential_rotation_per_mm * s_arr + self.work_phase
+        back = rot_z(-phi2)
+        rot = np.einsum("sij,jk,skl->sil", back, rot_x(self.tilt), rot_z(phi0 + self.cutter_phase))
+        centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1)
+        return rot, np.einsum("sij,sj->si", back, centre)
+
+    def edge_in_work_frame(self, edge: np.ndarray, phi0: np.ndarray) -> np.ndarray:
+        """Edge points of every cutter tooth for each cutter angle, in the work frame (s = 0), shape (n, m, 3)."""
+        c = self.cutter
+        teeth = np.arange(c.teeth)
+        per_tooth = np.einsum("kij,nj->kni", rot_z(2 * np.pi * teeth / c.teeth), edge).reshape(-1, 3)
+        rot, t = self.cutter_pose(phi0)
+        return np.einsum("sij,nj->sni", rot, per_tooth) + t[:, None, :]
+
+    def edge_intrusion(self, steps: int = 720) -> float:
+        """Deepest intrusion [mm] of the ideal involute edge into the nominal gear material.
+
+        Samples one cutter pitch of the ideal motion at the finishing centre distance (the motion is
+        periodic with it). Material: the involute region between the gear's form limit and its tip,
+        and everything beyond the root circle. Positive means the edge would cut the gear's teeth.
+        """
+        g = self.gear
+        phi0 = np.linspace(0.0, 2 * np.pi / self.cutter.teeth, steps, endpoint=False)
+        pts = self.edge_in_work_frame(self.edge_points(), phi0).reshape(-1, 3)
+        r = np.hypot(pts[:, 0], pts[:, 1])
+        theta = np.arctan2(pts[:, 1], pts[:, 0])
+        fillet = g.rack.rho_f * (1 - math.sin(g.alpha_n)) * g.mn
+        if g.internal:
+            lo, hi = max(g.tip_radius, g.base_radius), g.root_radius - fillet
+            beyond_root = r - g.root_radius
+        else:
+            lo, hi = max(g.rack_form_diameter / 2, g.base_radius), g.tip_radius
+            beyond_root = g.root_radius - r
+        depth = beyond_root
+        band = (r >= lo) & (r <= hi)
+        if band.any():
+            rb = r[band]
+            centre = 2 * np.pi / g.lead * pts[band, 2] if g.helix_angle else 0.0
+            d = theta[band] - centre
+            pitch = 2 * np.pi / g.teeth
+            d = d - pitch * np.round(d / pitch)
+            psi = np.asarray(g.half_thickness_angle(rb))
+            inside = (psi - np.abs(d)) * rb  # arc depth into the tooth, > 0 inside material
+            depth = np.concatenate([beyond_root, inside])
+        return float(depth.max())
+
+
+#: Intrusion of the ideal involute edge into the nominal teeth that counts as interference [mm].
+#: The involute edge itself deviates from the exact (conjugate) edge by a few micrometres
+#: (domain.md section 1), so the threshold sits well above that.
+INTERFERENCE_TOLERANCE = 0.010
+
+
+def check_setup(setup: SkivingSetup) -> list[Problem]:
+    """Every reason why ``setup.cutter`` cannot skive ``setup.gear`` with ``setup.passes``."""
+    g, c = setup.gear, setup.cutter
+    out: list[Problem] = []
+    sigma = math.degrees(setup.shaft_angle)
+    if abs(setup.shaft_angle) < MIN_SHAFT_ANGLE:
+        need = "a helical cutter" if g.helix_angle == 0 else f"a cutter helix other than {math.degrees(g.helix_angle):+.1f} deg"
+        out.append(Problem(
+            "cutter.helix_angle", round(math.degrees(c.helix_angle), 6),
+            f"the shaft angle Sigma = {sigma:+.2f} deg leaves no cutting speed (skiving cuts by the sliding "
+            f"of crossed axes, v ~ sin(Sigma))",
+            f"choose {need} so that |Sigma| >= {math.degrees(MIN_SHAFT_ANGLE):.0f} deg (10-30 deg is usual)",
+        ))
+        return out
+    if g.internal and setup.final_centre_distance <= c.mn:
+        out.append(Problem(
+            "cutter.teeth", c.teeth,
+            f"the cutter (d0 = {c.reference_diameter:.3f} mm) is too large for the internal gear "
+            f"(d2 = {g.reference_diameter:.3f} mm): centre distance {setup.final_centre_distance:.3f} mm",
+            "use a cutter with clearly fewer teeth than the gear (z0 <= z2 - 10 is a safe start)",
+        ))
+        return out
+    ra0 = setup.cutter_tip_diameter / 2
+    if ra0 <= c.base_radius:
+        out.append(Problem(
+            "cutter.tip_diameter", round(setup.cutter_tip_diameter, 6),
+            f"the cutter tip circle lies inside its base circle d_b0 = {c.base_diameter:.3f} mm, so it has no involute edge",
+            f"use a tip diameter above {c.base_diameter:.3f} mm",
+        ))
+        return out
+    tip_thickness = c.normal_thickness_at(setup.cutter_tip_diameter)
+    if tip_thickness < MIN_TIP_THICKNESS * c.mn:
+        out.append(Problem(
+            "cutter.tip_diameter", round(setup.cutter_tip_diameter, 6),
+            f"the cutter teeth are pointed: tip land {tip_thickness:.3f} mm < {MIN_TIP_THICKNESS} mn "
+            f"(cutter profile shift {c.x:+.3f})",
+            "reduce the cutter tip diameter or its profile shift, or cut a shallower gear",
+        ))
+    if c.tip_diameter is not None and g.root_diameter is not None:
+        gen = setup.generated_root_diameter
+        if abs(gen - g.root_diameter_value) > 0.01:
+            want = default_cutter_tip_diameter(g, c, setup.final_centre_distance)
+            out.append(Problem(
+                "cutter.tip_diameter", c.tip_diameter,
+                f"at the finishing centre distance {setup.final_centre_distance:.4f} mm this cutter cuts a root "
+                f"diameter of {gen:.4f} mm, but gear.root_diameter = {g.root_diameter_value:.4f} mm",
+                f"set cutter.tip_diameter = {want:.4f} or drop one of the two keys",
+            ))
+    if not setup.passes or any(p <= 0 for p in setup.passes):
+        out.append(Problem("process.passes", list(setup.passes), "every radial infeed increment must be > 0 mm",
+                           "give a list of positive increments, e.g. [2.0, 1.5, 0.8, 0.2]"))
+    elif sum(setup.passes) > setup.full_depth + 1e-6:
+        out.append(Problem(
+            "process.passes", list(setup.passes),
+            f"the increments sum to {sum(setup.passes):.4f} mm, deeper than the tooth: from first touch of the "
+            f"blank to the finishing centre distance is {setup.full_depth:.4f} mm",
+            f"make the increments sum to at most {setup.full_depth:.4f} mm",
+        ))
+    intrusion = setup.edge_intrusion()
+    if intrusion > INTERFERENCE_TOLERANCE:
+        where = "tip interference with the internal gear's teeth" if g.internal else "the cutter edge undercuts or fouls the teeth"
+        out.append(Problem(
+            "cutter.teeth", c.teeth,
+            f"{where}: the cutting edge enters the nominal teeth by {intrusion:.3f} mm under the ideal motion "
+            f"(Sigma = {sigma:+.1f} deg)",
+            "use fewer cutter teeth" + (" (internal gears need z2 - z0 well above 8)" if g.internal else "")
+            + ", another cutter helix angle, or change the profile shifts",
+        ))
+    return out

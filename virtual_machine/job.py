@@ -1,0 +1,310 @@
+"""Job files: TOML describing the gear (or thread) to make, the cutter, the process and the machine.
+
+Every key is declared once in the tables below with its type, unit, default and check; the loader
+reports *all* problems of a job at once, each naming the key, the value, why and what would be valid.
+Units: mm, degrees, rpm, Hz; helix angles signed, right hand positive.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from cutting.errors import InputError, Problem
+from cutting.gear import Gear, check_gear
+from cutting.skiving import SkivingSetup, check_setup
+
+REQUIRED = object()
+STRUCTURES = ("mechanical", "hydraulic-differential", "hydraulic-shaft", "mechatronic")
+SYNCHRONIZATIONS = ("equal-coordinates", "master-slave")
+MAX_HELIX = 45.0
+
+
+@dataclass(frozen=True)
+class Key:
+    """One job key: expected type, default (REQUIRED if none), unit, meaning and an optional check.
+
+    ``check(value)`` returns ``None`` when fine, else ``(reason, hint)``.
+    """
+
+    kind: type | tuple[type, ...]
+    default: Any
+    unit: str
+    doc: str
+    check: Callable[[Any], tuple[str, str] | None] | None = None
+
+
+def _positive(v: float) -> tuple[str, str] | None:
+    return None if v > 0 else ("must be > 0", "give a positive number")
+
+
+def _helix(v: float) -> tuple[str, str] | None:
+    if abs(v) < MAX_HELIX:
+        return None
+    return (f"|helix angle| must be below {MAX_HELIX:.0f} deg (ISO 1328-1 validity, skiving practice)",
+            "use a helix angle between -45 and +45 deg")
+
+
+def _pressure(v: float) -> tuple[str, str] | None:
+    return None if 10.0 <= v <= 35.0 else ("normal pressure angle outside 10..35 deg", "20 deg is the standard value")
+
+
+def _one_of(*options: str) -> Callable[[str], tuple[str, str] | None]:
+    def check(v: str) -> tuple[str, str] | None:
+        return None if v in options else ("not a known value", "use one of " + ", ".join(repr(o) for o in options))
+
+    return check
+
+
+def _at_least(lo: float) -> Callable[[float], tuple[str, str] | None]:
+    def check(v: float) -> tuple[str, str] | None:
+        return None if v >= lo else (f"must be >= {lo:g}", f"give a value of at least {lo:g}")
+
+    return check
+
+
+def _passes(v: list) -> tuple[str, str] | None:
+    if not v:
+        return ("needs at least one pass", "e.g. [2.0, 1.5, 0.8, 0.2]; the last is the finishing pass")
+    if not all(isinstance(p, int | float) and not isinstance(p, bool) for p in v):
+        return ("must be a list of numbers [mm]", "e.g. [2.0, 1.5, 0.8, 0.2]")
+    if any(p <= 0 for p in v):
+        return ("every radial infeed increment must be > 0 mm", "drop zero or negative increments")
+    return None
+
+
+def _change_gears(v: list) -> tuple[str, str] | None:
+    if len(v) < 4 or not all(isinstance(t, int) and not isinstance(t, bool) and 12 <= t <= 200 for t in v):
+        return ("must list at least 4 tooth counts, integers 12..200", "e.g. [20, 23, 24, 25, 30, ...]")
+    return None
+
+
+GEAR_KEYS: dict[str, Key] = {
+    "teeth": Key(int, REQUIRED, "", "number of teeth z2", _at_least(5)),
+    "normal_module": Key(float, REQUIRED, "mm", "normal module mn", _positive),
+    "pressure_angle": Key(float, 20.0, "deg", "normal pressure angle alpha_n", _pressure),
+    "helix_angle": Key(float, 0.0, "deg", "reference helix angle beta2, right hand positive", _helix),
+    "face_width": Key(float, REQUIRED, "mm", "face width b", _positive),
+    "profile_shift": Key(float, 0.0, "", "profile shift coefficient x2 (positive towards the tooth tip)"),
+    "internal": Key(bool, False, "", "true for an internal (ring) gear"),
+    "tip_diameter": Key(float, None, "mm", "tip diameter da2 (default from the ISO 53 A basic rack)", _positive),
+    "root_diameter": Key(float, None, "mm", "root diameter df2 (default from the ISO 53 A basic rack)", _positive),
+}
+
+CUTTER_KEYS: dict[str, Key] = {
+    "teeth": Key(int, REQUIRED, "", "number of cutter teeth z0", _at_least(8)),
+    "helix_angle": Key(float, REQUIRED, "deg", "cutter helix angle beta0, right hand positive", _helix),
+    "profile_shift": Key(float, 0.0, "", "cutter profile shift x0"),
+    "tip_diameter": Key(float, None, "mm", "cutter tip diameter da0 (default: cuts the gear's root exactly)", _positive),
+    "edge": Key(str, "conjugate", "", "cutting edge: 'conjugate' (envelope method) or 'involute'",
+                _one_of("conjugate", "involute")),
+}
+
+PROCESS_KEYS: dict[str, Key] = {
+    "tool_speed": Key(float, REQUIRED, "rpm", "cutter spindle speed n0", _positive),
+    "axial_feed": Key(float, REQUIRED, "mm/rev", "axial feed s per workpiece revolution", _positive),
+    "passes": Key(list, REQUIRED, "mm", "radial infeed increments from first touch; the last is the finishing pass",
+                  _passes),
+    "feed_direction": Key(str, "down", "", "'down' (towards -z) or 'up'", _one_of("down", "up")),
+    "material": Key(str, "16MnCr5", "", "workpiece material (cutting forces, later issues)"),
+    "clearance": Key(float, 1.0, "mm", "axial approach and overrun added to the engagement zone", _at_least(0.0)),
+}
+
+THREAD_KEYS: dict[str, Key] = {
+    "lead": Key(float, REQUIRED, "mm", "thread lead P", _positive),
+    "hand": Key(str, "right", "", "'right' or 'left'", _one_of("right", "left")),
+    "diameter": Key(float, REQUIRED, "mm", "thread major diameter (sets the spindle speed)", _positive),
+    "length": Key(float, 30.0, "mm", "threaded length", _positive),
+}
+
+THREAD_PROCESS_KEYS: dict[str, Key] = {
+    "cutting_speed": Key(float, REQUIRED, "m/min", "cutting speed at the thread diameter", _positive),
+    "passes": PROCESS_KEYS["passes"],
+    "material": PROCESS_KEYS["material"],
+}
+
+MACHINE_KEYS: dict[str, Key] = {
+    "structure": Key(str, "mechatronic", "", "kinematic structure (seed 000 figs 1-4)", _one_of(*STRUCTURES)),
+    "synchronization": Key(str, "equal-coordinates", "", "electronic synchronisation scheme (seed 001)",
+                           _one_of(*SYNCHRONIZATIONS)),
+    "adaptive_correction": Key(bool, True, "", "sign/phase discriminator correction of the electronic links"),
+    "c1": Key(float, 1.0, "", "product of the fixed ratios of the generating chain (B1 -> B2)", _positive),
+    "c2": Key(float, None, "", "product of the fixed ratios of the tooth-line chain (lead screw -> B4); "
+              "default 1/24 for mechanical/hydraulic structures, 1 for mechatronic", _positive),
+    "c3": Key(float, 0.5, "", "product of the fixed ratios motor M1 -> tool spindle (speed chain)", _positive),
+    "c4": Key(float, 0.5, "mm", "carriage travel per work revolution with is = 1 (feed chain)", _positive),
+    "i_sigma": Key(float, 0.5, "", "differential ratio with one input held (bevel differential, carrier out)",
+                   _positive),
+    "lead_screw_pitch": Key(float, 10.0, "mm", "lead-screw pitch t_TV", _positive),
+    "motor_speed": Key(float, 1450.0, "rpm", "main motor speed n_M (4-pole induction motor)", _positive),
+    "reference_frequency": Key(float, 100e6, "Hz", "reference pulse generator 14 (seed 000) / 5 (seed 001)",
+                               _positive),
+    "command_pulses_per_rev": Key(int, 10000, "1/rev", "command pulses per revolution of each servo axis",
+                                  _at_least(1)),
+    "encoder_lines": Key(int, 5000, "1/rev", "lines of the encoders (4 counts per line)", _at_least(1)),
+    "hydraulic_steps_per_rev": Key(int, 3600, "1/rev", "steps per revolution of a hydraulic stepping motor",
+                                   _at_least(1)),
+    "hydraulic_max_windows": Key(int, 20000, "", "largest window count of a coding disc of a pulse generator",
+                                 _at_least(1)),
+    "change_gears": Key(list, None, "", "change-gear set (tooth counts; repeat a count for two gears)", _change_gears),
+    "i0": Key(float, 1.0, "", "thread group: ratio motor M2 -> lead screw (seed 001 fig 2)", _positive),
+    "i01": Key(float, 1.0, "", "thread group: product of the fixed ratios spindle -> lead screw (seed 001)",
+               _positive),
+}
+
+#: c2 default per structure (see MACHINE_KEYS["c2"]).
+C2_DEFAULT = {"mechanical": 1 / 24, "hydraulic-differential": 1 / 24, "hydraulic-shaft": 1 / 24, "mechatronic": 1.0}
+
+SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
+SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
+
+
+def _type_name(kind: type | tuple[type, ...]) -> str:
+    names = {int: "an integer", float: "a number", bool: "true or false", str: "a string", list: "a list"}
+    return names.get(kind, str(kind))
+
+
+def _coerce(raw: Any, key: Key) -> tuple[Any, str | None]:
+    """Value of the declared type, or an error message. Integers are accepted where numbers are."""
+    if key.kind is float:
+        if isinstance(raw, bool) or not isinstance(raw, int | float):
+            return None, "expected a number"
+        if not math.isfinite(raw):
+            return None, "expected a finite number"
+        return float(raw), None
+    if key.kind is int:
+        if isinstance(raw, bool) or not isinstance(raw, int):
+            return None, "expected an integer"
+        return raw, None
+    if not isinstance(raw, key.kind):
+        return None, f"expected {_type_name(key.kind)}"
+    return raw, None
+
+
+def parse_section(name: str, table: Any, keys: dict[str, Key], problems: list[Problem]) -> dict[str, Any]:
+    """Typed values of one section with defaults filled in; problems appended, never raised here."""
+    out: dict[str, Any] = {}
+    if not isinstance(table, dict):
+        problems.append(Problem(name, table, "must be a table", f"write it as [{name}] with key = value lines"))
+        return out
+    for k in table:
+        if k not in keys:
+            close = [c for c in keys if c.replace("_", "") in k.replace("_", "") or k.replace("_", "") in c.replace("_", "")]
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            problems.append(Problem(f"{name}.{k}", table[k], "unknown key",
+                                    hint + "valid keys: " + ", ".join(keys)))
+    for k, key in keys.items():
+        if k not in table:
+            if key.default is REQUIRED:
+                problems.append(Problem(f"{name}.{k}", None, f"missing required key ({key.doc})",
+                                        f"add {k} = <{_type_name(key.kind)}{', ' + key.unit if key.unit else ''}>"))
+            else:
+                out[k] = key.default
+            continue
+        value, err = _coerce(table[k], key)
+        if err:
+            problems.append(Problem(f"{name}.{k}", table[k], err, f"{key.doc} [{key.unit or '-'}]"))
+            continue
+        if key.check is not None:
+            bad = key.check(value)
+            if bad:
+                problems.append(Problem(f"{name}.{k}", table[k], bad[0], bad[1]))
+                continue
+        out[k] = value
+    return out
+
+
+@dataclass(frozen=True)
+class Job:
+    """A parsed, validated job. ``kind`` is "gear" or "thread"; unused sections are None."""
+
+    source: str
+    kind: str
+    machine: dict[str, Any]
+    process: dict[str, Any]
+    gear: Gear | None = None
+    cutter: Gear | None = None
+    cutter_options: dict[str, Any] | None = None
+    thread: dict[str, Any] | None = None
+
+    @property
+    def skiving(self) -> SkivingSetup:
+        if self.gear is None or self.cutter is None:
+            raise ValueError(f"{self.source} is a thread job; it has no skiving setup")
+        p = self.process
+        return SkivingSetup(self.gear, self.cutter, p["tool_speed"], p["axial_feed"], tuple(p["passes"]),
+                            p["feed_direction"], p["clearance"])
+
+
+def _gear_from(values: dict[str, Any]) -> Gear:
+    return Gear(
+        teeth=values["teeth"], normal_module=values["normal_module"],
+        pressure_angle=math.radians(values["pressure_angle"]), helix_angle=math.radians(values["helix_angle"]),
+        face_width=values["face_width"], profile_shift=values["profile_shift"], internal=values["internal"],
+        tip_diameter=values["tip_diameter"], root_diameter=values["root_diameter"],
+    )
+
+
+def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
+    """Validate a job given as a dict (as read from TOML). Raises :class:`InputError` with every problem."""
+    problems: list[Problem] = []
+    is_thread = "thread" in data
+    if is_thread and "gear" in data:
+        raise InputError(Problem("thread", "[thread] and [gear]", "a job describes either a gear or a thread",
+                                 "remove one of the two sections"), source)
+    sections = SECTIONS_THREAD if is_thread else SECTIONS_GEAR
+    for name in data:
+        if name not in sections:
+            problems.append(Problem(name, "[section]", "unknown section",
+                                    "valid sections: " + ", ".join(f"[{s}]" for s in sections)))
+    parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
+    machine = parsed["machine"]
+    if "structure" in machine and machine.get("c2") is None:
+        machine["c2"] = C2_DEFAULT[machine["structure"]]
+    if problems:
+        raise InputError(problems, source)
+    if is_thread:
+        return Job(source, "thread", machine, parsed["process"], thread=parsed["thread"])
+
+    g, c = parsed["gear"], parsed["cutter"]
+    gear = _gear_from(g)
+    problems += check_gear(gear, "gear")
+    cutter = Gear(
+        teeth=c["teeth"], normal_module=gear.mn, pressure_angle=gear.alpha_n,
+        helix_angle=math.radians(c["helix_angle"]), face_width=gear.mn * 10, profile_shift=c["profile_shift"],
+        tip_diameter=c["tip_diameter"],
+    )
+    if cutter.x < cutter.min_profile_shift - 1e-9:
+        problems.append(Problem("cutter.profile_shift", cutter.x,
+                                f"the cutter's own teeth would be undercut (z0 = {cutter.z} needs "
+                                f"x0 >= {cutter.min_profile_shift:+.4f})", "use more cutter teeth or a larger x0"))
+    job = Job(source, "gear", machine, parsed["process"], gear=gear, cutter=cutter,
+              cutter_options={"edge": c["edge"]})
+    if not problems:
+        problems += check_setup(job.skiving)
+    if problems:
+        raise InputError(problems, source)
+    return job
+
+
+def load_job(path: str | Path) -> Job:
+    """Read and validate a TOML job file."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(Problem("job", str(p), "no such file", "give the path of a .toml job file, e.g. "
+                                 "assets/jobs/spur_external.toml"))
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(Problem("job", str(p), f"not valid TOML: {exc}", "fix the syntax at the line shown"),
+                         str(p)) from exc
+    return parse_job(data, str(p))
+
+
+def default_job_path() -> Path:
+    """The default job shipped in assets/jobs/ beside the packages."""
+    return Path(__file__).resolve().parent.parent / "assets" / "jobs" / "default.toml"
