@@ -141,8 +141,8 @@ MACHINE_KEYS: dict[str, Key] = {
                    _positive),
     "lead_screw_pitch": Key(float, 10.0, "mm", "lead-screw pitch t_TV", _positive),
     "motor_speed": Key(float, 1450.0, "rpm", "main motor speed n_M (4-pole induction motor)", _positive),
-    "reference_frequency": Key(float, 100e6, "Hz", "reference pulse generator 14 (seed 000) / 5 (seed 001)",
-                               _positive),
+    "reference_frequency": Key(float, 1e9, "Hz", "reference pulse generator 14 (seed 000) / 5 (seed 001); high "
+                               "enough that kv, a multiple of z0, still sets n0 to better than 1 %", _positive),
     "command_pulses_per_rev": Key(int, 10000, "1/rev", "command pulses per revolution of each servo axis",
                                   _at_least(1)),
     "encoder_lines": Key(int, 5000, "1/rev", "lines of the encoders (4 counts per line)", _at_least(1)),
@@ -158,6 +158,14 @@ MACHINE_KEYS: dict[str, Key] = {
 
 #: c2 default per structure (see MACHINE_KEYS["c2"]).
 C2_DEFAULT = {"mechanical": 1 / 24, "hydraulic-differential": 1 / 24, "hydraulic-shaft": 1 / 24, "mechatronic": 1.0}
+
+
+def machine_constants(machine: dict[str, Any], structure: str) -> dict[str, Any]:
+    """The [machine] values with the structure-dependent defaults resolved for ``structure``."""
+    out = dict(machine)
+    if out.get("c2") is None:
+        out["c2"] = C2_DEFAULT.get(structure, 1.0)
+    return out
 
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
@@ -263,8 +271,6 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
                                     "valid sections: " + ", ".join(f"[{s}]" for s in sections)))
     parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
     machine = parsed["machine"]
-    if "structure" in machine and machine.get("c2") is None:
-        machine["c2"] = C2_DEFAULT[machine["structure"]]
     if problems:
         raise InputError(problems, source)
     if is_thread:

@@ -1,0 +1,97 @@
+"""The ``skive`` command line. It only assembles stages and prints; the work lives in the packages."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import click
+
+from cutting.errors import InputError
+from virtual_machine.job import STRUCTURES, default_job_path, load_job
+from virtual_machine.setup_sheet import SetupSheet, setup_sheet
+
+
+def _fail(exc: Exception) -> None:
+    click.echo(f"skive: {exc}", err=True)
+    sys.exit(2)
+
+
+@click.group(help="skive: a physics-based virtual gear-skiving machine.")
+def main() -> None:
+    pass
+
+
+def format_sheet(sheet: SetupSheet, source: str) -> str:
+    """The setting sheet as a setter reads it."""
+    lines = [f"SETTING SHEET  {source}", f"structure: {sheet.structure}", ""]
+    g = sheet.geometry
+    if sheet.kind == "gear":
+        gear, cut = g["gear"], g["cutter"]
+        kind = "internal" if gear["internal"] else "external"
+        lines += [
+            f"gear    z2 = {gear['z']} {kind}, mn = {gear['mn_mm']:g} mm, alpha_n = {gear['alpha_n_deg']:g} deg, "
+            f"beta = {gear['beta_deg']:+g} deg, d = {gear['d_mm']:.4f}, db = {gear['db_mm']:.4f}, "
+            f"da = {gear['da_mm']:.4f}, df = {gear['df_mm']:.4f} mm, lead = {gear['lead_mm']:.3f} mm",
+            f"cutter  z0 = {cut['z']}, beta0 = {cut['beta_deg']:+g} deg, x0 = {cut['x']:+g}, d0 = {cut['d_mm']:.4f}, "
+            f"da0 = {cut['da_mm']:.4f} mm, edge = {cut['edge']}",
+            f"shaft angle Sigma = {g['shaft_angle_deg']:+.4f} deg, finishing centre distance a = "
+            f"{g['centre_distance_final_mm']:.4f} mm, generated root diameter {g['generated_root_diameter_mm']:.4f} mm",
+            f"speed ratio n2/n0 = {g['speed_ratio_n2_n0']:+.9f}, work speed {g['work_speed_rpm']:.2f} rpm, "
+            f"differential rotation {g['differential_rotation_deg_per_mm']:+.6f} deg per mm of carriage travel (+z)",
+        ]
+    else:
+        lines.append(f"thread  lead P = {g['lead_mm']:g} mm {g['hand']} hand, d = {g['diameter_mm']:g} mm, "
+                     f"spindle {g['spindle_speed_rpm']:.1f} rpm")
+    lines += ["", "settings:"]
+    for name, s in sheet.settings.items():
+        real = "-" if s.realised is None else f"{s.realised:.9g}"
+        how = s.realisation.get("describe") or ", ".join(f"{k} {v}" for k, v in s.realisation.items()
+                                                       if k not in ("set",) and v is not None)
+        lines.append(f"  {name:3s} = {s.value:<16.9g} {s.formula:24s} {s.organ}")
+        lines.append(f"        set {real}  ({how}); error {s.relative_error:+.2e}")
+        if s.effect:
+            lines.append("        -> " + ", ".join(f"{k} {v:+.4g}" for k, v in s.effect.items()))
+    lines += ["", "constants: " + ", ".join(f"{k} = {v:g}" for k, v in sheet.constants.items()), "", "passes:"]
+    for p in sheet.passes:
+        extra = (f"a = {p['centre_distance_mm']:.4f} mm, depth {p['depth_mm']:.3f} mm, travel {p['travel_mm']:.2f} mm, "
+                 if "centre_distance_mm" in p else "")
+        lines.append(f"  {p['pass']}: infeed {p['infeed_mm']:.3f} mm, {extra}time {p['time_s']:.1f} s")
+    s = sheet.sanity
+    lines += ["", f"sanity: cutting speed {s['cutting_speed_m_min']:.1f} m/min, total machine time "
+              f"{s['total_time_s']:.1f} s"]
+    lines += [f"note: {n}" for n in sheet.notes]
+    return "\n".join(lines)
+
+
+@main.command(help="Print the machine setting sheet of JOB (default: the default job).")
+@click.argument("job", required=False, type=click.Path(path_type=Path))
+@click.option("--structure", type=click.Choice(STRUCTURES), help="Machine structure (default: the job's).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
+def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
+    path = job or default_job_path()
+    try:
+        sheet = setup_sheet(load_job(path), structure)
+    except (InputError, ValueError) as exc:
+        _fail(exc)
+    if as_json:
+        click.echo(json.dumps(_finite(sheet.to_json()), indent=2, allow_nan=False))
+    else:
+        click.echo(format_sheet(sheet, str(path)))
+
+
+def _finite(obj: object) -> object:
+    """JSON has no inf: an infinite lead (spur gear) becomes null."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+if __name__ == "__main__":
+    main()
