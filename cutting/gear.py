@@ -256,7 +256,9 @@ class Gear:
         if self.internal:
             return self.tip_diameter_value
         lift = self.mn * (self.rack.straight_dedendum(self.alpha_n) - self.x)
-        roll = self.base_radius * math.tan(self.transverse_pressure_angle) - lift / math.sin(self.transverse_pressure_angle)
+        roll = self.base_radius * math.tan(self.transverse_pressure_angle) - lift / math.sin(
+            self.transverse_pressure_angle
+        )
         return 2 * math.sqrt(self.base_radius**2 + max(roll, 0.0) ** 2)
 
     # ---- pitch-point helpers ------------------------------------------------------------------
@@ -275,30 +277,55 @@ def check_gear(gear: Gear, prefix: str = "gear") -> list[Problem]:
     da, df, db = gear.tip_diameter_value, gear.root_diameter_value, gear.base_diameter
     if gear.internal:
         if not df > da:
-            out.append(Problem(f"{prefix}.root_diameter", round(df, 6),
-                               f"an internal gear's root diameter must exceed its tip diameter {da:.4f} mm",
-                               f"give a root diameter above {da:.4f} mm"))
+            out.append(
+                Problem(
+                    f"{prefix}.root_diameter",
+                    round(df, 6),
+                    f"an internal gear's root diameter must exceed its tip diameter {da:.4f} mm",
+                    f"give a root diameter above {da:.4f} mm",
+                )
+            )
             return out
         if da <= db:
-            out.append(Problem(f"{prefix}.tip_diameter", round(da, 6),
-                               f"the internal gear's tip circle lies inside its base circle d_b = {db:.4f} mm: "
-                               "the tooth tips would not be involute",
-                               f"use a tip diameter above {db:.4f} mm (or a positive profile shift less than {gear.x:+.3f})"))
+            out.append(
+                Problem(
+                    f"{prefix}.tip_diameter",
+                    round(da, 6),
+                    f"the internal gear's tip circle lies inside its base circle d_b = {db:.4f} mm: "
+                    "the tooth tips would not be involute",
+                    f"use a tip diameter above {db:.4f} mm (or a profile shift below {gear.x:+.3f})",
+                )
+            )
             return out
     else:
         if not da > df > 0:
-            out.append(Problem(f"{prefix}.tip_diameter", round(da, 6),
-                               f"the tip diameter must exceed the root diameter {df:.4f} mm, which must be > 0",
-                               "check tip_diameter, root_diameter and profile_shift"))
+            out.append(
+                Problem(
+                    f"{prefix}.tip_diameter",
+                    round(da, 6),
+                    f"the tip diameter must exceed the root diameter {df:.4f} mm, which must be > 0",
+                    "check tip_diameter, root_diameter and profile_shift",
+                )
+            )
             return out
         if gear.x < gear.min_profile_shift - 1e-9:
-            out.append(Problem(f"{prefix}.profile_shift", gear.x,
-                               f"the gear is undercut: z = {gear.z} needs x >= {gear.min_profile_shift:+.4f} to be free "
-                               f"of undercut by the basic rack (hf = {gear.rack.hf}, rho_f = {gear.rack.rho_f})",
-                               f"use profile_shift >= {gear.min_profile_shift:+.4f} or more teeth"))
+            out.append(
+                Problem(
+                    f"{prefix}.profile_shift",
+                    gear.x,
+                    f"the gear is undercut: z = {gear.z} needs x >= {gear.min_profile_shift:+.4f} to be free "
+                    f"of undercut by the basic rack (hf = {gear.rack.hf}, rho_f = {gear.rack.rho_f})",
+                    f"use profile_shift >= {gear.min_profile_shift:+.4f} or more teeth",
+                )
+            )
     if gear.tip_normal_thickness < MIN_TIP_THICKNESS * gear.mn:
-        out.append(Problem(f"{prefix}.tip_diameter", round(da, 6),
-                           f"the teeth are pointed: normal tooth thickness at the tip s_an = {gear.tip_normal_thickness:.4f} mm "
-                           f"< {MIN_TIP_THICKNESS} mn = {MIN_TIP_THICKNESS * gear.mn:.4f} mm",
-                           "reduce the tip diameter (external) / enlarge it (internal), or reduce the profile shift"))
+        out.append(
+            Problem(
+                f"{prefix}.tip_diameter",
+                round(da, 6),
+                f"the teeth are pointed: normal tooth thickness at the tip s_an = {gear.tip_normal_thickness:.4f} mm "
+                f"< {MIN_TIP_THICKNESS} mn = {MIN_TIP_THICKNESS * gear.mn:.4f} mm",
+                "reduce the tip diameter (external) / enlarge it (internal), or reduce the profile shift",
+            )
+        )
     return out

@@ -307,66 +307,103 @@ def check_setup(setup: SkivingSetup) -> list[Problem]:
     out: list[Problem] = []
     sigma = math.degrees(setup.shaft_angle)
     if abs(setup.shaft_angle) < MIN_SHAFT_ANGLE:
-        need = "a helical cutter" if g.helix_angle == 0 else f"a cutter helix other than {math.degrees(g.helix_angle):+.1f} deg"
-        out.append(Problem(
-            "cutter.helix_angle", round(math.degrees(c.helix_angle), 6),
-            f"the shaft angle Sigma = {sigma:+.2f} deg leaves no cutting speed (skiving cuts by the sliding "
-            f"of crossed axes, v ~ sin(Sigma))",
-            f"choose {need} so that |Sigma| >= {math.degrees(MIN_SHAFT_ANGLE):.0f} deg (10-30 deg is usual)",
-        ))
+        need = (
+            "a helical cutter"
+            if g.helix_angle == 0
+            else f"a cutter helix other than {math.degrees(g.helix_angle):+.1f} deg"
+        )
+        out.append(
+            Problem(
+                "cutter.helix_angle",
+                round(math.degrees(c.helix_angle), 6),
+                f"the shaft angle Sigma = {sigma:+.2f} deg leaves no cutting speed (skiving cuts by the sliding "
+                f"of crossed axes, v ~ sin(Sigma))",
+                f"choose {need} so that |Sigma| >= {math.degrees(MIN_SHAFT_ANGLE):.0f} deg (10-30 deg is usual)",
+            )
+        )
         return out
     if g.internal and setup.final_centre_distance <= c.mn:
-        out.append(Problem(
-            "cutter.teeth", c.teeth,
-            f"the cutter (d0 = {c.reference_diameter:.3f} mm) is too large for the internal gear "
-            f"(d2 = {g.reference_diameter:.3f} mm): centre distance {setup.final_centre_distance:.3f} mm",
-            "use a cutter with clearly fewer teeth than the gear (z0 <= z2 - 10 is a safe start)",
-        ))
+        out.append(
+            Problem(
+                "cutter.teeth",
+                c.teeth,
+                f"the cutter (d0 = {c.reference_diameter:.3f} mm) is too large for the internal gear "
+                f"(d2 = {g.reference_diameter:.3f} mm): centre distance {setup.final_centre_distance:.3f} mm",
+                "use a cutter with clearly fewer teeth than the gear (z0 <= z2 - 10 is a safe start)",
+            )
+        )
         return out
     ra0 = setup.cutter_tip_diameter / 2
     if ra0 <= c.base_radius:
-        out.append(Problem(
-            "cutter.tip_diameter", round(setup.cutter_tip_diameter, 6),
-            f"the cutter tip circle lies inside its base circle d_b0 = {c.base_diameter:.3f} mm, so it has no involute edge",
-            f"use a tip diameter above {c.base_diameter:.3f} mm",
-        ))
+        out.append(
+            Problem(
+                "cutter.tip_diameter",
+                round(setup.cutter_tip_diameter, 6),
+                f"the cutter tip circle lies inside its base circle d_b0 = {c.base_diameter:.3f} mm: "
+                "no involute edge",
+                f"use a tip diameter above {c.base_diameter:.3f} mm",
+            )
+        )
         return out
     tip_thickness = c.normal_thickness_at(setup.cutter_tip_diameter)
     if tip_thickness < MIN_TIP_THICKNESS * c.mn:
-        out.append(Problem(
-            "cutter.tip_diameter", round(setup.cutter_tip_diameter, 6),
-            f"the cutter teeth are pointed: tip land {tip_thickness:.3f} mm < {MIN_TIP_THICKNESS} mn "
-            f"(cutter profile shift {c.x:+.3f})",
-            "reduce the cutter tip diameter or its profile shift, or cut a shallower gear",
-        ))
+        out.append(
+            Problem(
+                "cutter.tip_diameter",
+                round(setup.cutter_tip_diameter, 6),
+                f"the cutter teeth are pointed: tip land {tip_thickness:.3f} mm < {MIN_TIP_THICKNESS} mn "
+                f"(cutter profile shift {c.x:+.3f})",
+                "reduce the cutter tip diameter or its profile shift, or cut a shallower gear",
+            )
+        )
     if c.tip_diameter is not None and g.root_diameter is not None:
         gen = setup.generated_root_diameter
         if abs(gen - g.root_diameter_value) > 0.01:
             want = default_cutter_tip_diameter(g, c, setup.final_centre_distance)
-            out.append(Problem(
-                "cutter.tip_diameter", c.tip_diameter,
-                f"at the finishing centre distance {setup.final_centre_distance:.4f} mm this cutter cuts a root "
-                f"diameter of {gen:.4f} mm, but gear.root_diameter = {g.root_diameter_value:.4f} mm",
-                f"set cutter.tip_diameter = {want:.4f} or drop one of the two keys",
-            ))
+            out.append(
+                Problem(
+                    "cutter.tip_diameter",
+                    c.tip_diameter,
+                    f"at the finishing centre distance {setup.final_centre_distance:.4f} mm this cutter cuts a root "
+                    f"diameter of {gen:.4f} mm, but gear.root_diameter = {g.root_diameter_value:.4f} mm",
+                    f"set cutter.tip_diameter = {want:.4f} or drop one of the two keys",
+                )
+            )
     if not setup.passes or any(p <= 0 for p in setup.passes):
-        out.append(Problem("process.passes", list(setup.passes), "every radial infeed increment must be > 0 mm",
-                           "give a list of positive increments, e.g. [2.0, 1.5, 0.8, 0.2]"))
+        out.append(
+            Problem(
+                "process.passes",
+                list(setup.passes),
+                "every radial infeed increment must be > 0 mm",
+                "give a list of positive increments, e.g. [2.0, 1.5, 0.8, 0.2]",
+            )
+        )
     elif sum(setup.passes) > setup.full_depth + 1e-6:
-        out.append(Problem(
-            "process.passes", list(setup.passes),
-            f"the increments sum to {sum(setup.passes):.4f} mm, deeper than the tooth: from first touch of the "
-            f"blank to the finishing centre distance is {setup.full_depth:.4f} mm",
-            f"make the increments sum to at most {setup.full_depth:.4f} mm",
-        ))
+        out.append(
+            Problem(
+                "process.passes",
+                list(setup.passes),
+                f"the increments sum to {sum(setup.passes):.4f} mm, deeper than the tooth: from first touch of the "
+                f"blank to the finishing centre distance is {setup.full_depth:.4f} mm",
+                f"make the increments sum to at most {setup.full_depth:.4f} mm",
+            )
+        )
     intrusion = setup.edge_intrusion()
     if intrusion > INTERFERENCE_TOLERANCE:
-        where = "tip interference with the internal gear's teeth" if g.internal else "the cutter edge undercuts or fouls the teeth"
-        out.append(Problem(
-            "cutter.teeth", c.teeth,
-            f"{where}: the cutting edge enters the nominal teeth by {intrusion:.3f} mm under the ideal motion "
-            f"(Sigma = {sigma:+.1f} deg)",
-            "use fewer cutter teeth" + (" (internal gears need z2 - z0 well above 8)" if g.internal else "")
-            + ", another cutter helix angle, or change the profile shifts",
-        ))
+        where = (
+            "tip interference with the internal gear's teeth"
+            if g.internal
+            else "the cutter edge undercuts or fouls the teeth"
+        )
+        out.append(
+            Problem(
+                "cutter.teeth",
+                c.teeth,
+                f"{where}: the cutting edge enters the nominal teeth by {intrusion:.3f} mm under the ideal motion "
+                f"(Sigma = {sigma:+.1f} deg)",
+                "use fewer cutter teeth"
+                + (" (internal gears need z2 - z0 well above 8)" if g.internal else "")
+                + ", another cutter helix angle, or change the profile shifts",
+            )
+        )
     return out

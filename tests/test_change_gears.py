@@ -112,9 +112,7 @@ def assert_admissible(train: GearTrain, gs: ChangeGearSet) -> None:
 
 
 @pytest.mark.parametrize("stages", [1, 2])
-@pytest.mark.parametrize(
-    "exact", [Fraction(23, 40), Fraction(25, 60), Fraction(23, 20), Fraction(37, 97), Fraction(1)]
-)
+@pytest.mark.parametrize("exact", [Fraction(23, 40), Fraction(25, 60), Fraction(23, 20), Fraction(37, 97), Fraction(1)])
 def test_exact_ratio_is_hit_exactly(exact: Fraction, stages: int) -> None:
     train = choose_change_gears(float(exact), stages=stages)
     assert train.exact_ratio == exact
@@ -150,9 +148,7 @@ def test_known_answers_and_describe() -> None:
     assert one.describe() == "a/b = 23/40 = 0.575000000 (error +0.0e+00)"
     near = choose_change_gears(math.pi / 3)
     assert near.describe() == "a/b * c/d = 34/61 * 62/33 = 1.047193244 (error -4.1e-06)"
-    assert near.relative_error == pytest.approx(
-        (34 * 62 / (61 * 33) - math.pi / 3) / (math.pi / 3), rel=1e-12
-    )
+    assert near.relative_error == pytest.approx((34 * 62 / (61 * 33) - math.pi / 3) / (math.pi / 3), rel=1e-12)
 
 
 def test_gear_train_properties() -> None:

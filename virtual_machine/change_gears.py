@@ -443,12 +443,8 @@ def _reachable(gear_set: ChangeGearSet, stages: int) -> tuple[float, float]:
     if stages == 1:
         return float(tab.ratio[0]), float(tab.ratio[-1])
     clr = gear_set.min_clearance_teeth
-    rows_lo, _, low = _branch_and_bound(
-        tab, clr, np.zeros(n, dtype=np.int64), lambda r, c: _ratio_of(tab, r, c), 0.0
-    )
-    _, _, neg_high = _branch_and_bound(
-        tab, clr, np.full(n, n, dtype=np.int64), lambda r, c: -_ratio_of(tab, r, c), 0.0
-    )
+    rows_lo, _, low = _branch_and_bound(tab, clr, np.zeros(n, dtype=np.int64), lambda r, c: _ratio_of(tab, r, c), 0.0)
+    _, _, neg_high = _branch_and_bound(tab, clr, np.full(n, n, dtype=np.int64), lambda r, c: -_ratio_of(tab, r, c), 0.0)
     if not rows_lo.size:
         return math.inf, -math.inf
     return low, -neg_high
@@ -465,9 +461,7 @@ def _check_set_and_stages(gear_set: ChangeGearSet, stages: int) -> None:
             _problem("gear_set", gear_set, "not a ChangeGearSet", "pass STANDARD_SET or a ChangeGearSet(...)")
         )
     if not _is_int(stages) or stages not in (1, 2):
-        raise ValueError(
-            _problem("stages", stages, "unsupported number of stages", "use 1 (a/b) or 2 ((a/b)*(c/d))")
-        )
+        raise ValueError(_problem("stages", stages, "unsupported number of stages", "use 1 (a/b) or 2 ((a/b)*(c/d))"))
     if len(gear_set.teeth) < 2 * stages:
         raise ValueError(
             _problem(
@@ -503,11 +497,7 @@ def reachable_range(gear_set: ChangeGearSet = STANDARD_SET, stages: int = 2) -> 
     _check_set_and_stages(gear_set, stages)
     low, high = _reachable(gear_set, stages)
     if low > high:
-        engagement = (
-            f" and the engagement rule (clearance {gear_set.min_clearance_teeth} teeth)"
-            if stages == 2
-            else ""
-        )
+        engagement = f" and the engagement rule (clearance {gear_set.min_clearance_teeth} teeth)" if stages == 2 else ""
         raise ValueError(
             _problem(
                 f"{gear_set.name}",

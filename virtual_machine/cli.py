@@ -43,25 +43,33 @@ def format_sheet(sheet: SetupSheet, source: str) -> str:
             f"differential rotation {g['differential_rotation_deg_per_mm']:+.6f} deg per mm of carriage travel (+z)",
         ]
     else:
-        lines.append(f"thread  lead P = {g['lead_mm']:g} mm {g['hand']} hand, d = {g['diameter_mm']:g} mm, "
-                     f"spindle {g['spindle_speed_rpm']:.1f} rpm")
+        lines.append(
+            f"thread  lead P = {g['lead_mm']:g} mm {g['hand']} hand, d = {g['diameter_mm']:g} mm, "
+            f"spindle {g['spindle_speed_rpm']:.1f} rpm"
+        )
     lines += ["", "settings:"]
     for name, s in sheet.settings.items():
         real = "-" if s.realised is None else f"{s.realised:.9g}"
-        how = s.realisation.get("describe") or ", ".join(f"{k} {v}" for k, v in s.realisation.items()
-                                                       if k not in ("set",) and v is not None)
+        how = s.realisation.get("describe") or ", ".join(
+            f"{k} {v}" for k, v in s.realisation.items() if k not in ("set",) and v is not None
+        )
         lines.append(f"  {name:3s} = {s.value:<16.9g} {s.formula:24s} {s.organ}")
         lines.append(f"        set {real}  ({how}); error {s.relative_error:+.2e}")
         if s.effect:
             lines.append("        -> " + ", ".join(f"{k} {v:+.4g}" for k, v in s.effect.items()))
     lines += ["", "constants: " + ", ".join(f"{k} = {v:g}" for k, v in sheet.constants.items()), "", "passes:"]
     for p in sheet.passes:
-        extra = (f"a = {p['centre_distance_mm']:.4f} mm, depth {p['depth_mm']:.3f} mm, travel {p['travel_mm']:.2f} mm, "
-                 if "centre_distance_mm" in p else "")
+        extra = (
+            f"a = {p['centre_distance_mm']:.4f} mm, depth {p['depth_mm']:.3f} mm, travel {p['travel_mm']:.2f} mm, "
+            if "centre_distance_mm" in p
+            else ""
+        )
         lines.append(f"  {p['pass']}: infeed {p['infeed_mm']:.3f} mm, {extra}time {p['time_s']:.1f} s")
     s = sheet.sanity
-    lines += ["", f"sanity: cutting speed {s['cutting_speed_m_min']:.1f} m/min, total machine time "
-              f"{s['total_time_s']:.1f} s"]
+    lines += [
+        "",
+        f"sanity: cutting speed {s['cutting_speed_m_min']:.1f} m/min, total machine time {s['total_time_s']:.1f} s",
+    ]
     lines += [f"note: {n}" for n in sheet.notes]
     return "\n".join(lines)
 

@@ -45,8 +45,10 @@ def _positive(v: float) -> tuple[str, str] | None:
 def _helix(v: float) -> tuple[str, str] | None:
     if abs(v) < MAX_HELIX:
         return None
-    return (f"|helix angle| must be below {MAX_HELIX:.0f} deg (ISO 1328-1 validity, skiving practice)",
-            "use a helix angle between -45 and +45 deg")
+    return (
+        f"|helix angle| must be below {MAX_HELIX:.0f} deg (ISO 1328-1 validity, skiving practice)",
+        "use a helix angle between -45 and +45 deg",
+    )
 
 
 def _pressure(v: float) -> tuple[str, str] | None:
@@ -99,16 +101,24 @@ CUTTER_KEYS: dict[str, Key] = {
     "teeth": Key(int, REQUIRED, "", "number of cutter teeth z0", _at_least(8)),
     "helix_angle": Key(float, REQUIRED, "deg", "cutter helix angle beta0, right hand positive", _helix),
     "profile_shift": Key(float, 0.0, "", "cutter profile shift x0"),
-    "tip_diameter": Key(float, None, "mm", "cutter tip diameter da0 (default: cuts the gear's root exactly)", _positive),
-    "edge": Key(str, "conjugate", "", "cutting edge: 'conjugate' (envelope method) or 'involute'",
-                _one_of("conjugate", "involute")),
+    "tip_diameter": Key(
+        float, None, "mm", "cutter tip diameter da0 (default: cuts the gear's root exactly)", _positive
+    ),
+    "edge": Key(
+        str,
+        "conjugate",
+        "",
+        "cutting edge: 'conjugate' (envelope method) or 'involute'",
+        _one_of("conjugate", "involute"),
+    ),
 }
 
 PROCESS_KEYS: dict[str, Key] = {
     "tool_speed": Key(float, REQUIRED, "rpm", "cutter spindle speed n0", _positive),
     "axial_feed": Key(float, REQUIRED, "mm/rev", "axial feed s per workpiece revolution", _positive),
-    "passes": Key(list, REQUIRED, "mm", "radial infeed increments from first touch; the last is the finishing pass",
-                  _passes),
+    "passes": Key(
+        list, REQUIRED, "mm", "radial infeed increments from first touch; the last is the finishing pass", _passes
+    ),
     "feed_direction": Key(str, "down", "", "'down' (towards -z) or 'up'", _one_of("down", "up")),
     "material": Key(str, "16MnCr5", "", "workpiece material (cutting forces, later issues)"),
     "clearance": Key(float, 1.0, "mm", "axial approach and overrun added to the engagement zone", _at_least(0.0)),
@@ -129,31 +139,47 @@ THREAD_PROCESS_KEYS: dict[str, Key] = {
 
 MACHINE_KEYS: dict[str, Key] = {
     "structure": Key(str, "mechatronic", "", "kinematic structure (seed 000 figs 1-4)", _one_of(*STRUCTURES)),
-    "synchronization": Key(str, "equal-coordinates", "", "electronic synchronisation scheme (seed 001)",
-                           _one_of(*SYNCHRONIZATIONS)),
+    "synchronization": Key(
+        str, "equal-coordinates", "", "electronic synchronisation scheme (seed 001)", _one_of(*SYNCHRONIZATIONS)
+    ),
     "adaptive_correction": Key(bool, True, "", "sign/phase discriminator correction of the electronic links"),
     "c1": Key(float, 1.0, "", "product of the fixed ratios of the generating chain (B1 -> B2)", _positive),
-    "c2": Key(float, None, "", "product of the fixed ratios of the tooth-line chain (lead screw -> B4); "
-              "default 1/24 for mechanical/hydraulic structures, 1 for mechatronic", _positive),
+    "c2": Key(
+        float,
+        None,
+        "",
+        "product of the fixed ratios of the tooth-line chain (lead screw -> B4); "
+        "default 1/24 for mechanical/hydraulic structures, 1 for mechatronic",
+        _positive,
+    ),
     "c3": Key(float, 0.5, "", "product of the fixed ratios motor M1 -> tool spindle (speed chain)", _positive),
     "c4": Key(float, 0.5, "mm", "carriage travel per work revolution with is = 1 (feed chain)", _positive),
-    "i_sigma": Key(float, 0.5, "", "differential ratio with one input held (bevel differential, carrier out)",
-                   _positive),
+    "i_sigma": Key(
+        float, 0.5, "", "differential ratio with one input held (bevel differential, carrier out)", _positive
+    ),
     "lead_screw_pitch": Key(float, 10.0, "mm", "lead-screw pitch t_TV", _positive),
     "motor_speed": Key(float, 1450.0, "rpm", "main motor speed n_M (4-pole induction motor)", _positive),
-    "reference_frequency": Key(float, 1e9, "Hz", "reference pulse generator 14 (seed 000) / 5 (seed 001); high "
-                               "enough that kv, a multiple of z0, still sets n0 to better than 1 %", _positive),
-    "command_pulses_per_rev": Key(int, 10000, "1/rev", "command pulses per revolution of each servo axis",
-                                  _at_least(1)),
+    "reference_frequency": Key(
+        float,
+        1e9,
+        "Hz",
+        "reference pulse generator 14 (seed 000) / 5 (seed 001); high "
+        "enough that kv, a multiple of z0, still sets n0 to better than 1 %",
+        _positive,
+    ),
+    "command_pulses_per_rev": Key(
+        int, 10000, "1/rev", "command pulses per revolution of each servo axis", _at_least(1)
+    ),
     "encoder_lines": Key(int, 5000, "1/rev", "lines of the encoders (4 counts per line)", _at_least(1)),
-    "hydraulic_steps_per_rev": Key(int, 3600, "1/rev", "steps per revolution of a hydraulic stepping motor",
-                                   _at_least(1)),
-    "hydraulic_max_windows": Key(int, 20000, "", "largest window count of a coding disc of a pulse generator",
-                                 _at_least(1)),
+    "hydraulic_steps_per_rev": Key(
+        int, 3600, "1/rev", "steps per revolution of a hydraulic stepping motor", _at_least(1)
+    ),
+    "hydraulic_max_windows": Key(
+        int, 20000, "", "largest window count of a coding disc of a pulse generator", _at_least(1)
+    ),
     "change_gears": Key(list, None, "", "change-gear set (tooth counts; repeat a count for two gears)", _change_gears),
     "i0": Key(float, 1.0, "", "thread group: ratio motor M2 -> lead screw (seed 001 fig 2)", _positive),
-    "i01": Key(float, 1.0, "", "thread group: product of the fixed ratios spindle -> lead screw (seed 001)",
-               _positive),
+    "i01": Key(float, 1.0, "", "thread group: product of the fixed ratios spindle -> lead screw (seed 001)", _positive),
 }
 
 #: c2 default per structure (see MACHINE_KEYS["c2"]).
@@ -166,6 +192,7 @@ def machine_constants(machine: dict[str, Any], structure: str) -> dict[str, Any]
     if out.get("c2") is None:
         out["c2"] = C2_DEFAULT.get(structure, 1.0)
     return out
+
 
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
@@ -201,15 +228,22 @@ def parse_section(name: str, table: Any, keys: dict[str, Key], problems: list[Pr
         return out
     for k in table:
         if k not in keys:
-            close = [c for c in keys if c.replace("_", "") in k.replace("_", "") or k.replace("_", "") in c.replace("_", "")]
+            close = [
+                c for c in keys if c.replace("_", "") in k.replace("_", "") or k.replace("_", "") in c.replace("_", "")
+            ]
             hint = f"did you mean {close[0]!r}? " if close else ""
-            problems.append(Problem(f"{name}.{k}", table[k], "unknown key",
-                                    hint + "valid keys: " + ", ".join(keys)))
+            problems.append(Problem(f"{name}.{k}", table[k], "unknown key", hint + "valid keys: " + ", ".join(keys)))
     for k, key in keys.items():
         if k not in table:
             if key.default is REQUIRED:
-                problems.append(Problem(f"{name}.{k}", None, f"missing required key ({key.doc})",
-                                        f"add {k} = <{_type_name(key.kind)}{', ' + key.unit if key.unit else ''}>"))
+                problems.append(
+                    Problem(
+                        f"{name}.{k}",
+                        None,
+                        f"missing required key ({key.doc})",
+                        f"add {k} = <{_type_name(key.kind)}{', ' + key.unit if key.unit else ''}>",
+                    )
+                )
             else:
                 out[k] = key.default
             continue
@@ -244,16 +278,28 @@ class Job:
         if self.gear is None or self.cutter is None:
             raise ValueError(f"{self.source} is a thread job; it has no skiving setup")
         p = self.process
-        return SkivingSetup(self.gear, self.cutter, p["tool_speed"], p["axial_feed"], tuple(p["passes"]),
-                            p["feed_direction"], p["clearance"])
+        return SkivingSetup(
+            self.gear,
+            self.cutter,
+            p["tool_speed"],
+            p["axial_feed"],
+            tuple(p["passes"]),
+            p["feed_direction"],
+            p["clearance"],
+        )
 
 
 def _gear_from(values: dict[str, Any]) -> Gear:
     return Gear(
-        teeth=values["teeth"], normal_module=values["normal_module"],
-        pressure_angle=math.radians(values["pressure_angle"]), helix_angle=math.radians(values["helix_angle"]),
-        face_width=values["face_width"], profile_shift=values["profile_shift"], internal=values["internal"],
-        tip_diameter=values["tip_diameter"], root_diameter=values["root_diameter"],
+        teeth=values["teeth"],
+        normal_module=values["normal_module"],
+        pressure_angle=math.radians(values["pressure_angle"]),
+        helix_angle=math.radians(values["helix_angle"]),
+        face_width=values["face_width"],
+        profile_shift=values["profile_shift"],
+        internal=values["internal"],
+        tip_diameter=values["tip_diameter"],
+        root_diameter=values["root_diameter"],
     )
 
 
@@ -262,13 +308,23 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     problems: list[Problem] = []
     is_thread = "thread" in data
     if is_thread and "gear" in data:
-        raise InputError(Problem("thread", "[thread] and [gear]", "a job describes either a gear or a thread",
-                                 "remove one of the two sections"), source)
+        raise InputError(
+            Problem(
+                "thread",
+                "[thread] and [gear]",
+                "a job describes either a gear or a thread",
+                "remove one of the two sections",
+            ),
+            source,
+        )
     sections = SECTIONS_THREAD if is_thread else SECTIONS_GEAR
     for name in data:
         if name not in sections:
-            problems.append(Problem(name, "[section]", "unknown section",
-                                    "valid sections: " + ", ".join(f"[{s}]" for s in sections)))
+            problems.append(
+                Problem(
+                    name, "[section]", "unknown section", "valid sections: " + ", ".join(f"[{s}]" for s in sections)
+                )
+            )
     parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
     machine = parsed["machine"]
     if problems:
@@ -280,16 +336,25 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     gear = _gear_from(g)
     problems += check_gear(gear, "gear")
     cutter = Gear(
-        teeth=c["teeth"], normal_module=gear.mn, pressure_angle=gear.alpha_n,
-        helix_angle=math.radians(c["helix_angle"]), face_width=gear.mn * 10, profile_shift=c["profile_shift"],
+        teeth=c["teeth"],
+        normal_module=gear.mn,
+        pressure_angle=gear.alpha_n,
+        helix_angle=math.radians(c["helix_angle"]),
+        face_width=gear.mn * 10,
+        profile_shift=c["profile_shift"],
         tip_diameter=c["tip_diameter"],
     )
     if cutter.x < cutter.min_profile_shift - 1e-9:
-        problems.append(Problem("cutter.profile_shift", cutter.x,
-                                f"the cutter's own teeth would be undercut (z0 = {cutter.z} needs "
-                                f"x0 >= {cutter.min_profile_shift:+.4f})", "use more cutter teeth or a larger x0"))
-    job = Job(source, "gear", machine, parsed["process"], gear=gear, cutter=cutter,
-              cutter_options={"edge": c["edge"]})
+        problems.append(
+            Problem(
+                "cutter.profile_shift",
+                cutter.x,
+                f"the cutter's own teeth would be undercut (z0 = {cutter.z} needs "
+                f"x0 >= {cutter.min_profile_shift:+.4f})",
+                "use more cutter teeth or a larger x0",
+            )
+        )
+    job = Job(source, "gear", machine, parsed["process"], gear=gear, cutter=cutter, cutter_options={"edge": c["edge"]})
     if not problems:
         problems += check_setup(job.skiving)
     if problems:
@@ -301,13 +366,17 @@ def load_job(path: str | Path) -> Job:
     """Read and validate a TOML job file."""
     p = Path(path)
     if not p.is_file():
-        raise InputError(Problem("job", str(p), "no such file", "give the path of a .toml job file, e.g. "
-                                 "assets/jobs/spur_external.toml"))
+        raise InputError(
+            Problem(
+                "job", str(p), "no such file", "give the path of a .toml job file, e.g. assets/jobs/spur_external.toml"
+            )
+        )
     try:
         data = tomllib.loads(p.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(Problem("job", str(p), f"not valid TOML: {exc}", "fix the syntax at the line shown"),
-                         str(p)) from exc
+        raise InputError(
+            Problem("job", str(p), f"not valid TOML: {exc}", "fix the syntax at the line shown"), str(p)
+        ) from exc
     return parse_job(data, str(p))
 
 

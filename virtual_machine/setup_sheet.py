@@ -61,8 +61,15 @@ class Setting:
         return (self.realised - self.value) / self.value
 
     def to_json(self) -> dict[str, Any]:
-        return {"organ": self.organ, "formula": self.formula, "value": self.value, "realised": self.realised,
-                "relative_error": self.relative_error, **self.realisation, "effect": self.effect}
+        return {
+            "organ": self.organ,
+            "formula": self.formula,
+            "value": self.value,
+            "realised": self.realised,
+            "relative_error": self.relative_error,
+            **self.realisation,
+            "effect": self.effect,
+        }
 
 
 @dataclass
@@ -104,8 +111,11 @@ def realise_guitar(setting: Setting, gear_set: ChangeGearSet, stages: int) -> Se
         return setting
     train = choose_change_gears(abs(setting.value), gear_set, stages)
     setting.realised = math.copysign(train.ratio, setting.value)
-    setting.realisation = {"gears": {"a_b_c_d" if stages == 2 else "a_b": list(train.teeth)},
-                           "describe": train.describe(), "set": gear_set.name}
+    setting.realisation = {
+        "gears": {"a_b_c_d" if stages == 2 else "a_b": list(train.teeth)},
+        "describe": train.describe(),
+        "set": gear_set.name,
+    }
     return setting
 
 
@@ -143,15 +153,19 @@ def ratio_error_effect(job: Job, eps: float) -> dict[str, float]:
     tangent: a helix slope error.
     """
     g, s = job.gear, job.process["axial_feed"]
-    return {"pitch_um_per_work_rev": eps * math.pi * g.reference_diameter * 1e3,
-            "helix_drift_um_over_face": eps * 2 * math.pi * g.base_radius * g.face_width / s * 1e3}
+    return {
+        "pitch_um_per_work_rev": eps * math.pi * g.reference_diameter * 1e3,
+        "helix_drift_um_over_face": eps * 2 * math.pi * g.base_radius * g.face_width / s * 1e3,
+    }
 
 
 def lead_error_effect(job: Job, eps: float) -> dict[str, float]:
     """A tooth-line ratio error eps: lead error eps T, helix slope eps b tan(beta_b) over the face."""
     g = job.gear
-    return {"lead_um": eps * abs(g.lead) * 1e3,
-            "helix_slope_um_over_face": eps * g.face_width * abs(math.tan(g.base_helix_angle)) * 1e3}
+    return {
+        "lead_um": eps * abs(g.lead) * 1e3,
+        "helix_slope_um_over_face": eps * g.face_width * abs(math.tan(g.base_helix_angle)) * 1e3,
+    }
 
 
 def speed_effect(eps: float, what: str) -> dict[str, float]:
@@ -161,10 +175,19 @@ def speed_effect(eps: float, what: str) -> dict[str, float]:
 # ---- skiving structures --------------------------------------------------------------------------
 def _skiving_constants(job: Job, names: tuple[str, ...]) -> dict[str, float]:
     m = job.machine
-    table = {"c1": m["c1"], "c2": m["c2"], "c3": m["c3"], "c4": m["c4"], "i_sigma": m["i_sigma"],
-             "t_tv": m["lead_screw_pitch"], "n_m": m["motor_speed"], "f_ref": m["reference_frequency"],
-             "p_cmd": m["command_pulses_per_rev"], "q_step": m["hydraulic_steps_per_rev"],
-             "n_disc_max": m["hydraulic_max_windows"]}
+    table = {
+        "c1": m["c1"],
+        "c2": m["c2"],
+        "c3": m["c3"],
+        "c4": m["c4"],
+        "i_sigma": m["i_sigma"],
+        "t_tv": m["lead_screw_pitch"],
+        "n_m": m["motor_speed"],
+        "f_ref": m["reference_frequency"],
+        "p_cmd": m["command_pulses_per_rev"],
+        "q_step": m["hydraulic_steps_per_rev"],
+        "n_disc_max": m["hydraulic_max_windows"],
+    }
     return {n: table[n] for n in names}
 
 
@@ -182,12 +205,18 @@ def sheet_mechanical(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     g, c, m, p = job.gear, job.cutter, job.machine, job.process
     gs = gear_set_of(job)
     T = g.lead
-    ix = Setting("ix", "guitar ix (Fv internal link, 4 -> 5)", "z0 / (c1 iS z2)",
-                 c.teeth / (m["c1"] * m["i_sigma"] * g.teeth))
-    iy = Setting("iy", "guitar iy (Fs internal link, 13 -> 14)", "t_TV / (T c2 iS)",
-                 0.0 if math.isinf(T) else m["lead_screw_pitch"] / (T * m["c2"] * m["i_sigma"]))
-    iv = Setting("iv", "guitar iv (Fv external link, 10 -> 3)", "n0 / (c3 n_M)",
-                 p["tool_speed"] / (m["c3"] * m["motor_speed"]))
+    ix = Setting(
+        "ix", "guitar ix (Fv internal link, 4 -> 5)", "z0 / (c1 iS z2)", c.teeth / (m["c1"] * m["i_sigma"] * g.teeth)
+    )
+    iy = Setting(
+        "iy",
+        "guitar iy (Fs internal link, 13 -> 14)",
+        "t_TV / (T c2 iS)",
+        0.0 if math.isinf(T) else m["lead_screw_pitch"] / (T * m["c2"] * m["i_sigma"]),
+    )
+    iv = Setting(
+        "iv", "guitar iv (Fv external link, 10 -> 3)", "n0 / (c3 n_M)", p["tool_speed"] / (m["c3"] * m["motor_speed"])
+    )
     is_ = Setting("is", "guitar is (Fs external link, 7 -> 13)", "s / c4", p["axial_feed"] / m["c4"])
     for s in (ix, iy, iv, is_):
         realise_guitar(s, gs, 2)
@@ -203,12 +232,22 @@ def sheet_hydraulic_differential(job: Job) -> tuple[dict[str, Setting], tuple[st
     g, c, m, p = job.gear, job.cutter, job.machine, job.process
     q, nmax = m["hydraulic_steps_per_rev"], m["hydraulic_max_windows"]
     T = g.lead
-    kx = Setting("kx", "pulse generator GGI1 -> stepping motor GShD1", "z0 / (c1 iS z2)",
-                 c.teeth / (m["c1"] * m["i_sigma"] * g.teeth))
-    ky = Setting("ky", "pulse generator GGI2 -> stepping motor GShD2", "t_TV / (T c2 iS)",
-                 0.0 if math.isinf(T) else m["lead_screw_pitch"] / (T * m["c2"] * m["i_sigma"]))
+    kx = Setting(
+        "kx",
+        "pulse generator GGI1 -> stepping motor GShD1",
+        "z0 / (c1 iS z2)",
+        c.teeth / (m["c1"] * m["i_sigma"] * g.teeth),
+    )
+    ky = Setting(
+        "ky",
+        "pulse generator GGI2 -> stepping motor GShD2",
+        "t_TV / (T c2 iS)",
+        0.0 if math.isinf(T) else m["lead_screw_pitch"] / (T * m["c2"] * m["i_sigma"]),
+    )
     iv = Setting("iv", "two-gear guitar iv (M -> 7)", "n0 / (c3 n_M)", p["tool_speed"] / (m["c3"] * m["motor_speed"]))
-    is_ = Setting("is", "pulse generator GGI3 -> stepping motor GShD3 (lead screw)", "s / c4", p["axial_feed"] / m["c4"])
+    is_ = Setting(
+        "is", "pulse generator GGI3 -> stepping motor GShD3 (lead screw)", "s / c4", p["axial_feed"] / m["c4"]
+    )
     realise_pulse_generator(kx, q, nmax)
     realise_pulse_generator(ky, q, nmax)
     realise_guitar(iv, gear_set_of(job), 1)
@@ -225,8 +264,12 @@ def sheet_hydraulic_shaft(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]
     """S3, seed 000 fig. 3: one hydraulic shaft carries B2 + B4; kx = (z2/z0)(1 + s/T) / c1."""
     g, c, m, p = job.gear, job.cutter, job.machine, job.process
     q, nmax = m["hydraulic_steps_per_rev"], m["hydraulic_max_windows"]
-    kx = Setting("kx", "pulse generator GGI -> stepping motor GShD (work -> tool)", "(z2/z0)(1 + s/T) / c1",
-                 g.teeth / c.teeth * (1 + signed_feed_over_lead(job)) / m["c1"])
+    kx = Setting(
+        "kx",
+        "pulse generator GGI -> stepping motor GShD (work -> tool)",
+        "(z2/z0)(1 + s/T) / c1",
+        g.teeth / c.teeth * (1 + signed_feed_over_lead(job)) / m["c1"],
+    )
     iv = Setting("iv", "two-gear guitar iv (M -> 8)", "n0 / (c3 n_M)", p["tool_speed"] / (m["c3"] * m["motor_speed"]))
     is_ = Setting("is", "guitar is (5 -> 9 -> lead screw)", "s / c4", p["axial_feed"] / m["c4"])
     realise_pulse_generator(kx, q, nmax)
@@ -250,30 +293,55 @@ def sheet_mechatronic(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     factor = Fraction(m["c1"]).limit_denominator(10**6) * Fraction(g.teeth, c.teeth)  # kx / kv
     kv_ideal = divider_for_rate(f, pp, p["tool_speed"])
     kv_int = multiple_near(kv_ideal, factor.denominator)
-    kv = Setting("kv", "frequency divider 6 (tool spindle speed)", "60 f_ref / (p n0)", kv_ideal, float(kv_int),
-                 {"integer": kv_int})
+    kv = Setting(
+        "kv",
+        "frequency divider 6 (tool spindle speed)",
+        "60 f_ref / (p n0)",
+        kv_ideal,
+        float(kv_int),
+        {"integer": kv_int},
+    )
     kv.effect = speed_effect(kv_ideal / kv_int - 1, "cutting_speed")  # n ~ 1/k
     kx_ideal = m["c1"] * kv_int * g.teeth / c.teeth
     kx_int = round(kx_ideal)
-    kx = Setting("kx", "frequency divider 7 (work spindle, B2)", "c1 kv z2 / z0", kx_ideal, float(kx_int),
-                 {"integer": kx_int})
+    kx = Setting(
+        "kx", "frequency divider 7 (work spindle, B2)", "c1 kv z2 / z0", kx_ideal, float(kx_int), {"integer": kx_int}
+    )
     kx.effect = ratio_error_effect(job, kx_ideal / kx_int - 1)
     n0 = 60 * f / (pp * kv_int)
     n_screw = p["axial_feed"] * n0 * c.teeth / g.teeth / m["lead_screw_pitch"]  # rpm of the lead screw
     ks_ideal = divider_for_rate(f, pp, n_screw)
     ks_int = max(1, round(ks_ideal))
-    ks = Setting("ks", "frequency divider 21 (lead screw, feed)", "60 f_ref / (p n_TV)", ks_ideal, float(ks_int),
-                 {"integer": ks_int})
+    ks = Setting(
+        "ks",
+        "frequency divider 21 (lead screw, feed)",
+        "60 f_ref / (p n_TV)",
+        ks_ideal,
+        float(ks_int),
+        {"integer": ks_int},
+    )
     ks.effect = speed_effect(ks_ideal / ks_int - 1, "feed")
     if g.helix_angle == 0:
-        ky = Setting("ky", "frequency divider 22 (work spindle, B4)", "c2 ks T / t_TV", 0.0, 0.0,
-                     {"integer": None, "note": "divider 22 off: spur gear, no additional rotation"})
+        ky = Setting(
+            "ky",
+            "frequency divider 22 (work spindle, B4)",
+            "c2 ks T / t_TV",
+            0.0,
+            0.0,
+            {"integer": None, "note": "divider 22 off: spur gear, no additional rotation"},
+        )
     else:
         ky_ideal = m["c2"] * ks_int * abs(g.lead) / m["lead_screw_pitch"]
         ky_int = round(ky_ideal)
         sign = "+" if signed_feed_over_lead(job) * 1 >= 0 else "-"
-        ky = Setting("ky", "frequency divider 22 (work spindle, B4)", "c2 ks T / t_TV", ky_ideal, float(ky_int),
-                     {"integer": ky_int, "summator_9_input": sign})
+        ky = Setting(
+            "ky",
+            "frequency divider 22 (work spindle, B4)",
+            "c2 ks T / t_TV",
+            ky_ideal,
+            float(ky_int),
+            {"integer": ky_int, "summator_9_input": sign},
+        )
         ky.effect = lead_error_effect(job, ky_ideal / ky_int - 1)
     return {s.name: s for s in (kv, kx, ks, ky)}, ("c1", "c2", "t_tv", "f_ref", "p_cmd")
 
@@ -289,14 +357,33 @@ SKIVING_SHEETS = {
 def skiving_geometry(job: Job) -> tuple[dict[str, Any], list[dict[str, float]], dict[str, float]]:
     g, c, st = job.gear, job.cutter, job.skiving
     geometry = {
-        "gear": {"z": g.teeth, "mn_mm": g.mn, "mt_mm": g.transverse_module, "alpha_n_deg": math.degrees(g.alpha_n),
-                 "alpha_t_deg": math.degrees(g.transverse_pressure_angle), "beta_deg": math.degrees(g.beta),
-                 "beta_b_deg": math.degrees(g.base_helix_angle), "d_mm": g.reference_diameter,
-                 "db_mm": g.base_diameter, "da_mm": g.tip_diameter_value, "df_mm": g.root_diameter_value,
-                 "lead_mm": g.lead, "pt_mm": g.transverse_pitch, "pbt_mm": g.transverse_base_pitch,
-                 "sn_mm": g.normal_tooth_thickness, "internal": g.internal},
-        "cutter": {"z": c.teeth, "beta_deg": math.degrees(c.beta), "x": c.x, "d_mm": c.reference_diameter,
-                   "db_mm": c.base_diameter, "da_mm": st.cutter_tip_diameter, "edge": job.cutter_options["edge"]},
+        "gear": {
+            "z": g.teeth,
+            "mn_mm": g.mn,
+            "mt_mm": g.transverse_module,
+            "alpha_n_deg": math.degrees(g.alpha_n),
+            "alpha_t_deg": math.degrees(g.transverse_pressure_angle),
+            "beta_deg": math.degrees(g.beta),
+            "beta_b_deg": math.degrees(g.base_helix_angle),
+            "d_mm": g.reference_diameter,
+            "db_mm": g.base_diameter,
+            "da_mm": g.tip_diameter_value,
+            "df_mm": g.root_diameter_value,
+            "lead_mm": g.lead,
+            "pt_mm": g.transverse_pitch,
+            "pbt_mm": g.transverse_base_pitch,
+            "sn_mm": g.normal_tooth_thickness,
+            "internal": g.internal,
+        },
+        "cutter": {
+            "z": c.teeth,
+            "beta_deg": math.degrees(c.beta),
+            "x": c.x,
+            "d_mm": c.reference_diameter,
+            "db_mm": c.base_diameter,
+            "da_mm": st.cutter_tip_diameter,
+            "edge": job.cutter_options["edge"],
+        },
         "shaft_angle_deg": math.degrees(st.shaft_angle),
         "centre_distance_final_mm": st.final_centre_distance,
         "generated_root_diameter_mm": st.generated_root_diameter,
@@ -304,11 +391,17 @@ def skiving_geometry(job: Job) -> tuple[dict[str, Any], list[dict[str, float]], 
         "differential_rotation_deg_per_mm": math.degrees(st.differential_rotation_per_mm),
         "work_speed_rpm": st.work_speed,
     }
-    passes = [{"pass": i + 1, "infeed_mm": inc, "depth_mm": d, "centre_distance_mm": a, "travel_mm": L, "time_s": t}
-              for i, (inc, d, a, L, t) in enumerate(zip(st.passes, st.pass_depths, st.pass_centre_distances,
-                                                        st.pass_travel, st.pass_times, strict=True))]
-    sanity = {"cutting_speed_m_min": st.cutting_speed, "total_time_s": sum(st.pass_times),
-              "depth_short_of_full_mm": st.full_depth - sum(st.passes)}
+    passes = [
+        {"pass": i + 1, "infeed_mm": inc, "depth_mm": d, "centre_distance_mm": a, "travel_mm": L, "time_s": t}
+        for i, (inc, d, a, L, t) in enumerate(
+            zip(st.passes, st.pass_depths, st.pass_centre_distances, st.pass_travel, st.pass_times, strict=True)
+        )
+    ]
+    sanity = {
+        "cutting_speed_m_min": st.cutting_speed,
+        "total_time_s": sum(st.pass_times),
+        "depth_short_of_full_mm": st.full_depth - sum(st.passes),
+    }
     return geometry, passes, sanity
 
 
@@ -321,11 +414,17 @@ def thread_sheet(job: Job, structure: str) -> SetupSheet:
     settings: dict[str, Setting] = {}
     lead_effect = lambda eps: {"lead_um": eps * P * 1e3, "pitch_um_over_length": eps * t["length"] * 1e3}  # noqa: E731
     if structure == "mechanical":
-        ix = realise_guitar(Setting("ix", "guitar ix (5 -> R1 -> 6 -> TV)", "P / (i01 t_TV)", P / (m["i01"] * t_tv)),
-                            gear_set_of(job), 2)
+        ix = realise_guitar(
+            Setting("ix", "guitar ix (5 -> R1 -> 6 -> TV)", "P / (i01 t_TV)", P / (m["i01"] * t_tv)),
+            gear_set_of(job),
+            2,
+        )
         ix.effect = lead_effect(ix.relative_error)
-        iv = realise_guitar(Setting("iv", "guitar iv (M -> 8 -> R2 -> 5)", "n / (c3 n_M)",
-                                    n_sp / (m["c3"] * m["motor_speed"])), gear_set_of(job), 2)
+        iv = realise_guitar(
+            Setting("iv", "guitar iv (M -> 8 -> R2 -> 5)", "n / (c3 n_M)", n_sp / (m["c3"] * m["motor_speed"])),
+            gear_set_of(job),
+            2,
+        )
         iv.effect = speed_effect(iv.relative_error, "cutting_speed")
         settings = {"ix": ix, "iv": iv}
         consts = ("i01", "c3", "t_tv", "n_m")
@@ -338,9 +437,14 @@ def thread_sheet(job: Job, structure: str) -> SetupSheet:
         pp = m["command_pulses_per_rev"]
         kx_val = P / (m["i0"] * t_tv)
         frac = Fraction(kx_val * pp / e).limit_denominator(65535)
-        kx = Setting("kx", "frequency divider: counter 7 + coefficient block 8", "P / (i0 P_TV)", kx_val,
-                     float(frac) * e / pp, {"block_N": frac.numerator, "counter_K": frac.denominator,
-                                           "encoder_counts_per_rev": e})
+        kx = Setting(
+            "kx",
+            "frequency divider: counter 7 + coefficient block 8",
+            "P / (i0 P_TV)",
+            kx_val,
+            float(frac) * e / pp,
+            {"block_N": frac.numerator, "counter_K": frac.denominator, "encoder_counts_per_rev": e},
+        )
         kx.effect = lead_effect(kx.relative_error)
         settings = {"kx": kx}
         consts = ("i0", "t_tv", "p_cmd", "n_enc")
@@ -350,24 +454,50 @@ def thread_sheet(job: Job, structure: str) -> SetupSheet:
         c_const = Fraction(m["i01"] * t_tv / P).limit_denominator(10**6)  # kx / kv
         kv_ideal = divider_for_rate(f, pp, n_sp)
         kv_int = multiple_near(kv_ideal, c_const.denominator)
-        kv = Setting("kv", "frequency divider: counter 9 + block 11 (spindle)", "60 f_ref / (p n)", kv_ideal,
-                     float(kv_int), {"integer": kv_int})
+        kv = Setting(
+            "kv",
+            "frequency divider: counter 9 + block 11 (spindle)",
+            "60 f_ref / (p n)",
+            kv_ideal,
+            float(kv_int),
+            {"integer": kv_int},
+        )
         kv.effect = speed_effect(kv_ideal / kv_int - 1, "cutting_speed")
         kx_ideal = m["i01"] * t_tv * kv_int / P
-        kx = Setting("kx", "frequency divider: counter 10 + block 12 (carriage)", "c kv / P, c = i01 P_TV", kx_ideal,
-                     float(round(kx_ideal)), {"integer": round(kx_ideal)})
+        kx = Setting(
+            "kx",
+            "frequency divider: counter 10 + block 12 (carriage)",
+            "c kv / P, c = i01 P_TV",
+            kx_ideal,
+            float(round(kx_ideal)),
+            {"integer": round(kx_ideal)},
+        )
         kx.effect = lead_effect(kx_ideal / round(kx_ideal) - 1)
         settings = {"kv": kv, "kx": kx}
         consts = ("i01", "t_tv", "f_ref", "p_cmd")
         name = "thread-equal-coordinates"
-    table = {"i0": m["i0"], "i01": m["i01"], "c3": m["c3"], "t_tv": t_tv, "n_m": m["motor_speed"],
-             "f_ref": m["reference_frequency"], "p_cmd": m["command_pulses_per_rev"], "n_enc": m["encoder_lines"]}
+    table = {
+        "i0": m["i0"],
+        "i01": m["i01"],
+        "c3": m["c3"],
+        "t_tv": t_tv,
+        "n_m": m["motor_speed"],
+        "f_ref": m["reference_frequency"],
+        "p_cmd": m["command_pulses_per_rev"],
+        "n_enc": m["encoder_lines"],
+    }
     feed = P * n_sp / 60  # mm/s
     passes = [{"pass": i + 1, "infeed_mm": inc, "time_s": t["length"] / feed} for i, inc in enumerate(p["passes"])]
-    return SetupSheet(name, "thread", settings, {k: table[k] for k in consts},
-                      {"lead_mm": P, "hand": t["hand"], "diameter_mm": t["diameter"], "spindle_speed_rpm": n_sp},
-                      passes, {"cutting_speed_m_min": p["cutting_speed"], "total_time_s": len(passes) * t["length"] / feed},
-                      [])
+    return SetupSheet(
+        name,
+        "thread",
+        settings,
+        {k: table[k] for k in consts},
+        {"lead_mm": P, "hand": t["hand"], "diameter_mm": t["diameter"], "spindle_speed_rpm": n_sp},
+        passes,
+        {"cutting_speed_m_min": p["cutting_speed"], "total_time_s": len(passes) * t["length"] / feed},
+        [],
+    )
 
 
 def setup_sheet(job: Job, structure: str | None = None) -> SetupSheet:
@@ -375,8 +505,10 @@ def setup_sheet(job: Job, structure: str | None = None) -> SetupSheet:
     structure = structure or job.machine["structure"]
     if job.kind == "thread":
         if structure not in ("mechanical", "mechatronic"):
-            raise ValueError(f"--structure {structure!r}: the thread group of seed 001 exists as 'mechanical' or "
-                             "'mechatronic' (with machine.synchronization 'master-slave' or 'equal-coordinates')")
+            raise ValueError(
+                f"--structure {structure!r}: the thread group of seed 001 exists as 'mechanical' or "
+                "'mechatronic' (with machine.synchronization 'master-slave' or 'equal-coordinates')"
+            )
         return thread_sheet(job, structure)
     if structure not in SKIVING_SHEETS:
         raise ValueError(f"--structure {structure!r}: not a skiving structure; use one of {', '.join(SKIVING_SHEETS)}")
@@ -385,8 +517,12 @@ def setup_sheet(job: Job, structure: str | None = None) -> SetupSheet:
     geometry, passes, sanity = skiving_geometry(job)
     notes = []
     if sanity["depth_short_of_full_mm"] > 1e-6:
-        notes.append(f"the passes stop {sanity['depth_short_of_full_mm']:.3f} mm short of full depth: the teeth come "
-                     "out thicker than nominal")
+        notes.append(
+            f"the passes stop {sanity['depth_short_of_full_mm']:.3f} mm short of full depth: the teeth come "
+            "out thicker than nominal"
+        )
     if structure == "mechatronic":
         notes.append("ky follows c2 ks T / t_TV (divider law f_out = f_ref / k); seed 000 prints ks t_TV / (c2 T)")
-    return SetupSheet(structure, "gear", settings, _skiving_constants(job, const_names), geometry, passes, sanity, notes)
+    return SetupSheet(
+        structure, "gear", settings, _skiving_constants(job, const_names), geometry, passes, sanity, notes
+    )
