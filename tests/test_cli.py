@@ -19,7 +19,9 @@ def test_setup_default_job_prints_the_sheet():
 
 def test_setup_json_for_every_structure():
     for structure in ("mechanical", "hydraulic-differential", "hydraulic-shaft", "mechatronic"):
-        res = CliRunner().invoke(main, ["setup", str(JOBS / "helical_internal.toml"), "--structure", structure, "--json"])
+        res = CliRunner().invoke(
+            main, ["setup", str(JOBS / "helical_internal.toml"), "--structure", structure, "--json"]
+        )
         assert res.exit_code == 0, res.output
         data = json.loads(res.output)
         assert data["structure"] == structure

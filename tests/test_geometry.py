@@ -77,7 +77,9 @@ def test_internal_tooth_is_the_complement_of_an_external_tooth(x):
     internal = Gear(60, 2.0, 20 * DEG, 15 * DEG, 20.0, profile_shift=x, internal=True)
     external = Gear(60, 2.0, 20 * DEG, 15 * DEG, 20.0, profile_shift=-x)
     for r in (60.0, 63.0, 66.0):
-        assert internal.half_thickness_angle(r) == pytest.approx(math.pi / 60 - external.half_thickness_angle(r), abs=1e-14)
+        assert internal.half_thickness_angle(r) == pytest.approx(
+            math.pi / 60 - external.half_thickness_angle(r), abs=1e-14
+        )
 
 
 def test_undercut_limit():

@@ -124,3 +124,12 @@ def test_json_names_are_the_seeds(spur):
     assert consts["c2"] == pytest.approx(1 / 24)
     sanity = setup_sheet(spur, "mechatronic").to_json()["sanity"]
     assert sanity["cutting_speed_m_min"] == pytest.approx(131.496, abs=1e-3)
+
+
+def test_unreachable_guitar_ratio_names_the_setting(helical):
+    from cutting.errors import InputError
+
+    job = dataclasses.replace(helical, machine={**helical.machine, "c2": 1e-4})
+    with pytest.raises(InputError, match="outside the range") as info:
+        setup_sheet(job, "mechanical")
+    assert info.value.keys == ["setting.iy"] and "machine.c1..c4" in str(info.value)

@@ -43,7 +43,9 @@ def test_spur_external_by_hand():
     assert st.cutting_speed == pytest.approx(v, abs=1e-9) and v == pytest.approx(131.496, abs=1e-3)
     feed_rate = 0.2 * 1437.5 / 60
     assert st.pass_times == pytest.approx(tuple(t / feed_rate for t in st.pass_travel), rel=1e-12)
-    assert all(20.0 + 2.0 < t < 20.0 + 2.0 + 2 * st.cutter_tip_diameter / 2 * math.sin(20 * DEG) for t in st.pass_travel)
+    assert all(
+        20.0 + 2.0 < t < 20.0 + 2.0 + 2 * st.cutter_tip_diameter / 2 * math.sin(20 * DEG) for t in st.pass_travel
+    )
 
 
 def test_profile_shift_moves_the_centre_distance():

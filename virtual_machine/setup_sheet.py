@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any
 
+from cutting.errors import InputError, Problem
 from virtual_machine.change_gears import STANDARD_SET, ChangeGearSet, choose_change_gears
 from virtual_machine.job import Job, machine_constants
 
@@ -109,7 +110,18 @@ def realise_guitar(setting: Setting, gear_set: ChangeGearSet, stages: int) -> Se
         setting.realised = 0.0
         setting.realisation = {"gears": None, "note": "chain disengaged (spur gear: no helix term)"}
         return setting
-    train = choose_change_gears(abs(setting.value), gear_set, stages)
+    try:
+        train = choose_change_gears(abs(setting.value), gear_set, stages)
+    except ValueError as exc:
+        raise InputError(
+            Problem(
+                f"setting.{setting.name}",
+                setting.value,
+                f"{setting.organ} cannot set {setting.formula} = {abs(setting.value):.6g}: {exc}",
+                "change the machine constant of that chain (machine.c1..c4, i_sigma, i01), the speed or feed, "
+                "or supply machine.change_gears",
+            )
+        ) from exc
     setting.realised = math.copysign(train.ratio, setting.value)
     setting.realisation = {
         "gears": {"a_b_c_d" if stages == 2 else "a_b": list(train.teeth)},
