@@ -150,18 +150,21 @@ class SkivingSetup:
     # ---- kinematics ---------------------------------------------------------------------------
     @cached_property
     def speed_ratio(self) -> float:
-        """Signed omega2 / omega0 of the generating motion (magnitude z0/z2).
+        """Signed omega2 / omega0 of the generating motion (magnitude z0/z2 for any profile shifts).
 
-        Equal velocity of both bodies at the mesh point along the direction that lies in the tangent
-        plane and is normal to the common tooth direction.
+        Both bodies roll on their own reference cylinders against the common rack: their velocities at
+        their pitch points agree along the direction that lies in the rack plane and is normal to the
+        common tooth direction.
         """
         g = self.gear
-        p = np.array([g.reference_radius, 0.0, 0.0])
+        p2 = np.array([g.reference_radius, 0.0, 0.0])
         centre = np.array([self.final_centre_distance, 0.0, 0.0])
+        r0 = self.cutter.reference_radius
+        p0 = centre + np.array([r0 if g.internal else -r0, 0.0, 0.0])
         tooth_dir = np.array([0.0, math.sin(g.helix_angle), math.cos(g.helix_angle)])
         n = np.cross([1.0, 0.0, 0.0], tooth_dir)
-        v_work = np.cross([0.0, 0.0, 1.0], p) @ n
-        v_tool = np.cross(self.cutter_axis, p - centre) @ n
+        v_work = np.cross([0.0, 0.0, 1.0], p2) @ n
+        v_tool = np.cross(self.cutter_axis, p0 - centre) @ n
         return float(v_tool / v_work)
 
     @cached_property
@@ -300,6 +303,10 @@ class SkivingSetup:
 #: (domain.md section 1), so the threshold sits well above that.
 INTERFERENCE_TOLERANCE = 0.010
 
+#: An internal gear's cutter must fit through the bore (tip diameter d_a2) with this radial clearance,
+#: in multiples of mn, so it can be retracted radially to the axis and withdrawn axially after the cut.
+INTERNAL_RETRACT_CLEARANCE = 1.0
+
 
 def check_setup(setup: SkivingSetup) -> list[Problem]:
     """Every reason why ``setup.cutter`` cannot skive ``setup.gear`` with ``setup.passes``."""
@@ -322,13 +329,17 @@ def check_setup(setup: SkivingSetup) -> list[Problem]:
             )
         )
         return out
-    if g.internal and setup.final_centre_distance <= c.mn:
+    if g.internal and (
+        setup.final_centre_distance <= c.mn
+        or setup.cutter_tip_diameter > g.tip_diameter_value - 2 * INTERNAL_RETRACT_CLEARANCE * g.mn
+    ):
         out.append(
             Problem(
                 "cutter.teeth",
                 c.teeth,
-                f"the cutter (d0 = {c.reference_diameter:.3f} mm) is too large for the internal gear "
-                f"(d2 = {g.reference_diameter:.3f} mm): centre distance {setup.final_centre_distance:.3f} mm",
+                f"the cutter (d0 = {c.reference_diameter:.3f} mm, tip {setup.cutter_tip_diameter:.3f} mm) is too large "
+                f"for the internal gear: it must pass the bore d_a2 = {g.tip_diameter_value:.3f} mm with "
+                f"{INTERNAL_RETRACT_CLEARANCE:g} mn clearance on the radius to be retracted after the cut",
                 "use a cutter with clearly fewer teeth than the gear (z0 <= z2 - 10 is a safe start)",
             )
         )

@@ -59,10 +59,18 @@ def test_profile_shift_moves_the_centre_distance():
     ("z2", "beta2", "z0", "beta0", "internal"),
     [(40, 0, 23, 20, False), (40, 15, 31, -5, False), (60, 20, 25, 0, True), (71, -12, 29, 10, True)],
 )
-def test_speed_ratio_is_z0_over_z2(z2, beta2, z0, beta0, internal):
-    st = setup(z2, beta2, z0, beta0, internal)
+@pytest.mark.parametrize(("x2", "x0"), [(0.0, 0.0), (0.3, 0.0), (-0.2, 0.15)])
+def test_speed_ratio_is_z0_over_z2(z2, beta2, z0, beta0, internal, x2, x0):
+    st = setup(z2, beta2, z0, beta0, internal, x2=x2, x0=x0)
     assert abs(st.speed_ratio) == pytest.approx(z0 / z2, abs=1e-12)
     assert np.sign(st.speed_ratio) == (1 if internal else -1)
+
+
+def test_profile_shifted_pair_generates_without_interference():
+    """The edge rolls on the gear's own reference cylinder whatever x2 and x0 are."""
+    for x2, x0 in ((0.3, 0.0), (-0.2, 0.1)):
+        assert setup(x2=x2, x0=x0).edge_intrusion() < 0.005
+    assert check_setup(setup(12, 0, 23, 20, x2=0.35)) == []
 
 
 def test_pose_is_rigid_and_follows_the_kinematics():
@@ -103,6 +111,9 @@ def test_check_setup_reports_what_cannot_cut():
     assert check_setup(setup(beta0=0.0))[0].key == "cutter.helix_angle"  # spur + spur: Sigma = 0
     too_big = check_setup(setup(60, 0, 60, 20, True))
     assert too_big[0].key == "cutter.teeth" and "too large" in too_big[0].reason
+    # helical internal z2 = 60 with a spur cutter: a 58-tooth cutter (tip 121 mm) cannot pass the bore 123.7 - 4 mm
+    assert [p.key for p in check_setup(setup(60, 20, 58, 0, True))] == ["cutter.teeth"]
+    assert check_setup(setup(60, 20, 55, 0, True)) == []
     deep = check_setup(setup(passes=(3.0, 2.0)))
     assert deep[0].key == "process.passes" and "4.5000" in deep[0].hint
     assert check_setup(setup(passes=(2.0, 1.0))) == []  # shallower than full depth is allowed

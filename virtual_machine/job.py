@@ -327,36 +327,43 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
             )
     parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
     machine = parsed["machine"]
-    if problems:
-        raise InputError(problems, source)
     if is_thread:
+        if problems:
+            raise InputError(problems, source)
         return Job(source, "thread", machine, parsed["process"], thread=parsed["thread"])
 
+    # Geometry checks run as soon as their own keys are sound, so they are reported beside key errors.
     g, c = parsed["gear"], parsed["cutter"]
-    gear = _gear_from(g)
-    problems += check_gear(gear, "gear")
-    cutter = Gear(
-        teeth=c["teeth"],
-        normal_module=gear.mn,
-        pressure_angle=gear.alpha_n,
-        helix_angle=math.radians(c["helix_angle"]),
-        face_width=gear.mn * 10,
-        profile_shift=c["profile_shift"],
-        tip_diameter=c["tip_diameter"],
-    )
-    if cutter.x < cutter.min_profile_shift - 1e-9:
-        problems.append(
-            Problem(
-                "cutter.profile_shift",
-                cutter.x,
-                f"the cutter's own teeth would be undercut (z0 = {cutter.z} needs "
-                f"x0 >= {cutter.min_profile_shift:+.4f})",
-                "use more cutter teeth or a larger x0",
-            )
+    gear_ok = set(GEAR_KEYS) <= set(g)
+    cutter_ok = gear_ok and set(CUTTER_KEYS) <= set(c)
+    gear = cutter = None
+    if gear_ok:
+        gear = _gear_from(g)
+        problems += check_gear(gear, "gear")
+    if cutter_ok:
+        cutter = Gear(
+            teeth=c["teeth"],
+            normal_module=gear.mn,
+            pressure_angle=gear.alpha_n,
+            helix_angle=math.radians(c["helix_angle"]),
+            face_width=gear.mn * 10,  # unused: the cutter cuts with its rake face
+            profile_shift=c["profile_shift"],
+            tip_diameter=c["tip_diameter"],
         )
+        if cutter.x < cutter.min_profile_shift - 1e-9:
+            problems.append(
+                Problem(
+                    "cutter.profile_shift",
+                    cutter.x,
+                    f"the cutter's own teeth would be undercut (z0 = {cutter.z} needs "
+                    f"x0 >= {cutter.min_profile_shift:+.4f})",
+                    "use more cutter teeth or a larger x0",
+                )
+            )
+    if problems:
+        raise InputError(problems, source)
     job = Job(source, "gear", machine, parsed["process"], gear=gear, cutter=cutter, cutter_options={"edge": c["edge"]})
-    if not problems:
-        problems += check_setup(job.skiving)
+    problems += check_setup(job.skiving)
     if problems:
         raise InputError(problems, source)
     return job
