@@ -1,0 +1,106 @@
+"""A ball probe on the mesh: exact point-to-triangle distances and the seat of a ball in a tooth space.
+
+Used for runout (a ball in every space, touching both flanks) and for the dimension over/between balls.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from cutting.gear import Gear
+from metrology.datum import Datum
+from metrology.sections import MeshData
+
+
+def point_triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Distance from point ``p`` (3,) to each triangle ``tri`` (n, 3, 3): closest point by Voronoi regions."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
+    bp = p - b
+    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
+    cp = p - c
+    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    # face region by default
+    denom = va + vb + vc
+    denom = np.where(np.abs(denom) < 1e-300, 1e-300, denom)
+    v, w = vb / denom, vc / denom
+    q = a + ab * v[:, None] + ac * w[:, None]
+
+    def put(mask: np.ndarray, value: np.ndarray) -> None:
+        q[mask] = value[mask]
+
+    # edge regions (checked before vertices so vertex regions win)
+    m_bc = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
+    t_bc = (d4 - d3) / np.where((d4 - d3) + (d5 - d6) == 0, 1, (d4 - d3) + (d5 - d6))
+    put(m_bc, b + (c - b) * t_bc[:, None])
+    m_ac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
+    t_ac = d2 / np.where(d2 - d6 == 0, 1, d2 - d6)
+    put(m_ac, a + ac * t_ac[:, None])
+    m_ab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
+    t_ab = d1 / np.where(d1 - d3 == 0, 1, d1 - d3)
+    put(m_ab, a + ab * t_ab[:, None])
+    put((d6 >= 0) & (d5 <= d6), c)
+    put((d3 >= 0) & (d4 <= d3), b)
+    put((d1 <= 0) & (d2 <= 0), a)
+    return np.linalg.norm(p - q, axis=1)
+
+
+def ball_seats(mesh: MeshData, gear: Gear, datum: Datum, diameter: float, centre_radius: float) -> np.ndarray:
+    """Centres (z, 3) of a ball of ``diameter`` seated in every space at mid face, touching both flanks.
+
+    Row j is the space after nominal tooth j (between teeth j and j+1). ``centre_radius`` is the nominal
+    radius of the ball centre, used as the start. The centre stays in the mid-face plane and moves in
+    radius and angle until its distance to the mesh on each side of it is the ball radius.
+    """
+    pitch = 2 * math.pi / gear.teeth
+    tri = mesh.vertices[mesh.faces]
+    cen = tri.mean(axis=1)
+    rc = np.hypot(cen[:, 0], cen[:, 1])
+    thc = np.arctan2(cen[:, 1], cen[:, 0])
+    r_in, r_out = sorted((gear.tip_radius, gear.root_radius))
+    z_lo, z_hi = tri[:, :, 2].min(axis=1), tri[:, :, 2].max(axis=1)
+    near_plane = (z_lo < datum.z_mid + diameter) & (z_hi > datum.z_mid - diameter)
+    zone = (rc > r_in - diameter) & (rc < r_out + 0.1 * gear.mn) & near_plane
+    tri, thc = tri[zone], thc[zone]
+    # tooth-space centre lines turn with the helix: compare angles in the mid plane
+    out = np.zeros((gear.teeth, 3))
+    radius = diameter / 2
+    for j in range(gear.teeth):
+        phi0 = datum.rotation + (j + 0.5) * pitch
+        dphi = (thc - phi0 + math.pi) % (2 * math.pi) - math.pi
+        local = np.abs(dphi) < 1.2 * pitch
+        t_loc, a_loc = tri[local], dphi[local]
+
+        ccw = a_loc > 0  # flank triangles on each side of the nominal space centre line
+        t_ccw, t_cw = t_loc[ccw], t_loc[~ccw]
+
+        def point(rho: float, phi: float, phi0: float = phi0) -> np.ndarray:
+            return np.array([rho * math.cos(phi0 + phi), rho * math.sin(phi0 + phi), datum.z_mid])
+
+        def centred(rho: float, t_ccw=t_ccw, t_cw=t_cw) -> tuple[float, float]:
+            """Angle at which the ball at radius rho is equidistant from both flanks, and that distance."""
+
+            def gap(phi: float) -> float:
+                c = point(rho, phi)
+                return point_triangle_distance(c, t_ccw).min() - point_triangle_distance(c, t_cw).min()
+
+            phi = brentq(gap, -0.45 * pitch, 0.45 * pitch, xtol=1e-14)
+            return phi, point_triangle_distance(point(rho, phi), t_ccw).min()
+
+        # the ball sinks into the space until it touches: distance grows as it leaves the space
+        lo, hi = sorted((centre_radius - 0.5 * gear.mn, centre_radius + 0.5 * gear.mn))
+        try:
+            rho = brentq(lambda rr: centred(rr)[1] - radius, lo, hi, xtol=1e-12)
+        except ValueError as exc:
+            msg = f"the ball of {diameter:.3f} mm does not seat in space {j} near r = {centre_radius:.3f} mm"
+            raise RuntimeError(msg) from exc
+        phi, _ = centred(rho)
+        out[j] = point(rho, phi)
+    return out
