@@ -60,26 +60,36 @@ def ball_seats(mesh: MeshData, gear: Gear, datum: Datum, diameter: float, centre
     radius and angle until its distance to the mesh on each side of it is the ball radius.
     """
     pitch = 2 * math.pi / gear.teeth
-    tri = mesh.vertices[mesh.faces]
+    half = diameter / 2
+    # only triangles the ball can touch: near the ball-centre circle, near the mid plane
+    v = mesh.vertices
+    vr = mesh.radius
+    f = mesh.faces
+    fr_lo, fr_hi = vr[f].min(axis=1), vr[f].max(axis=1)
+    fz_lo, fz_hi = v[f, 2].min(axis=1), v[f, 2].max(axis=1)
+    zone = (fr_hi > centre_radius - 1.5 * diameter) & (fr_lo < centre_radius + 1.5 * diameter)
+    zone &= (fz_lo < datum.z_mid + 0.75 * diameter) & (fz_hi > datum.z_mid - 0.75 * diameter)
+    tri = v[f[zone]]
     cen = tri.mean(axis=1)
-    rc = np.hypot(cen[:, 0], cen[:, 1])
     thc = np.arctan2(cen[:, 1], cen[:, 0])
-    r_in, r_out = sorted((gear.tip_radius, gear.root_radius))
-    z_lo, z_hi = tri[:, :, 2].min(axis=1), tri[:, :, 2].max(axis=1)
-    near_plane = (z_lo < datum.z_mid + diameter) & (z_hi > datum.z_mid - diameter)
-    zone = (rc > r_in - diameter) & (rc < r_out + 0.1 * gear.mn) & near_plane
-    tri, thc = tri[zone], thc[zone]
-    # tooth-space centre lines turn with the helix: compare angles in the mid plane
     out = np.zeros((gear.teeth, 3))
-    radius = diameter / 2
+    radius = half
     for j in range(gear.teeth):
         phi0 = datum.rotation + (j + 0.5) * pitch
         dphi = (thc - phi0 + math.pi) % (2 * math.pi) - math.pi
-        local = np.abs(dphi) < 1.2 * pitch
+        local = np.abs(dphi) < 0.75 * pitch + half / centre_radius
         t_loc, a_loc = tri[local], dphi[local]
 
+        # keep the triangles within reach of the ball around its nominal seat (one exact distance pass),
+        # then check the seat against all local triangles at the end
+        reach = (
+            point_triangle_distance(
+                np.array([centre_radius * math.cos(phi0), centre_radius * math.sin(phi0), datum.z_mid]), t_loc
+            )
+            < radius + 0.3 * gear.mn
+        )
         ccw = a_loc > 0  # flank triangles on each side of the nominal space centre line
-        t_ccw, t_cw = t_loc[ccw], t_loc[~ccw]
+        t_ccw, t_cw = t_loc[ccw & reach], t_loc[~ccw & reach]
 
         def point(rho: float, phi: float, phi0: float = phi0) -> np.ndarray:
             return np.array([rho * math.cos(phi0 + phi), rho * math.sin(phi0 + phi), datum.z_mid])
@@ -91,16 +101,19 @@ def ball_seats(mesh: MeshData, gear: Gear, datum: Datum, diameter: float, centre
                 c = point(rho, phi)
                 return point_triangle_distance(c, t_ccw).min() - point_triangle_distance(c, t_cw).min()
 
-            phi = brentq(gap, -0.45 * pitch, 0.45 * pitch, xtol=1e-14)
+            phi = brentq(gap, -0.45 * pitch, 0.45 * pitch, xtol=1e-13)
             return phi, point_triangle_distance(point(rho, phi), t_ccw).min()
 
         # the ball sinks into the space until it touches: distance grows as it leaves the space
         lo, hi = sorted((centre_radius - 0.5 * gear.mn, centre_radius + 0.5 * gear.mn))
         try:
-            rho = brentq(lambda rr: centred(rr)[1] - radius, lo, hi, xtol=1e-12)
+            rho = brentq(lambda rr: centred(rr)[1] - radius, lo, hi, xtol=1e-10)
         except ValueError as exc:
             msg = f"the ball of {diameter:.3f} mm does not seat in space {j} near r = {centre_radius:.3f} mm"
             raise RuntimeError(msg) from exc
-        phi, _ = centred(rho)
-        out[j] = point(rho, phi)
+        phi, dist = centred(rho)
+        seat = point(rho, phi)
+        if point_triangle_distance(seat, t_loc).min() < dist - 1e-9:
+            raise RuntimeError(f"the ball of {diameter:.3f} mm in space {j} moved beyond 0.3 mn from its nominal seat")
+        out[j] = seat
     return out

@@ -101,6 +101,7 @@ def reference_gear_mesh(
     rim: float | None = None,
     offset: tuple[float, float] = (0.0, 0.0),
     rotation: float = 0.0,
+    helix_sagitta: float = 1e-4,
 ) -> trimesh.Trimesh:
     """Watertight mesh of ``gear`` (face from -b/2 to +b/2) with an imposed deviation.
 
@@ -112,6 +113,7 @@ def reference_gear_mesh(
     rim: radial rim thickness of an internal gear beyond the root [mm] (default 3 mn)
     offset: (x, y) translation applied last, e.g. an eccentricity [mm]
     rotation: rigid rotation about z applied before the offset [rad]
+    helix_sagitta: largest radial chord error of the helix between sections [mm] (sets z_divisions)
     """
     outline = transverse_outline(gear, flank_points, arc_points)
     if gear.internal:
@@ -124,8 +126,8 @@ def reference_gear_mesh(
     b = gear.face_width
     omega = twist_rate(gear)
     if z_divisions is None:
-        # helix chord sagitta r (omega dz)^2 / 8 below 1e-4 mm: radial, so < 0.04 um along the base tangent
-        z_divisions = 0 if omega == 0 else math.ceil(b * abs(omega) * math.sqrt(gear.tip_radius / 8 / 1e-4))
+        # helix chord sagitta r (omega dz)^2 / 8 is radial: along the base tangent it counts ~ tan(alpha) of it
+        z_divisions = 0 if omega == 0 else math.ceil(b * abs(omega) * math.sqrt(gear.tip_radius / 8 / helix_sagitta))
         if deviation is not None:
             z_divisions = max(z_divisions, 24)
     solid = mf.Manifold.extrude(cs, b, n_divisions=z_divisions).translate((0.0, 0.0, -b / 2))
