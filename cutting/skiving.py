@@ -350,8 +350,7 @@ def check_setup(setup: SkivingSetup) -> list[Problem]:
             Problem(
                 "cutter.tip_diameter",
                 round(setup.cutter_tip_diameter, 6),
-                f"the cutter tip circle lies inside its base circle d_b0 = {c.base_diameter:.3f} mm: "
-                "no involute edge",
+                f"the cutter tip circle lies inside its base circle d_b0 = {c.base_diameter:.3f} mm: no involute edge",
                 f"use a tip diameter above {c.base_diameter:.3f} mm",
             )
         )

@@ -146,7 +146,7 @@ def ball_centre_radius(gear: Gear, diameter: float) -> float:
     return g.base_radius / math.cos(a_k)
 
 
-def measure(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, name: str = "mesh") -> dict[str, Any]:
+def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, name: str = "mesh") -> dict[str, Any]:
     """Measure ``mesh`` as the gear ``gear``; returns the issue-3 JSON document."""
     opt = opt or MeasureOptions()
     datum = establish_datum(mesh, gear, name)
@@ -188,8 +188,9 @@ def measure(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, name:
     order = np.argsort(datum.number(np.arange(z)))
     k_sector = opt.sector_teeth or iso.default_sector_pitches(z)
     pitch = {}
+    at_circle = profile_trace(mesh, gear, datum, 0.0, np.array([r_p]))
     for side in SIDES:
-        e = profile_trace(mesh, gear, datum, 0.0, np.array([r_p]))[side][:, 0]
+        e = at_circle[side][:, 0]
         u = r_p * e / (side_sign(gear, side) * gear.base_radius) * UM  # arc on the circle, counter-clockwise
         pitch[side] = pitch_block(u[order], k_sector)
     result["pitch"] = pitch
@@ -300,3 +301,7 @@ def iso1328_block(gear: Gear, result: dict[str, Any], k: int) -> dict[str, Any]:
         "class": classes,
         "measured": worst,
     }
+
+
+#: the name the tests and scripts use
+measure = measure_gear

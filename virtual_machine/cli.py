@@ -90,6 +90,79 @@ def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
         click.echo(format_sheet(sheet, str(path)))
 
 
+@main.command(help="Measure a gear MESH (STL, PLY, OBJ, 3MF, GLB) as the gear of JOB's [gear] section.")
+@click.argument("mesh", type=click.Path(path_type=Path))
+@click.option("--job", "job_path", type=click.Path(path_type=Path), help="Job file (default: the default job).")
+@click.option("--json", "as_json", is_flag=True, help="Print the measurement JSON instead of the summary.")
+@click.option("--out", type=click.Path(path_type=Path), help="Write measurement.json and the charts here.")
+def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) -> None:
+    from metrology.charts import finite, write_charts
+    from metrology.datum import load_mesh
+    from metrology.measure import MeasureOptions, measure_gear
+    from virtual_machine.job import load_gear_section
+
+    try:
+        gear, options = load_gear_section(job_path or default_job_path())
+        data = load_mesh(mesh)
+        result = measure_gear(
+            data, gear, MeasureOptions(**{k: v for k, v in options.items() if v is not None}), str(mesh)
+        )
+    except (InputError, ValueError, RuntimeError) as exc:
+        _fail(exc)
+    doc = finite(result)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "measurement.json").write_text(json.dumps(doc, indent=2, allow_nan=False))
+        write_charts(out, result)
+    if as_json:
+        click.echo(json.dumps(doc, indent=2, allow_nan=False))
+    else:
+        click.echo(format_measurement(doc, str(mesh)))
+        if out is not None:
+            click.echo(f"\nwrote {out / 'measurement.json'}, profile.png, helix.png, pitch.png")
+
+
+def format_measurement(doc: dict, source: str) -> str:
+    """The class table a gear engineer reads first."""
+    iso = doc["iso1328"]
+    lines = [f"MEASUREMENT  {source}", ""]
+    lines.append(f"{'parameter':10s} {'left':>9s} {'right':>9s} {'tol':>7s} {'class':>6s}")
+    rows = [
+        ("f_p", "pitch"),
+        ("F_p", "pitch"),
+        ("F_alpha", "profile"),
+        ("f_Halpha", "profile"),
+        ("f_falpha", "profile"),
+        ("F_beta", "helix"),
+        ("f_Hbeta", "helix"),
+        ("f_fbeta", "helix"),
+    ]
+    tol = iso.get("tolerances") or {}
+    cls = iso.get("class") or {}
+    for key, block in rows:
+        left, right = doc[block]["left"][key], doc[block]["right"][key]
+        t = tol.get(key)
+        lines.append(f"{key:10s} {left:9.2f} {right:9.2f} {t if t is not None else '-':>7} {cls.get(key, '-')!s:>6}")
+    fr = doc["runout"]["F_r"]
+    lines.append(f"{'F_r':10s} {fr:9.2f} {'':9s} {tol.get('F_r', '-')!s:>7} {cls.get('F_r', '-')!s:>6}")
+    lines.append("")
+    if iso.get("error"):
+        lines.append(f"ISO 1328-1: {iso['error']}")
+    else:
+        lines.append(f"ISO 1328-1:2013 class of the gear: {cls.get('overall')}")
+    th = doc["thickness"]
+    ob = th["over_balls"]
+    lines.append(
+        f"over balls (D = {ob['ball_diameter_mm']:g} mm): M = {ob['M_dK_mm']:.4f} mm "
+        f"(nominal {ob['M_dK_nominal_mm']:.4f})"
+    )
+    sp = th["span"]
+    if sp.get("k"):
+        lines.append(f"span W_{sp['k']} = {sp['W_k_mm']:.4f} mm (nominal {sp['W_k_nominal_mm']:.4f})")
+    lines.append(f"tip diameter {th['tip_diameter_mm']:.4f} mm, root diameter {th['root_diameter_mm']:.4f} mm")
+    return "\n".join(lines)
+
+
 def _finite(obj: object) -> object:
     """JSON has no inf: an infinite lead (spur gear) becomes null."""
     if isinstance(obj, float) and not math.isfinite(obj):

@@ -182,6 +182,16 @@ MACHINE_KEYS: dict[str, Key] = {
     "i01": Key(float, 1.0, "", "thread group: product of the fixed ratios spindle -> lead screw (seed 001)", _positive),
 }
 
+MEASUREMENT_KEYS: dict[str, Key] = {
+    "profile_start_diameter": Key(
+        float, None, "mm", "start of the profile evaluation range (active profile start)", _positive
+    ),
+    "profile_end_diameter": Key(float, None, "mm", "end of the profile evaluation range", _positive),
+    "sector_teeth": Key(int, None, "", "k of the sector pitch deviation F_pk (default z/8)", _at_least(1)),
+    "span_teeth": Key(int, None, "", "spanned teeth k of W_k (default DIN 3960 / 21773)", _at_least(1)),
+    "ball_diameter": Key(float, None, "mm", "ball for over-balls and runout (default DIN 3977 size)", _positive),
+}
+
 #: c2 default per structure (see MACHINE_KEYS["c2"]).
 C2_DEFAULT = {"mechanical": 1 / 24, "hydraulic-differential": 1 / 24, "hydraulic-shaft": 1 / 24, "mechatronic": 1.0}
 
@@ -195,6 +205,7 @@ def machine_constants(machine: dict[str, Any], structure: str) -> dict[str, Any]
 
 
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
+OPTIONAL_SECTIONS = {"measurement": MEASUREMENT_KEYS}
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
 
 
@@ -272,6 +283,7 @@ class Job:
     cutter: Gear | None = None
     cutter_options: dict[str, Any] | None = None
     thread: dict[str, Any] | None = None
+    measurement: dict[str, Any] | None = None
 
     @property
     def skiving(self) -> SkivingSetup:
@@ -319,13 +331,14 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
         )
     sections = SECTIONS_THREAD if is_thread else SECTIONS_GEAR
     for name in data:
-        if name not in sections:
+        if name not in sections and name not in OPTIONAL_SECTIONS:
             problems.append(
                 Problem(
                     name, "[section]", "unknown section", "valid sections: " + ", ".join(f"[{s}]" for s in sections)
                 )
             )
     parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
+    measurement = parse_section("measurement", data.get("measurement", {}), MEASUREMENT_KEYS, problems)
     machine = parsed["machine"]
     if is_thread:
         if problems:
@@ -362,15 +375,24 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
             )
     if problems:
         raise InputError(problems, source)
-    job = Job(source, "gear", machine, parsed["process"], gear=gear, cutter=cutter, cutter_options={"edge": c["edge"]})
+    job = Job(
+        source,
+        "gear",
+        machine,
+        parsed["process"],
+        gear=gear,
+        cutter=cutter,
+        cutter_options={"edge": c["edge"]},
+        measurement=measurement,
+    )
     problems += check_setup(job.skiving)
     if problems:
         raise InputError(problems, source)
     return job
 
 
-def load_job(path: str | Path) -> Job:
-    """Read and validate a TOML job file."""
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """The TOML of a job file, or an InputError naming the file."""
     p = Path(path)
     if not p.is_file():
         raise InputError(
@@ -384,7 +406,30 @@ def load_job(path: str | Path) -> Job:
         raise InputError(
             Problem("job", str(p), f"not valid TOML: {exc}", "fix the syntax at the line shown"), str(p)
         ) from exc
-    return parse_job(data, str(p))
+    return data
+
+
+def load_job(path: str | Path) -> Job:
+    """Read and validate a TOML job file."""
+    return parse_job(read_toml(path), str(path))
+
+
+def load_gear_section(path: str | Path) -> tuple[Gear, dict[str, Any]]:
+    """Only the [gear] and [measurement] sections of a job, validated: what measuring a gear needs."""
+    data = read_toml(path)
+    problems: list[Problem] = []
+    if "gear" not in data:
+        raise InputError(
+            Problem("gear", None, "the job has no [gear] section", "describe the gear to measure"), str(path)
+        )
+    g = parse_section("gear", data["gear"], GEAR_KEYS, problems)
+    measurement = parse_section("measurement", data.get("measurement", {}), MEASUREMENT_KEYS, problems)
+    if not problems:
+        gear = _gear_from(g)
+        problems += check_gear(gear, "gear")
+    if problems:
+        raise InputError(problems, str(path))
+    return gear, measurement
 
 
 def default_job_path() -> Path:

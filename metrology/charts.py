@@ -1,0 +1,136 @@
+"""Measuring-machine charts: profile and helix traces with the tolerance band, pitch bars with the
+cumulative curve. Written as PNG with matplotlib's Agg backend (no display needed)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+SIDES = ("left", "right")
+
+
+def chart_teeth(z: int, count: int = 4) -> list[int]:
+    """Tooth numbers a measuring machine would chart: ``count`` teeth evenly round the gear."""
+    return sorted({1 + round(i * z / count) % z for i in range(count)})
+
+
+def _trace_chart(
+    path: Path,
+    title: str,
+    x_label: str,
+    axis: np.ndarray,
+    traces: dict[str, np.ndarray],
+    numbers: list[int],
+    band_um: float | None,
+    band_label: str,
+) -> None:
+    """Traces drawn like a gear chart: deviation across, the flank coordinate up; one column per tooth."""
+    fig, axes = plt.subplots(1, 2 * len(numbers), figsize=(2.0 * 2 * len(numbers), 6), sharey=True)
+    for s, side in enumerate(SIDES):
+        for j, n in enumerate(numbers):
+            ax = axes[s * len(numbers) + j]
+            e = traces[side][n - 1]
+            ok = np.isfinite(e)
+            ax.plot(e[ok], axis[ok], color="tab:blue", lw=1.2)
+            if ok.sum() > 2:
+                coef = np.polyfit(axis[ok], e[ok], 1)
+                ax.plot(np.polyval(coef, axis[ok]), axis[ok], color="tab:orange", lw=0.8, ls="--")
+                if band_um is not None:
+                    mid = float(np.mean(e[ok]))
+                    ax.axvspan(mid - band_um / 2, mid + band_um / 2, color="tab:green", alpha=0.12)
+            ax.axvline(0.0, color="k", lw=0.5)
+            ax.set_title(f"{side} {n}", fontsize=9)
+            ax.set_xlim(
+                -max(5.0, (band_um or 0) * 0.75, np.nanmax(np.abs(e)) * 1.3 if ok.any() else 0),
+                max(5.0, (band_um or 0) * 0.75, np.nanmax(np.abs(e)) * 1.3 if ok.any() else 0),
+            )
+            ax.tick_params(labelsize=7)
+            ax.set_xlabel("um", fontsize=8)
+    axes[0].set_ylabel(x_label)
+    fig.suptitle(f"{title}  (band: {band_label})", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def pitch_chart(path: Path, result: dict[str, Any]) -> None:
+    """Single pitch deviations as bars and the cumulative pitch deviation as a curve, both flanks."""
+    tol = result["iso1328"].get("tolerances") or {}
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    for ax, side in zip(axes, SIDES, strict=True):
+        p = result["pitch"][side]
+        n = np.arange(1, len(p["f_pi"]) + 1)
+        ax.bar(n, p["f_pi"], color="tab:blue", alpha=0.7, label="f_pi")
+        ax.plot(n, p["F_pi"], color="tab:red", marker=".", label="F_pi")
+        if tol.get("f_p"):
+            for v in (tol["f_p"], -tol["f_p"]):
+                ax.axhline(v, color="tab:blue", ls=":", lw=0.8)
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_ylabel(f"{side} [um]")
+        ax.set_title(
+            f"{side}: f_p = {p['f_p']:.2f} um, F_p = {p['F_p']:.2f} um, F_pk(k={p['k']}) = {p['F_pk']:.2f} um",
+            fontsize=9,
+        )
+        ax.legend(fontsize=8, loc="upper right")
+    axes[-1].set_xlabel("tooth")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def write_charts(out: Path, result: dict[str, Any]) -> list[Path]:
+    """profile.png, helix.png and pitch.png in ``out``; returns the paths."""
+    out.mkdir(parents=True, exist_ok=True)
+    tr = result["_traces"]
+    order = tr["order"]  # nominal tooth index of tooth numbers 1..z
+    z = len(order)
+    numbers = chart_teeth(z)
+    iso = result["iso1328"]
+    tol = iso.get("tolerances") or {}
+    cls = iso.get("tolerances_class")
+    label = f"ISO 1328-1 class {cls}" if cls else "no ISO class"
+    prof = {s: np.asarray(tr["profile"][s])[order] * 1e3 for s in SIDES}
+    helix = {s: np.asarray(tr["helix"][s])[order] * 1e3 for s in SIDES}
+    paths = [out / "profile.png", out / "helix.png", out / "pitch.png"]
+    _trace_chart(
+        paths[0],
+        "Profile (mid section)",
+        "roll length [mm]",
+        np.asarray(tr["L_mm"]),
+        prof,
+        numbers,
+        tol.get("F_alpha"),
+        f"F_alpha {label}",
+    )
+    _trace_chart(
+        paths[1],
+        "Helix (reference cylinder)",
+        "z [mm]",
+        np.asarray(tr["z_mm"]),
+        helix,
+        numbers,
+        tol.get("F_beta"),
+        f"F_beta {label}",
+    )
+    pitch_chart(paths[2], result)
+    return paths
+
+
+def finite(obj: Any) -> Any:
+    """JSON-safe copy: NaN/inf -> None, numpy scalars -> Python numbers, private keys dropped."""
+    if isinstance(obj, dict):
+        return {k: finite(v) for k, v in obj.items() if not str(k).startswith("_")}
+    if isinstance(obj, list | tuple):
+        return [finite(v) for v in obj]
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
