@@ -41,7 +41,7 @@ def check_mesh(mesh: trimesh.Trimesh, name: str = "mesh") -> MeshData:
     """A watertight, outward-oriented solid, or an InputError saying what is wrong."""
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise InputError(Problem("mesh", name, "holds no triangles", "export the gear as a closed triangle mesh"))
-    mesh.merge_vertices()
+    # files are loaded with process=True, which already merges duplicate vertices (STL triangle soup)
     if not mesh.is_watertight:
         raise InputError(
             Problem(
@@ -51,8 +51,10 @@ def check_mesh(mesh: trimesh.Trimesh, name: str = "mesh") -> MeshData:
                 "measure a closed solid: repair holes and non-manifold edges before measuring",
             )
         )
-    if mesh.volume <= 0:
-        why = f"has volume {mesh.volume:.3f} mm^3 (inside out)"
+    tri = np.asarray(mesh.vertices)[np.asarray(mesh.faces)]
+    volume = float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6)
+    if volume <= 0:
+        why = f"has volume {volume:.3f} mm^3 (inside out)"
         raise InputError(Problem("mesh", name, why, "fix the triangle winding"))
     return MeshData(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces))
 

@@ -67,8 +67,10 @@ def ball_seats(mesh: MeshData, gear: Gear, datum: Datum, diameter: float, centre
     f = mesh.faces
     fr_lo, fr_hi = vr[f].min(axis=1), vr[f].max(axis=1)
     fz_lo, fz_hi = v[f, 2].min(axis=1), v[f, 2].max(axis=1)
-    zone = (fr_hi > centre_radius - 1.5 * diameter) & (fr_lo < centre_radius + 1.5 * diameter)
-    zone &= (fz_lo < datum.z_mid + 0.75 * diameter) & (fz_hi > datum.z_mid - 0.75 * diameter)
+    # a ball touches within half its diameter of its centre; the centre moves little from nominal
+    reach = 0.5 * diameter + 0.5 * gear.mn
+    zone = (fr_hi > centre_radius - reach) & (fr_lo < centre_radius + reach)
+    zone &= (fz_lo < datum.z_mid + reach) & (fz_hi > datum.z_mid - reach)
     tri = v[f[zone]]
     cen = tri.mean(axis=1)
     thc = np.arctan2(cen[:, 1], cen[:, 0])
@@ -80,40 +82,71 @@ def ball_seats(mesh: MeshData, gear: Gear, datum: Datum, diameter: float, centre
         local = np.abs(dphi) < 0.75 * pitch + half / centre_radius
         t_loc, a_loc = tri[local], dphi[local]
 
-        # keep the triangles within reach of the ball around its nominal seat (one exact distance pass),
-        # then check the seat against all local triangles at the end
-        reach = (
-            point_triangle_distance(
-                np.array([centre_radius * math.cos(phi0), centre_radius * math.sin(phi0), datum.z_mid]), t_loc
-            )
-            < radius + 0.3 * gear.mn
-        )
-        ccw = a_loc > 0  # flank triangles on each side of the nominal space centre line
-        t_ccw, t_cw = t_loc[ccw & reach], t_loc[~ccw & reach]
-
-        def point(rho: float, phi: float, phi0: float = phi0) -> np.ndarray:
-            return np.array([rho * math.cos(phi0 + phi), rho * math.sin(phi0 + phi), datum.z_mid])
-
-        def centred(rho: float, t_ccw=t_ccw, t_cw=t_cw) -> tuple[float, float]:
-            """Angle at which the ball at radius rho is equidistant from both flanks, and that distance."""
-
-            def gap(phi: float) -> float:
-                c = point(rho, phi)
-                return point_triangle_distance(c, t_ccw).min() - point_triangle_distance(c, t_cw).min()
-
-            phi = brentq(gap, -0.45 * pitch, 0.45 * pitch, xtol=1e-13)
-            return phi, point_triangle_distance(point(rho, phi), t_ccw).min()
-
-        # the ball sinks into the space until it touches: distance grows as it leaves the space
-        lo, hi = sorted((centre_radius - 0.5 * gear.mn, centre_radius + 0.5 * gear.mn))
-        try:
-            rho = brentq(lambda rr: centred(rr)[1] - radius, lo, hi, xtol=1e-10)
-        except ValueError as exc:
-            msg = f"the ball of {diameter:.3f} mm does not seat in space {j} near r = {centre_radius:.3f} mm"
-            raise RuntimeError(msg) from exc
-        phi, dist = centred(rho)
-        seat = point(rho, phi)
-        if point_triangle_distance(seat, t_loc).min() < dist - 1e-9:
-            raise RuntimeError(f"the ball of {diameter:.3f} mm in space {j} moved beyond 0.3 mn from its nominal seat")
+        # Keep only triangles within reach of the ball around its nominal seat (one exact distance pass);
+        # if the seat found touches anything left out, widen the reach and solve again.
+        nominal_seat = np.array([centre_radius * math.cos(phi0), centre_radius * math.sin(phi0), datum.z_mid])
+        d_nominal = point_triangle_distance(nominal_seat, t_loc)
+        for margin in (0.05 * gear.mn, 0.3 * gear.mn, math.inf):
+            reach = d_nominal < radius + margin
+            try:
+                seat, dist = _seat(
+                    t_loc[(a_loc > 0) & reach],
+                    t_loc[(a_loc <= 0) & reach],
+                    radius,
+                    centre_radius,
+                    phi0,
+                    pitch,
+                    gear.mn,
+                    datum.z_mid,
+                    diameter,
+                    j,
+                )
+            except RuntimeError:
+                if math.isinf(margin):
+                    raise
+                continue
+            # triangle inequality: only triangles this close to the nominal seat can be closer to the found one
+            near = d_nominal < dist + np.linalg.norm(seat - nominal_seat) + 1e-9
+            if point_triangle_distance(seat, t_loc[near]).min() >= dist - 1e-9:
+                break
         out[j] = seat
     return out
+
+
+def _seat(
+    t_ccw: np.ndarray,
+    t_cw: np.ndarray,
+    radius: float,
+    centre_radius: float,
+    phi0: float,
+    pitch: float,
+    mn: float,
+    z_mid: float,
+    diameter: float,
+    j: int,
+) -> tuple[np.ndarray, float]:
+    """Ball seat between the flank triangles on either side of the space centre line phi0."""
+
+    def point(rho: float, phi: float) -> np.ndarray:
+        return np.array([rho * math.cos(phi0 + phi), rho * math.sin(phi0 + phi), z_mid])
+
+    def centred(rho: float) -> tuple[float, float]:
+        """Angle at which the ball at radius rho is equidistant from both flanks, and that distance."""
+
+        def gap(phi: float) -> float:
+            c = point(rho, phi)
+            return point_triangle_distance(c, t_ccw).min() - point_triangle_distance(c, t_cw).min()
+
+        phi = brentq(gap, -0.45 * pitch, 0.45 * pitch, xtol=1e-13)
+        return phi, point_triangle_distance(point(rho, phi), t_ccw).min()
+
+    if len(t_ccw) == 0 or len(t_cw) == 0:
+        raise RuntimeError(f"the ball of {diameter:.3f} mm finds no flank on one side of space {j}")
+    lo, hi = centre_radius - 0.5 * mn, centre_radius + 0.5 * mn
+    try:
+        rho = brentq(lambda rr: centred(rr)[1] - radius, lo, hi, xtol=1e-10)
+    except ValueError as exc:
+        msg = f"the ball of {diameter:.3f} mm does not seat in space {j} near r = {centre_radius:.3f} mm"
+        raise RuntimeError(msg) from exc
+    phi, dist = centred(rho)
+    return point(rho, phi), dist

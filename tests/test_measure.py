@@ -231,3 +231,12 @@ def test_bad_meshes_are_refused():
     )
     with pytest.raises(InputError, match="axis is not on z"):
         measure(check_mesh(tilted), Gear(30, 2.0, 20 * DEG, 0.0, tilted.extents[2]))
+
+
+def test_iso_validity_is_enforced_with_a_clear_message():
+    """ISO 1328-1:2013 covers b >= 4 mm: a 3 mm gear is measured, but gets no class and says why."""
+    g = Gear(30, 2.0, 20 * DEG, 0.0, 3.0)
+    res = measure(check_mesh(reference_gear_mesh(g, flank_points=40, rotation=0.05)), g)
+    assert res["iso1328"]["class"] is None
+    assert "b = 3" in res["iso1328"]["error"] and "4 <= b" in res["iso1328"]["error"]
+    assert res["profile"]["left"]["F_alpha"] < 1.0  # the deviations are still reported
