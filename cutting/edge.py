@@ -154,11 +154,11 @@ def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) ->
 
             def bound(phi: float, rho: float = rho, start: float = th0[i], mate: str = mate, sgn: float = sgn) -> float:
                 th, ok, d = _on_flank(setup, rho, start, mate, np.array([phi]), band)
-                return float(sgn * th[0]) if ok[0] and sgn * d[0] < 0 else math.inf
+                return float(sgn * th[0]) if ok[0] and sgn * d[0] < 0 else 1e9  # finite: keeps Brent stable
 
             lo, hi = phi_grid[max(k - 1, 0)], phi_grid[min(k + 1, steps - 1)]
             best = minimize_scalar(bound, bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
-            out[i] = sgn * min(cand[k], best.fun)
+            out[i] = sgn * min(cand[k], best.fun)  # best.fun = 1e9 where no bound was found
         # Below the generating zone the "envelope" comes from the workpiece's tip corner and departs from the
         # involute by far more than the crossing error: keep the involute there (it never meets the flank).
         out = np.where(np.abs(out - th0) * radii > CONJUGATE_MAX_DEPARTURE, th0, out)
