@@ -1,0 +1,103 @@
+"""The cutting engine on a small gear: tubes, sectors, the ideal cut and what the measurement sees."""
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from cutting.edge import involute_edge
+from cutting.errors import InputError
+from cutting.gear import Gear
+from cutting.removal import CutResult, Stock, cut
+from cutting.skiving import SkivingSetup
+from cutting.solids import blank
+from cutting.sweep import sample_window, tube
+from cutting.trajectory import check_poses, ideal_passes
+from metrology.measure import measure
+from metrology.sections import MeshData
+
+DEG = math.pi / 180
+
+
+def small_setup() -> SkivingSetup:
+    """z2 = 16, mn = 1, b = 2 mm, helical cutter z0 = 11: small enough to cut in a test."""
+    return SkivingSetup(Gear(16, 1.0, 20 * DEG, 0.0, 2.0), Gear(11, 1.0, 20 * DEG, 20 * DEG, 5.0), 2000, 0.2, (2.25,))
+
+
+def test_sampling_bounds_the_chord_error():
+    st = small_setup()
+    edge = involute_edge(st, 30)
+    pts = np.column_stack([edge.outline, np.zeros(len(edge.outline))])
+    pose = st.cutter_pose
+    for tol in (4e-3, 1e-3):
+        t, err = sample_window(pose, pts, -0.5, 0.5, tol)
+        assert err <= tol
+        # an independent check at quarter points of every interval: the chord error stays near the bound
+        tq = t[:-1] + 0.25 * np.diff(t)
+        p0, p1 = (np.einsum("mij,nj->mni", *pose(x)[:1], pts) + pose(x)[1][:, None, :] for x in (t[:-1], t[1:]))
+        pq = np.einsum("mij,nj->mni", pose(tq)[0], pts) + pose(tq)[1][:, None, :]
+        dev = np.linalg.norm(pq - (0.75 * p0 + 0.25 * p1), axis=2).max()
+        assert dev <= tol  # a parabola's deviation at a quarter is 3/4 of the midpoint's
+
+
+def test_tube_volume_is_outline_area_times_normal_travel():
+    """A straight translation along the rake normal: the tube is a prism, volume = area * length."""
+    st = small_setup()
+    edge = involute_edge(st, 30)
+    x, y = edge.outline[:, 0], edge.outline[:, 1]
+    area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    rot = np.repeat(np.eye(3)[None], 5, axis=0)
+    trans = np.column_stack([np.zeros(5), np.zeros(5), np.linspace(0, 3.0, 5)])
+    solid = tube(edge.outline, rot, trans)
+    assert solid.volume() == pytest.approx(area * 3.0, rel=1e-5)
+
+
+def test_bad_poses_are_refused():
+    t = np.array([0.0, 1.0, 2.0])
+    rot = np.repeat(np.eye(3)[None], 3, axis=0)
+    trans = np.zeros((3, 3))
+    check_poses(t, rot, trans)
+    with pytest.raises(InputError, match="non-finite"):
+        check_poses(t, rot, np.where(np.arange(9).reshape(3, 3) == 4, np.nan, 0.0))
+    skew = rot.copy()
+    skew[1, 0, 0] = 1.01
+    with pytest.raises(InputError, match="not a rigid rotation"):
+        check_poses(t, skew, trans)
+    with pytest.raises(InputError, match="does not increase"):
+        check_poses(np.array([0.0, 1.0, 1.0]), rot, trans)
+
+
+def test_never_touching_the_blank_is_an_error():
+    st = small_setup()
+    motion = ideal_passes(st)[0]
+    from dataclasses import replace
+
+    far = replace(motion, centre_distance=motion.centre_distance + 5.0)
+    res = CutResult(None)
+    with pytest.raises(ValueError, match="never reaches the blank"):
+        cut(Stock(st.gear), involute_edge(st, 30), far, 5e-3, res)
+
+
+def test_ideal_cut_of_a_small_gear():
+    """One full-depth pass at 4 um sweep error: a manifold gear with the right teeth and thickness."""
+    st = small_setup()
+    stock = Stock(st.gear)
+    v_blank = blank(st.gear).volume()
+    assert sum(stock.volumes) == pytest.approx(v_blank, rel=1e-9)  # the sectors tile the blank exactly
+    res = CutResult(None)
+    cut(stock, involute_edge(st, 40), ideal_passes(st)[0], 4e-3, res)
+    solid = stock.solid()
+    assert solid.status().name == "NoError" and not solid.is_empty()
+    assert res.sweep_error <= 4e-3
+    # every chip is what left the stock
+    assert sum(c.volume for c in res.chips) == pytest.approx(v_blank - solid.volume(), rel=1e-6)
+    m = solid.to_mesh64()
+    mesh = trimesh.Trimesh(np.asarray(m.vert_properties)[:, :3], np.asarray(m.tri_verts), process=False)
+    assert mesh.is_watertight
+    doc = measure(MeshData(mesh.vertices, mesh.faces), st.gear)
+    # the chords leave material: at most the sweep error on each flank, plus the involute edge's bow
+    span = doc["thickness"]["span"]
+    assert 0.0 < (span["W_k_mm"] - span["W_k_nominal_mm"]) * 1e3 < 2 * 4.0 + 3.0
+    # every flank point lies between nominal and nominal + (chord error + feed ridge): so does every pitch
+    assert doc["pitch"]["left"]["F_p"] < 4.0 + 1.0 and doc["pitch"]["right"]["F_p"] < 4.0 + 1.0
