@@ -150,17 +150,18 @@ def cut(
         t0, t1 = max(tm - dt, 0.0), min(tm + dt, motion.duration)
         if t1 <= t0:
             continue
-        # skip passages wholly above or below the face
-        z_probe = place(pts, *pose(np.linspace(t0, t1, 9)))[..., 2]
-        if z_probe.min() > b2 or z_probe.max() < -b2:
+        # keep the part of the window in which the tooth can meet the blank (radius and face), one sample wider
+        probe = np.linspace(t0, t1, 65)
+        w = place(pts, *pose(probe))
+        r = np.hypot(w[..., 0], w[..., 1])
+        meets = ((r > g.tip_radius) if g.internal else (r < g.tip_radius)) & (np.abs(w[..., 2]) <= b2)
+        hit = np.nonzero(meets.any(axis=1))[0]
+        if hit.size == 0:
             continue
+        t0, t1 = probe[max(hit[0] - 1, 0)], probe[min(hit[-1] + 1, len(probe) - 1)]
         times, err = sample_window(pose, pts, t0, t1, tol)
         tool = tube(edge.outline, *pose(times))
-        w = place(pts, *pose(times)).reshape(-1, 3)
-        r = np.hypot(w[:, 0], w[:, 1])
-        reach = w[(r < g.tip_radius) if not g.internal else (r > g.tip_radius)]
-        if len(reach) == 0:
-            continue
+        reach = place(pts, *pose(times)).reshape(-1, 3)
         sectors = stock.sectors(reach)
         vol = stock.subtract(tool, sectors)
         result.sweeps += len(times) - 1
