@@ -165,16 +165,19 @@ def establish_datum(mesh: MeshData, gear: Gear, name: str = "mesh") -> Datum:
 
 
 def _check_axis(mesh: MeshData, z_lo: float, z_hi: float, name: str, problems: list[Problem]) -> None:
-    """The mean vertex position of slabs near both faces must lie on one vertical line (z-fold symmetry)."""
-    z = mesh.vertices[:, 2]
+    """The sections near both faces must have their centroids on one vertical line.
+
+    The centroid is that of the section's outline weighted by length, so it does not depend on how
+    densely the mesh is tessellated (a cut gear has dense feed marks on some flanks and none on others).
+    """
     b = z_hi - z_lo
     centres = []
     for f in (0.2, 0.8):
-        slab = np.abs(z - (z_lo + f * b)) < 0.1 * b
-        if slab.sum() < 10:
+        a, bb = level_segments(mesh, "z", z_lo + f * b)
+        length = np.linalg.norm(bb[:, :2] - a[:, :2], axis=1)
+        if length.sum() <= 0.0:
             return
-        centres.append(mesh.vertices[slab, :2].mean(axis=0))
-    # the slab means are only rough axis points (vertex density), so the threshold is generous
+        centres.append(((a[:, :2] + bb[:, :2]) / 2 * length[:, None]).sum(axis=0) / length.sum())
     drift = float(np.linalg.norm(centres[1] - centres[0]))
     tilt = math.degrees(math.atan2(drift, 0.6 * b))
     if tilt > MAX_AXIS_TILT_DEG:
