@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -11,7 +12,8 @@ import numpy as np
 import trimesh
 
 from cutting.edge import CuttingEdge, make_edge
-from cutting.removal import CutResult, Stock, cut
+from cutting.engine import cut_passes
+from cutting.removal import DEFAULT_SLAB, CutResult
 from cutting.skiving import SkivingSetup
 from cutting.trajectory import ideal_passes
 
@@ -22,6 +24,12 @@ class CutReport:
     edge: CuttingEdge
     seconds: float
     pass_seconds: list[float]
+    stock_triangles: int
+
+
+def default_workers() -> int:
+    """One worker process per core, at most 8."""
+    return max(1, min(os.cpu_count() or 1, 8))
 
 
 def cut_ideal(
@@ -30,24 +38,19 @@ def cut_ideal(
     finishing_tol: float,
     roughing_tol: float,
     progress: Callable[[int, int, int], None] | None = None,
+    workers: int | None = None,
+    slab: float = DEFAULT_SLAB,
 ) -> CutReport:
-    """Cut every pass with the ideal motion. ``progress(pass_index, done, total)`` is called per tooth passage."""
+    """Cut every pass with the ideal motion. ``progress(pass_index, done, total)`` reports tooth passages."""
     t_start = time.perf_counter()
     edge = make_edge(setup, edge_kind)
-    stock = Stock(setup.gear)
-    result = CutResult(None)
     motions = ideal_passes(setup)
-    pass_seconds = []
-    for motion in motions:
-        last = motion.index == len(motions) - 1
-        t0 = time.perf_counter()
-        cb = None if progress is None else (lambda d, n, i=motion.index: progress(i, d, n))
-        cut(stock, edge, motion, finishing_tol if last else roughing_tol, result, cb)
-        pass_seconds.append(time.perf_counter() - t0)
-    result.gear = stock.solid()
+    tols = [finishing_tol if m.index == len(motions) - 1 else roughing_tol for m in motions]
+    run = cut_passes(setup.gear, edge, motions, tols, workers or default_workers(), slab, progress)
+    result = run.result
     if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
         raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
-    return CutReport(result, edge, time.perf_counter() - t_start, pass_seconds)
+    return CutReport(result, edge, time.perf_counter() - t_start, run.pass_seconds, run.stock_triangles)
 
 
 def to_trimesh(solid: mf.Manifold) -> trimesh.Trimesh:

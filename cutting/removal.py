@@ -20,7 +20,7 @@ from cutting.flank import twist_rate
 from cutting.gear import Gear
 from cutting.skiving import rot_z
 from cutting.solids import blank
-from cutting.sweep import outline_points, place, sample_window, tube
+from cutting.sweep import outline_points, place, sample_window, simplify_outline, tube
 from cutting.trajectory import PassMotion
 
 
@@ -39,67 +39,131 @@ class Chip:
 class CutResult:
     gear: mf.Manifold
     chips: list[Chip] = field(default_factory=list)
-    sweep_error: float = 0.0  # largest chord deviation of the sweeps [mm]
+    sweep_error: float = 0.0  # largest deviation of the swept tubes from the exact sweep of the edge [mm]
     subtractions: int = 0
     sweeps: int = 0
 
 
-class Stock:
-    """The workpiece as twisted angular sectors, one per tooth space, boundaries on the tooth centre lines."""
+#: Slab height [mm]: thinner slabs carry fewer triangles per boolean, but a passage then needs more sub-tubes,
+#: whose pose ranges overlap (benchmarks/bench_cut.py --slabs measures the trade-off).
+DEFAULT_SLAB = 2.0
 
-    def __init__(self, gear: Gear, rim: float | None = None):
+#: Angular overlap of neighbouring sectors, as a fraction of the pitch (a few micrometres of tooth centre).
+SECTOR_OVERLAP = 2e-4
+
+
+class Stock:
+    """The workpiece as cells: angular sectors (one per tooth space, twisted with the helix, boundaries on the
+    tooth centre lines) cut into axial slabs.
+
+    A boolean costs about 1 us per triangle of both operands, so the cells keep each operand small: a tooth
+    passage meets only the few cells its path crosses, and each cell carries only the feed marks of its own
+    slab. ``slab`` is the target slab height [mm].
+    """
+
+    def __init__(
+        self, gear: Gear, rim: float | None = None, slab: float = DEFAULT_SLAB, sectors: Sequence[int] | None = None
+    ):
+        """``sectors``: the tooth spaces this stock holds (all by default); a parallel cut gives each worker a share."""
         self.gear = gear
         self.n = gear.teeth
+        self.owned = frozenset(range(self.n) if sectors is None else sectors)
         solid = blank(gear, rim)
         b = gear.face_width
         r_out = (gear.root_radius + 4 * gear.mn + (rim or 0)) * 1.5 if gear.internal else gear.tip_radius * 1.5
         pitch = 2 * math.pi / self.n
         twist = math.degrees(twist_rate(gear) * b)
         self.twist_rate = twist_rate(gear)
+        slabs = max(1, round(b / slab))
+        self.z_edges = np.linspace(-b / 2, b / 2, slabs + 1)
         divisions = 0 if twist == 0 else max(8, int(abs(twist) / 0.5))
-        self.tiles: list[mf.Manifold] = []
-        for k in range(self.n):
-            a0, a1 = k * pitch, (k + 1) * pitch  # tooth centre k to tooth centre k+1: space k in the middle
-            wedge = mf.CrossSection(
-                [
-                    np.array(
-                        [
-                            [0.0, 0.0],
-                            [r_out * math.cos(a0), r_out * math.sin(a0)],
-                            [r_out * math.cos(a1), r_out * math.sin(a1)],
-                        ]
-                    )
-                ]
-            )
+        self.cells: dict[tuple[int, int], mf.Manifold] = {}
+        for k in sorted(self.owned):
+            # tooth centre k to tooth centre k+1 (space k in the middle), overlapping the neighbours by a sliver of
+            # tooth that is never cut: the final union then meets real overlaps, not two nearly coincident walls
+            a0, a1 = k * pitch - SECTOR_OVERLAP * pitch, (k + 1) * pitch + SECTOR_OVERLAP * pitch
+            corners = [
+                [0.0, 0.0],
+                [r_out * math.cos(a0), r_out * math.sin(a0)],
+                [r_out * math.cos(a1), r_out * math.sin(a1)],
+            ]
+            wedge = mf.CrossSection([np.array(corners)])
             # extrude twists counter-clockwise with +z for positive degrees, like a right-hand helix
             prism = mf.Manifold.extrude(wedge, b + 2, n_divisions=divisions, twist_degrees=twist)
             prism = prism.translate((0.0, 0.0, -b / 2 - 1)).rotate(
                 (0.0, 0.0, math.degrees(-self.twist_rate * (b / 2 + 1)))
             )
-            tile = solid ^ prism
-            tile.num_tri()
-            self.tiles.append(tile)
-        self.volumes = [t.volume() for t in self.tiles]
+            sector = solid ^ prism
+            for s in range(slabs):
+                cell = sector
+                if s > 0:
+                    cell = cell.trim_by_plane((0.0, 0.0, 1.0), float(self.z_edges[s]))
+                if s < slabs - 1:
+                    cell = cell.trim_by_plane((0.0, 0.0, -1.0), -float(self.z_edges[s + 1]))
+                self.cells[k, s] = cell
+        self.volumes = {key: cell.volume() for key, cell in self.cells.items()}
 
-    def sectors(self, pts: np.ndarray) -> list[int]:
-        """Indices of the sectors that points (n, 3) of the work frame reach (helix untwisted first)."""
-        theta = np.arctan2(pts[:, 1], pts[:, 0]) - self.twist_rate * pts[:, 2]
+    def reached(self, w: np.ndarray) -> dict[tuple[int, int], tuple[int, int]]:
+        """For placed outlines ``w`` (m poses, n points, 3): each cell that the tube between consecutive poses
+        can enter, with the first and last pose of the sub-tube that covers all of it.
+
+        Between two poses the tube lies in the convex hull of the two outlines, so an interval can only
+        reach the slabs its z range overlaps and the sectors its (untwisted) angle range overlaps.
+        """
         pitch = 2 * math.pi / self.n
-        k = np.floor(theta / pitch).astype(int) % self.n
-        return sorted(set(k.tolist()))
+        theta = np.arctan2(w[..., 1], w[..., 0]) - self.twist_rate * w[..., 2]
+        ref = float(np.angle(np.exp(1j * theta).mean()))
+        theta = ref + np.angle(np.exp(1j * (theta - ref)))  # continuous around the tube
+        margin = 1e-3 * pitch  # the hull of a short chord bulges by far less than this in angle
+        lo_t, hi_t = theta.min(axis=1), theta.max(axis=1)
+        lo_z, hi_z = w[..., 2].min(axis=1), w[..., 2].max(axis=1)
+        lo_t, hi_t = np.minimum(lo_t[:-1], lo_t[1:]) - margin, np.maximum(hi_t[:-1], hi_t[1:]) + margin
+        lo_z, hi_z = np.minimum(lo_z[:-1], lo_z[1:]), np.maximum(hi_z[:-1], hi_z[1:])
+        k_lo, k_hi = np.floor(lo_t / pitch).astype(int), np.floor(hi_t / pitch).astype(int)
+        slabs = len(self.z_edges) - 1
+        s_lo = np.searchsorted(self.z_edges, lo_z, side="right") - 1
+        s_hi = np.searchsorted(self.z_edges, hi_z, side="left") - 1
+        out: dict[tuple[int, int], tuple[int, int]] = {}
+        for i in range(len(w) - 1):
+            for s in range(max(s_lo[i], 0), min(s_hi[i], slabs - 1) + 1):
+                for k in range(k_lo[i], k_hi[i] + 1):
+                    key = (k % self.n, s)
+                    if key[0] not in self.owned:
+                        continue
+                    first, _ = out.get(key, (i, i))
+                    out[key] = (first, i + 1)
+        return out
 
-    def subtract(self, tool: mf.Manifold, sectors: Sequence[int]) -> float:
-        """Remove ``tool`` from the given sectors; returns the removed volume [mm^3]."""
-        removed = 0.0
-        for k in sectors:
-            cut = self.tiles[k] - tool
-            v = cut.volume()  # evaluates the lazy boolean
-            removed += self.volumes[k] - v
-            self.tiles[k], self.volumes[k] = cut, v
+    def subtract(self, tool: mf.Manifold, key: tuple[int, int]) -> float:
+        """Remove ``tool`` from one cell; returns the removed volume [mm^3]."""
+        cut = self.cells[key] - tool
+        v = cut.volume()  # evaluates the lazy boolean
+        removed = self.volumes[key] - v
+        self.cells[key], self.volumes[key] = cut, v
         return removed
 
+    def triangles(self) -> int:
+        return sum(cell.num_tri() for cell in self.cells.values())
+
     def solid(self) -> mf.Manifold:
-        return mf.Manifold.batch_boolean(self.tiles, mf.OpType.Add)
+        return union_cells(self.cells, self.z_edges)
+
+
+def union_cells(cells: dict[tuple[int, int], mf.Manifold], z_edges: np.ndarray) -> mf.Manifold:
+    """The union of the cells. The slabs meet in exact planes z = const: vertices that the booleans left a
+    rounding error off a slab plane are put back on it first, so the union merges the faces instead of
+    leaving a slit."""
+    planes = np.asarray(z_edges)[1:-1]
+
+    def snap(v: np.ndarray) -> np.ndarray:
+        v = np.array(v, dtype=float)
+        near = np.abs(v[:, 2:3] - planes[None, :]) < 1e-7
+        hit = near.any(axis=1)
+        v[hit, 2] = planes[np.argmax(near[hit], axis=1)]
+        return v
+
+    parts = [cell.warp_batch(snap) if planes.size else cell for cell in cells.values()]
+    return mf.Manifold.batch_boolean(parts, mf.OpType.Add)
 
 
 def engagement_half_angle(motion: PassMotion, edge: CuttingEdge) -> float:
@@ -118,6 +182,19 @@ def engagement_half_angle(motion: PassMotion, edge: CuttingEdge) -> float:
     return float(np.abs(phi[inside]).max()) + 0.02
 
 
+def passage_range(motion: PassMotion, edge: CuttingEdge) -> tuple[float, int, int]:
+    """Engagement half angle [rad] and the first and last cutter tooth pitch m whose passage (at t = m * pitch
+    time) can meet the blank during the pass."""
+    half = engagement_half_angle(motion, edge)
+    pitch = 2 * math.pi / motion.setup.cutter.teeth
+    return half, math.ceil(-half / pitch), math.floor((motion.omega0 * motion.duration + half) / pitch)
+
+
+def passage_count(motion: PassMotion, edge: CuttingEdge) -> int:
+    _, first, last = passage_range(motion, edge)
+    return last - first + 1
+
+
 def cut(
     stock: Stock,
     edge: CuttingEdge,
@@ -126,16 +203,21 @@ def cut(
     result: CutResult,
     progress: Callable[[int, int], None] | None = None,
 ) -> None:
-    """Run one pass of ``motion`` on ``stock``: every tooth passage swept to ``tol`` [mm] and subtracted."""
+    """Run one pass of ``motion`` on ``stock``: every tooth passage swept to ``tol`` [mm] and subtracted.
+
+    ``tol`` bounds the whole sweep error: the simplified outline's deviation from the edge plus the chord
+    error of the point paths between poses.
+    """
     setup = motion.setup
     z0 = setup.cutter.teeth
     g = setup.gear
-    half = engagement_half_angle(motion, edge)
+    half, m_first, m_last = passage_range(motion, edge)
     dt = half / motion.omega0
     step = 2 * math.pi / z0 / motion.omega0  # one tooth pitch of the cutter
-    m_first = math.ceil(-half / (2 * math.pi / z0))
-    m_last = math.floor((motion.omega0 * motion.duration + half) / (2 * math.pi / z0))
-    pts = outline_points(edge.outline)
+    # the tolerance is shared: half for the outline's polygon, half for the chords of the point paths
+    outline, outline_err = simplify_outline(edge.outline, tol / 2)
+    sweep_tol = tol - outline_err
+    pts = outline_points(outline)
     b2 = g.face_width / 2
     total = m_last - m_first + 1
     for count, m in enumerate(range(m_first, m_last + 1)):
@@ -159,14 +241,14 @@ def cut(
         if hit.size == 0:
             continue
         t0, t1 = probe[max(hit[0] - 1, 0)], probe[min(hit[-1] + 1, len(probe) - 1)]
-        times, err = sample_window(pose, pts, t0, t1, tol)
-        tool = tube(edge.outline, *pose(times))
-        reach = place(pts, *pose(times)).reshape(-1, 3)
-        sectors = stock.sectors(reach)
-        vol = stock.subtract(tool, sectors)
+        times, err = sample_window(pose, pts, t0, t1, sweep_tol)
+        rot, trans = pose(times)
+        vol = 0.0
+        for key, (i0, i1) in stock.reached(place(pts, rot, trans)).items():
+            vol += stock.subtract(tube(outline, rot[i0 : i1 + 1], trans[i0 : i1 + 1]), key)
+            result.subtractions += 1
         result.sweeps += len(times) - 1
-        result.subtractions += len(sectors)
-        result.sweep_error = max(result.sweep_error, err)
+        result.sweep_error = max(result.sweep_error, err + outline_err)
         result.chips.append(Chip(motion.index, j, tm, vol, len(times) - 1))
         if progress is not None:
             progress(count + 1, total)

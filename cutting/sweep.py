@@ -85,3 +85,33 @@ def tube(outline: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> mf.Manifold
             "through itself; sample the window more finely"
         )
     return solid
+
+
+def simplify_outline(outline: np.ndarray, tol: float) -> tuple[np.ndarray, float]:
+    """Fewest vertices of the closed polygon ``outline`` that keep every dropped vertex within ``tol`` [mm].
+
+    Douglas-Peucker on each half (split at the vertex farthest from the first one), so the sweep costs
+    triangles only where the edge bends. Returns the simplified outline and the largest deviation left.
+    """
+    n = len(outline)
+    far = int(np.argmax(np.linalg.norm(outline - outline[0], axis=1)))
+    keep = np.zeros(n, dtype=bool)
+    keep[[0, far]] = True
+    closed = np.vstack([outline, outline[:1]])
+    stack = [(0, far), (far, n)]
+    worst = 0.0
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2:
+            continue
+        a, b = closed[i], closed[j]
+        seg = b - a
+        p = closed[i + 1 : j] - a
+        cross = np.abs(seg[0] * p[:, 1] - seg[1] * p[:, 0]) / max(float(np.linalg.norm(seg)), 1e-300)
+        k = int(np.argmax(cross))
+        if cross[k] > tol:
+            keep[i + 1 + k] = True
+            stack += [(i, i + 1 + k), (i + 1 + k, j)]
+        else:
+            worst = max(worst, float(cross[k]))
+    return outline[keep], worst

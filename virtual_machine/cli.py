@@ -126,10 +126,11 @@ def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) 
 @click.argument("job", required=False, type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 @click.option("--edge", type=click.Choice(["conjugate", "involute"]), help="Override the job's cutter.edge.")
-def cut(job: Path | None, out: Path, edge: str | None) -> None:
+@click.option("--workers", type=click.IntRange(1, 64), help="Worker processes (default: one per core, at most 8).")
+def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> None:
     from tqdm import tqdm
 
-    from cutting.ideal_cut import cut_ideal, to_trimesh
+    from cutting.ideal_cut import cut_ideal, default_workers, to_trimesh
     from metrology.charts import finite, write_charts
     from metrology.datum import check_mesh
     from metrology.measure import MeasureOptions, measure_gear
@@ -149,7 +150,7 @@ def cut(job: Path | None, out: Path, edge: str | None) -> None:
         bars[i].refresh()
 
     kind = edge or j.cutter_options["edge"]
-    report = cut_ideal(st, kind, j.process["sweep_error"], j.process["roughing_sweep_error"], progress)
+    report = cut_ideal(st, kind, j.process["sweep_error"], j.process["roughing_sweep_error"], progress, workers)
     for b in bars.values():
         b.close()
     out.mkdir(parents=True, exist_ok=True)
@@ -165,6 +166,7 @@ def cut(job: Path | None, out: Path, edge: str | None) -> None:
         "subtractions": r.subtractions,
         "passages": len(r.chips),
         "triangles": len(mesh.faces),
+        "workers": workers or default_workers(),
         "seconds": report.seconds,
         "pass_seconds": report.pass_seconds,
         "machine_seconds": list(st.pass_times),

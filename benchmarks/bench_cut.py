@@ -1,0 +1,93 @@
+"""Benchmark (run on demand): the ideal cut's speed and accuracy against the allowed sweep error.
+
+    python benchmarks/bench_cut.py              # the finishing pass of spur_external.toml at 1 um
+    python benchmarks/bench_cut.py --small      # convergence table on a small gear (both edges, 5/2/1/0.5 um)
+    python benchmarks/bench_cut.py --slabs      # finishing-pass rate against the slab height
+    options: --workers N (default: one per core), --tol UM
+
+Prints wall time, the real machine time of what was cut (tool speed and feed), their ratio, the number of
+tooth passages, swept sub-tubes and booleans, triangles of the stock, peak memory (resident, all processes)
+and the measured deviations.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import resource
+import time
+
+from cutting.edge import make_edge
+from cutting.engine import cut_passes
+from cutting.gear import Gear
+from cutting.ideal_cut import default_workers, to_trimesh
+from cutting.skiving import SkivingSetup
+from cutting.trajectory import ideal_passes
+from metrology.datum import check_mesh
+from metrology.measure import measure_gear
+
+DEG = math.pi / 180
+
+
+def spur_external() -> SkivingSetup:
+    g = Gear(40, 2.0, 20 * DEG, 0.0, 20.0)
+    c = Gear(23, 2.0, 20 * DEG, 20 * DEG, 10.0)
+    return SkivingSetup(g, c, 2500, 0.2, (2.0, 1.5, 0.8, 0.2))
+
+
+def small() -> SkivingSetup:
+    g = Gear(20, 1.0, 20 * DEG, 0.0, 4.0)
+    c = Gear(13, 1.0, 20 * DEG, 20 * DEG, 5.0)
+    return SkivingSetup(g, c, 2000, 0.1, (2.25,))
+
+
+def peak_rss_mib() -> float:
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return max(own, kids) / 1024
+
+
+def run(setup: SkivingSetup, kind: str, tol: float, passes: list[int], workers: int, slab: float = 2.0) -> None:
+    edge = make_edge(setup, kind)
+    motions = [ideal_passes(setup)[i] for i in passes]
+    t0 = time.perf_counter()
+    out = cut_passes(setup.gear, edge, motions, [tol] * len(motions), workers, slab)
+    wall = time.perf_counter() - t0
+    res = out.result
+    mesh = to_trimesh(res.gear)
+    doc = measure_gear(check_mesh(mesh), setup.gear)
+    p, h, sp = doc["profile"], doc["helix"], doc["thickness"]["span"]
+    machine = sum(setup.pass_times[i] for i in passes)
+    print(
+        f"{kind:9s} {tol * 1e3:4.1f} um (bound {res.sweep_error * 1e3:4.2f}) | "
+        f"f_Ha {max(abs(p[s]['f_Halpha']) for s in p):5.2f} f_fa {max(p[s]['f_falpha'] for s in p):5.2f} "
+        f"f_Hb {max(abs(h[s]['f_Hbeta']) for s in h):5.2f} f_fb {max(h[s]['f_fbeta'] for s in h):5.2f} "
+        f"f_p {max(doc['pitch'][s]['f_p'] for s in doc['pitch']):5.2f} "
+        f"dW {(sp['W_k_mm'] - sp['W_k_nominal_mm']) * 1e3:+6.2f} um | wall {wall:6.1f} s, machine {machine:5.2f} s, "
+        f"ratio {wall / machine:5.1f} | {len(res.chips)} passages, {res.sweeps} sweeps, {res.subtractions} booleans, "
+        f"gear {len(mesh.faces):,} tris, slab {slab} mm, {workers} workers, peak RSS {peak_rss_mib():.0f} MiB",
+        flush=True,
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--small", action="store_true")
+    ap.add_argument("--slabs", action="store_true")
+    ap.add_argument("--workers", type=int, default=default_workers())
+    ap.add_argument("--tol", type=float, default=1.0)
+    a = ap.parse_args()
+    if a.small:
+        for kind in ("conjugate", "involute"):
+            for tol in (5.0, 2.0, 1.0, 0.5):
+                run(small(), kind, tol * 1e-3, [0], a.workers)
+    elif a.slabs:
+        for slab in (1.0, 2.0, 4.0):
+            run(spur_external(), "conjugate", a.tol * 1e-3, [3], a.workers, slab)
+    else:
+        # the finishing pass alone, on the blank: it cuts the full depth, so it is the heaviest finishing pass
+        run(spur_external(), "conjugate", a.tol * 1e-3, [3], a.workers)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,120 @@
+"""Cutting a sequence of passes, in parallel over the tooth spaces.
+
+The cells of different tooth spaces never share a boolean (a cutter tooth in a space meets only that space's
+sector: the sectors meet on the tooth centre lines, which no sweep reaches), so the spaces are split between
+worker processes, each running every pass on its own share of the stock. The result does not depend on the
+number of workers: each cell sees the same subtractions in the same order. manifold3d holds the GIL during a
+boolean, so threads would not help; processes do.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+
+import manifold3d as mf
+import numpy as np
+
+from cutting.edge import CuttingEdge
+from cutting.gear import Gear
+from cutting.removal import DEFAULT_SLAB, CutResult, Stock, cut, passage_count, union_cells
+from cutting.trajectory import PassMotion
+
+#: progress(pass_index, passages_done, passages_total)
+Progress = Callable[[int, int, int], None]
+
+
+@dataclass
+class EngineResult:
+    result: CutResult
+    stock_triangles: int
+    pass_seconds: list[float]
+
+
+def cut_passes(
+    gear: Gear,
+    edge: CuttingEdge,
+    motions: Sequence[PassMotion],
+    tolerances: Sequence[float],
+    workers: int = 1,
+    slab: float = DEFAULT_SLAB,
+    progress: Progress | None = None,
+) -> EngineResult:
+    """Cut every pass in order on a fresh blank; ``result.gear`` is the union of the cells.
+
+    ``workers`` > 1 runs that many processes, each owning every ``workers``-th tooth space.
+    """
+    if workers <= 1:
+        stock = Stock(gear, slab=slab)
+        result = CutResult(None)
+        pass_seconds = []
+        for motion, tol in zip(motions, tolerances, strict=True):
+            t0 = time.perf_counter()
+            cb = None if progress is None else (lambda d, n, i=motion.index: progress(i, d, n))
+            cut(stock, edge, motion, tol, result, cb)
+            pass_seconds.append(time.perf_counter() - t0)
+        result.gear = stock.solid()
+        return EngineResult(result, stock.triangles(), pass_seconds)
+
+    ctx = mp.get_context("spawn")  # a fork would copy manifold's thread pool state
+    done = ctx.Array("i", len(motions))
+    totals = [passage_count(m, edge) for m in motions]
+    shares = [list(range(w, gear.teeth, workers)) for w in range(workers)]
+    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker, initargs=(done,)) as pool:
+        futures = [pool.submit(_worker, gear, edge, list(motions), list(tolerances), slab, s) for s in shares]
+        while True:
+            finished, pending = wait(futures, timeout=0.25, return_when=FIRST_EXCEPTION)
+            if progress is not None:
+                for i, total in enumerate(totals):
+                    progress(motions[i].index, min(done[i] // workers, total), total)
+            if not pending or any(f.exception() for f in finished):
+                break
+        parts = [f.result() for f in futures]
+    result = CutResult(None)
+    first = parts[0][0]
+    for chip_index, chip in enumerate(first.chips):
+        chip.volume = sum(p[0].chips[chip_index].volume for p in parts)
+        result.chips.append(chip)
+    result.sweep_error = max(p[0].sweep_error for p in parts)
+    result.sweeps = first.sweeps
+    result.subtractions = sum(p[0].subtractions for p in parts)
+    cells: dict[tuple[int, int], mf.Manifold] = {}
+    for _, meshes, _, _ in parts:
+        for key, (verts, tris) in meshes.items():
+            cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris))
+    z_edges = parts[0][2]
+    result.gear = union_cells(cells, z_edges)
+    pass_seconds = list(np.max([p[3] for p in parts], axis=0))
+    return EngineResult(result, sum(c.num_tri() for c in cells.values()), pass_seconds)
+
+
+_DONE = None
+
+
+def _init_worker(done) -> None:
+    global _DONE
+    _DONE = done
+
+
+def _worker(gear, edge, motions, tolerances, slab, sectors):
+    stock = Stock(gear, slab=slab, sectors=sectors)
+    result = CutResult(None)
+    pass_seconds = []
+    for position, (motion, tol) in enumerate(zip(motions, tolerances, strict=True)):
+        t0 = time.perf_counter()
+
+        def tick(_d: int, _n: int, i: int = position) -> None:
+            with _DONE.get_lock():
+                _DONE[i] += 1
+
+        cut(stock, edge, motion, tol, result, tick)
+        pass_seconds.append(time.perf_counter() - t0)
+    meshes = {}
+    for key, cell in stock.cells.items():
+        m = cell.to_mesh64()
+        # fresh, writable arrays: Mesh64 refuses read-only views
+        meshes[key] = (np.array(m.vert_properties, dtype=float), np.array(m.tri_verts, dtype=np.uint64))
+    return result, meshes, stock.z_edges, pass_seconds
