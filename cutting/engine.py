@@ -50,12 +50,11 @@ def cut_passes(
     if workers <= 1:
         stock = Stock(gear, slab=slab)
         result = CutResult(None)
-        pass_seconds = []
-        for motion, tol in zip(motions, tolerances, strict=True):
-            t0 = time.perf_counter()
-            cb = None if progress is None else (lambda d, n, i=motion.index: progress(i, d, n))
-            cut(stock, edge, motion, tol, result, cb)
-            pass_seconds.append(time.perf_counter() - t0)
+
+        def report(position: int) -> Callable[[int, int], None] | None:
+            return None if progress is None else (lambda d, n: progress(motions[position].index, d, n))
+
+        pass_seconds = _run_passes(stock, edge, motions, tolerances, result, report)
         result.gear = stock.solid()
         return EngineResult(result, stock.triangles(), pass_seconds)
 
@@ -99,19 +98,28 @@ def _init_worker(done) -> None:
     _DONE = done
 
 
-def _worker(gear, edge, motions, tolerances, slab, sectors):
-    stock = Stock(gear, slab=slab, sectors=sectors)
-    result = CutResult(None)
+def _run_passes(stock, edge, motions, tolerances, result, report) -> list[float]:
+    """Every pass in order on ``stock``; ``report(position)`` gives the progress callback of a pass."""
     pass_seconds = []
     for position, (motion, tol) in enumerate(zip(motions, tolerances, strict=True)):
         t0 = time.perf_counter()
-
-        def tick(_d: int, _n: int, i: int = position) -> None:
-            with _DONE.get_lock():
-                _DONE[i] += 1
-
-        cut(stock, edge, motion, tol, result, tick)
+        cut(stock, edge, motion, tol, result, report(position))
         pass_seconds.append(time.perf_counter() - t0)
+    return pass_seconds
+
+
+def _worker(gear, edge, motions, tolerances, slab, sectors):
+    stock = Stock(gear, slab=slab, sectors=sectors)
+    result = CutResult(None)
+
+    def report(position: int) -> Callable[[int, int], None]:
+        def tick(_done: int, _total: int) -> None:
+            with _DONE.get_lock():
+                _DONE[position] += 1
+
+        return tick
+
+    pass_seconds = _run_passes(stock, edge, motions, tolerances, result, report)
     meshes = {}
     for key, cell in stock.cells.items():
         m = cell.to_mesh64()

@@ -1,9 +1,10 @@
 """Swept-volume removal: the blank minus what the cutter teeth sweep along a pose trajectory.
 
-The stock is kept as angular sectors (one per tooth space, twisted with the helix), so each subtraction
-involves only the few sectors a tooth passage reaches and the cost follows what is cut, not the whole
-blank. A tooth passage is the interval in which one cutter tooth crosses the mesh zone; its swept volume
-is built whole as one tube (:mod:`cutting.sweep`), sampled to the allowed sweep error.
+The stock is kept as cells: one angular sector per tooth space (twisted with the helix) cut into axial
+slabs, so each subtraction involves only a cell a tooth passage reaches and the cost follows what is cut,
+not the whole blank. A tooth passage is the interval in which one cutter tooth crosses the mesh zone; it
+is sampled to the allowed sweep error and swept as one sub-tube per cell it reaches (:mod:`cutting.sweep`).
+Known weakness: on a face wider than one slab the final union can keep faces on the slab planes.
 """
 
 from __future__ import annotations
