@@ -82,8 +82,8 @@ def cut_passes(
     result.subtractions = sum(p[0].subtractions for p in parts)
     cells: dict[tuple[int, int], mf.Manifold] = {}
     for _, meshes, _, _ in parts:
-        for key, (verts, tris) in meshes.items():
-            cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris))
+        for key, (verts, tris, tolerance) in meshes.items():
+            cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
     z_edges = parts[0][2]
     result.gear = union_cells(cells, z_edges)
     pass_seconds = list(np.max([p[3] for p in parts], axis=0))
@@ -124,5 +124,6 @@ def _worker(gear, edge, motions, tolerances, slab, sectors):
     for key, cell in stock.cells.items():
         m = cell.to_mesh64()
         # fresh, writable arrays: Mesh64 refuses read-only views
-        meshes[key] = (np.array(m.vert_properties, dtype=float), np.array(m.tri_verts, dtype=np.uint64))
+        verts, tris = np.array(m.vert_properties, dtype=float), np.array(m.tri_verts, dtype=np.uint64)
+        meshes[key] = (verts, tris, cell.get_tolerance())
     return result, meshes, stock.z_edges, pass_seconds

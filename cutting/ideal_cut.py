@@ -13,6 +13,7 @@ import trimesh
 
 from cutting.edge import CuttingEdge, make_edge
 from cutting.engine import cut_passes
+from cutting.holder import check_holder_side
 from cutting.removal import DEFAULT_SLAB, CutResult
 from cutting.skiving import SkivingSetup
 from cutting.trajectory import ideal_passes
@@ -45,6 +46,7 @@ def cut_ideal(
     t_start = time.perf_counter()
     edge = make_edge(setup, edge_kind)
     motions = ideal_passes(setup)
+    check_holder_side(motions, edge, setup.cutter.face_width, setup.holder_diameter_value)
     tols = [finishing_tol if m.index == len(motions) - 1 else roughing_tol for m in motions]
     run = cut_passes(setup.gear, edge, motions, tols, workers or default_workers(), slab, progress)
     result = run.result

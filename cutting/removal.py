@@ -4,7 +4,7 @@ The stock is kept as cells: one angular sector per tooth space (twisted with the
 slabs, so each subtraction involves only a cell a tooth passage reaches and the cost follows what is cut,
 not the whole blank. A tooth passage is the interval in which one cutter tooth crosses the mesh zone; it
 is sampled to the allowed sweep error and swept as one sub-tube per cell it reaches (:mod:`cutting.sweep`).
-Known weakness: on a face wider than one slab the final union can keep faces on the slab planes.
+Cells meet in real overlaps (sectors) or in exact planes (slabs, see :func:`union_cells`).
 """
 
 from __future__ import annotations
@@ -83,10 +83,15 @@ class Stock:
             # tooth centre k to tooth centre k+1 (space k in the middle), overlapping the neighbours by a sliver of
             # tooth that is never cut: the final union then meets real overlaps, not two nearly coincident walls
             a0, a1 = k * pitch - SECTOR_OVERLAP * pitch, (k + 1) * pitch + SECTOR_OVERLAP * pitch
+            # the apex lies behind the axis, so near the axis the sectors overlap by a real width too; from half
+            # the root radius outwards the sides are the exact radii a0, a1 (the ones reached() assumes)
+            back, inner, mid = -0.05 * gear.root_radius, 0.5 * gear.root_radius, (a0 + a1) / 2
             corners = [
-                [0.0, 0.0],
+                [back * math.cos(mid), back * math.sin(mid)],
+                [inner * math.cos(a0), inner * math.sin(a0)],
                 [r_out * math.cos(a0), r_out * math.sin(a0)],
                 [r_out * math.cos(a1), r_out * math.sin(a1)],
+                [inner * math.cos(a1), inner * math.sin(a1)],
             ]
             wedge = mf.CrossSection([np.array(corners)])
             # extrude twists counter-clockwise with +z for positive degrees, like a right-hand helix
@@ -151,14 +156,15 @@ class Stock:
 
 
 def union_cells(cells: dict[tuple[int, int], mf.Manifold], z_edges: np.ndarray) -> mf.Manifold:
-    """The union of the cells. The slabs meet in exact planes z = const: vertices that the booleans left a
-    rounding error off a slab plane are put back on it first, so the union merges the faces instead of
-    leaving a slit."""
+    """The union of the cells. The slabs meet in exact planes z = const: vertices that the booleans left
+    within manifold's tolerance of a slab plane are put back on it first, so the union merges the faces
+    instead of leaving a sliver void (which a section exactly on the plane would see as walls)."""
     planes = np.asarray(z_edges)[1:-1]
+    reach = 4 * max([1e-10, *(cell.get_tolerance() for cell in cells.values())])
 
     def snap(v: np.ndarray) -> np.ndarray:
         v = np.array(v, dtype=float)
-        near = np.abs(v[:, 2:3] - planes[None, :]) < 1e-7
+        near = np.abs(v[:, 2:3] - planes[None, :]) < reach
         hit = near.any(axis=1)
         v[hit, 2] = planes[np.argmax(near[hit], axis=1)]
         return v

@@ -67,6 +67,8 @@ class SkivingSetup:
     passes: radial infeed increments [mm] from first touch of the blank; the last is the finishing pass
     feed_direction: "down" (cutter moves towards -z) or "up"
     clearance: axial distance [mm] added before and after the engagement zone on every pass
+    holder_diameter: the holder behind the cutter body [mm]; None means half the cutter's reference diameter
+        (a typical arbor nut); the cutter body width behind the rake face is ``cutter.face_width``
     """
 
     gear: Gear
@@ -76,7 +78,12 @@ class SkivingSetup:
     passes: tuple[float, ...]
     feed_direction: str = "down"
     clearance: float = 1.0
+    holder_diameter: float | None = None
     _cutter_tip: float | None = field(default=None, repr=False)
+
+    @property
+    def holder_diameter_value(self) -> float:
+        return self.holder_diameter if self.holder_diameter is not None else self.cutter.reference_diameter / 2
 
     # ---- axes ---------------------------------------------------------------------------------
     @cached_property

@@ -74,9 +74,11 @@ def tube(outline: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> mf.Manifold
     volume = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6
     if volume < 0:  # the outline moved against the cap orientation: flip to outward normals
         tris = tris[:, ::-1]
-    mesh = mf.Mesh(
-        vert_properties=np.ascontiguousarray(verts, dtype=np.float32),
-        tri_verts=np.ascontiguousarray(tris, dtype=np.uint32),
+    # double precision: a float32 mesh sets manifold's tolerance to ~1e-7 of the part's size, and the booleans
+    # may then move vertices by that much (enough to open slits where cells meet in a plane)
+    mesh = mf.Mesh64(
+        vert_properties=np.ascontiguousarray(verts, dtype=float),
+        tri_verts=np.ascontiguousarray(tris, dtype=np.uint64),
     )
     solid = mf.Manifold(mesh)
     if solid.status() != mf.Error.NoError:

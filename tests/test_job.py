@@ -646,3 +646,12 @@ def test_default_job_path_exists_and_loads():
     job = load_job(path)
     assert job.gear.z == 40
     assert job.machine["structure"] == "mechatronic"
+
+
+def test_cutter_body_and_holder_reach_the_setup():
+    job = parse_job(spur(cutter__width=25.0, cutter__holder_diameter=30.0), SOURCE)
+    assert job.skiving.cutter.face_width == 25.0 and job.skiving.holder_diameter_value == 30.0
+    default = parse_job(spur(), SOURCE).skiving
+    assert default.cutter.face_width == 20.0  # 10 mn
+    assert default.holder_diameter_value == pytest.approx(default.cutter.reference_diameter / 2)
+    refused(spur(cutter__holder_diameter=-5.0), "cutter.holder_diameter", -5.0)

@@ -117,3 +117,63 @@ def test_parallel_workers_cut_the_same_gear():
     a, b = one.result.gear, two.result.gear
     assert (a - b).volume() < 1e-9 and (b - a).volume() < 1e-9  # the same solid, not only the same volume
     assert [c.volume for c in two.result.chips] == pytest.approx([c.volume for c in one.result.chips], abs=1e-12)
+
+
+def _section(solid, z: float) -> tuple[float, float]:
+    """Perimeter [mm] of the section z = const and the largest distance of a section point from the blank's
+    outer circle inwards [mm] (a wall left inside the gear reaches towards the axis)."""
+    from metrology.sections import level_segments
+
+    m = solid.to_mesh64()
+    md = MeshData(np.asarray(m.vert_properties)[:, :3], np.asarray(m.tri_verts))
+    a, b = level_segments(md, "z", z)
+    return float(np.linalg.norm(b - a, axis=1).sum()), float(np.hypot(a[:, 0], a[:, 1]).min())
+
+
+def test_slab_planes_leave_no_trace_in_a_cut_face():
+    """A face three slabs wide, cut by two workers: the section exactly on a slab plane is the section a
+    hair beside it (same perimeter, nothing inside the root circle)."""
+    from cutting.engine import cut_passes
+
+    st = small_setup()
+    g = Gear(16, 1.0, 20 * DEG, 0.0, 6.0)
+    setup = SkivingSetup(g, st.cutter, 2000, 0.3, (2.25,))
+    out = cut_passes(g, involute_edge(setup, 30), ideal_passes(setup), [10e-3], workers=2, slab=2.0)
+    solid = out.result.gear
+    for plane in (-1.0, 1.0):
+        on, r_on = _section(solid, plane)
+        beside, _ = _section(solid, plane + 1e-6)
+        assert on == pytest.approx(beside, abs=1e-3)
+        assert r_on > g.root_radius - 0.01
+
+
+def test_union_puts_vertices_near_a_slab_plane_back_on_it():
+    """Two slabs whose shared face lies within manifold's tolerance of the plane (as a boolean may leave it)
+    unite into one solid without a sliver void."""
+    import manifold3d as mf
+
+    from cutting.removal import union_cells
+
+    lower = mf.Manifold.cube((10.0, 10.0, 1.0)).translate((0.0, 0.0, -1.0))
+    upper = mf.Manifold.cube((10.0, 10.0, 1.0)).translate((0.0, 0.0, 0.0))
+
+    def lift(v: np.ndarray) -> np.ndarray:  # the shared face slightly off the plane, unevenly
+        v = np.array(v, dtype=float)
+        on = np.abs(v[:, 2]) < 1e-12
+        v[on, 2] = 3e-12 * (1 + v[on, 0])
+        return v
+
+    upper = mf.Manifold(mf.Mesh64(**_mesh64(upper.warp_batch(lift)), tolerance=1e-11))
+    solid = union_cells({(0, 0): lower, (0, 1): upper}, np.array([-1.0, 0.0, 1.0]))
+    assert solid.volume() == pytest.approx(200.0, abs=1e-9)
+    assert solid.genus() == 0 and solid.num_tri() <= 24  # one box: no void, no leftover faces
+    perimeter, _ = _section(solid, 0.0)
+    assert perimeter == pytest.approx(40.0, abs=1e-9)
+
+
+def _mesh64(solid) -> dict:
+    m = solid.to_mesh64()
+    return {
+        "vert_properties": np.array(m.vert_properties, dtype=float),
+        "tri_verts": np.array(m.tri_verts, dtype=np.uint64),
+    }

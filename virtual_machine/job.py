@@ -104,6 +104,10 @@ CUTTER_KEYS: dict[str, Key] = {
     "tip_diameter": Key(
         float, None, "mm", "cutter tip diameter da0 (default: cuts the gear's root exactly)", _positive
     ),
+    "width": Key(float, None, "mm", "cutter body width behind the rake face (default 10 mn)", _positive),
+    "holder_diameter": Key(
+        float, None, "mm", "diameter of the holder behind the cutter body (default half the cutter's d0)", _positive
+    ),
     "edge": Key(
         str,
         "conjugate",
@@ -300,6 +304,7 @@ class Job:
             tuple(p["passes"]),
             p["feed_direction"],
             p["clearance"],
+            holder_diameter=(self.cutter_options or {}).get("holder_diameter"),
         )
 
 
@@ -361,7 +366,7 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
             normal_module=gear.mn,
             pressure_angle=gear.alpha_n,
             helix_angle=math.radians(c["helix_angle"]),
-            face_width=gear.mn * 10,  # unused: the cutter cuts with its rake face
+            face_width=c["width"] or gear.mn * 10,  # the body behind the rake face (holder-side collision check)
             profile_shift=c["profile_shift"],
             tip_diameter=c["tip_diameter"],
         )
@@ -384,7 +389,7 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
         parsed["process"],
         gear=gear,
         cutter=cutter,
-        cutter_options={"edge": c["edge"]},
+        cutter_options={"edge": c["edge"], "holder_diameter": c["holder_diameter"]},
         measurement=measurement,
     )
     problems += check_setup(job.skiving)
