@@ -81,12 +81,8 @@ def removed(points: np.ndarray, sets: Sequence[Passages], edge: CuttingEdge, gri
         frac = np.linspace(0.0, 1.0, grid)
         ts = ps.t0[mi, None] + frac[None, :] * (ps.t1 - ps.t0)[mi, None]  # (p, grid)
 
-        def plane_distance(t: np.ndarray, q=q) -> np.ndarray:
-            rot, trans = ps.motion.pose(t.ravel())
-            g = np.einsum("ni,ni->n", rot[:, :, 2], np.repeat(q, t.shape[1], axis=0) - trans)
-            return g.reshape(t.shape)
-
-        g = plane_distance(ts)
+        rot, trans = ps.motion.pose(ts.ravel())
+        g = np.einsum("ni,ni->n", rot[:, :, 2], np.repeat(q, grid, axis=0) - trans).reshape(ts.shape)
         pair, k = np.nonzero(np.sign(g[:, :-1]) * np.sign(g[:, 1:]) <= 0)
         if pair.size == 0:
             continue

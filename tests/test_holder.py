@@ -27,7 +27,7 @@ def test_a_normal_holder_passes():
 def test_a_fat_holder_is_named():
     """A holder as wide as the cutter, close behind the rake face, runs into the blank's top face."""
     st = setup()
-    with pytest.raises(InputError, match="cutter.holder_diameter") as err:
+    with pytest.raises(InputError, match=r"cutter\.holder_diameter") as err:
         check_holder_side(ideal_passes(st), involute_edge(st, 30), 2.0, st.cutter.reference_diameter * 1.2)
     assert "enters the blank" in str(err.value) and "pass 1" in str(err.value)
 
