@@ -3,6 +3,7 @@
     python benchmarks/bench_cut.py              # the finishing pass of spur_external.toml at 1 um
     python benchmarks/bench_cut.py --small      # convergence table on a small gear (both edges, 5/2/1/0.5 um)
     python benchmarks/bench_cut.py --slabs      # finishing-pass rate against the slab height
+    python benchmarks/bench_cut.py --job helical_internal   # the finishing pass of another job
     options: --workers N (default: one per core), --tol UM
 
 Prints wall time, the real machine time of what was cut (tool speed and feed), their ratio, the number of
@@ -86,11 +87,17 @@ def main() -> None:
     ap.add_argument("--slabs", action="store_true")
     ap.add_argument("--workers", type=int, default=default_workers())
     ap.add_argument("--tol", type=float, default=1.0)
+    ap.add_argument("--job", help="finishing pass of assets/jobs/JOB.toml instead of spur_external")
     a = ap.parse_args()
     if a.small:
         for kind in ("conjugate", "involute"):
             for tol in (5.0, 2.0, 1.0, 0.5):
                 run(small(), kind, tol * 1e-3, [0], a.workers)
+    elif a.job:
+        from virtual_machine.job import load_job
+
+        st = load_job(f"assets/jobs/{a.job}.toml").skiving
+        run(st, "conjugate", a.tol * 1e-3, [len(st.passes) - 1], a.workers)
     elif a.slabs:
         for slab in (1.0, 2.0, 4.0):
             run(spur_external(), "conjugate", a.tol * 1e-3, [3], a.workers, slab)

@@ -10,6 +10,7 @@ boolean, so threads would not help; processes do.
 from __future__ import annotations
 
 import multiprocessing as mp
+import os
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
@@ -32,6 +33,7 @@ class EngineResult:
     result: CutResult
     stock_triangles: int
     pass_seconds: list[float]
+    pass_triangles: list[int]  # stock triangles after each pass: bounded by the cut surface, not the booleans
 
 
 def cut_passes(
@@ -54,9 +56,9 @@ def cut_passes(
         def report(position: int) -> Callable[[int, int], None] | None:
             return None if progress is None else (lambda d, n: progress(motions[position].index, d, n))
 
-        pass_seconds = _run_passes(stock, edge, motions, tolerances, result, report)
+        pass_seconds, pass_triangles = _run_passes(stock, edge, motions, tolerances, result, report)
         result.gear = stock.solid()
-        return EngineResult(result, stock.triangles(), pass_seconds)
+        return EngineResult(result, stock.triangles(), pass_seconds, pass_triangles)
 
     ctx = mp.get_context("spawn")  # a fork would copy manifold's thread pool state
     done = ctx.Array("i", len(motions))
@@ -78,34 +80,41 @@ def cut_passes(
         chip.volume = sum(p[0].chips[chip_index].volume for p in parts)
         result.chips.append(chip)
     result.sweep_error = max(p[0].sweep_error for p in parts)
+    for p in parts:
+        for index, err in p[0].pass_sweep_error.items():
+            result.pass_sweep_error[index] = max(result.pass_sweep_error.get(index, 0.0), err)
     result.sweeps = first.sweeps
     result.subtractions = sum(p[0].subtractions for p in parts)
     cells: dict[tuple[int, int], mf.Manifold] = {}
-    for _, meshes, _, _ in parts:
+    for _, meshes, _, _, _ in parts:
         for key, (verts, tris, tolerance) in meshes.items():
             cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
     z_edges = parts[0][2]
     result.gear = union_cells(cells, z_edges)
-    pass_seconds = list(np.max([p[3] for p in parts], axis=0))
-    return EngineResult(result, sum(c.num_tri() for c in cells.values()), pass_seconds)
+    pass_seconds = [float(x) for x in np.max([p[3] for p in parts], axis=0)]
+    pass_triangles = [int(x) for x in np.sum([p[4] for p in parts], axis=0)]
+    return EngineResult(result, sum(c.num_tri() for c in cells.values()), pass_seconds, pass_triangles)
 
 
 _DONE = None
+_PARENT = None
 
 
 def _init_worker(done) -> None:
-    global _DONE
-    _DONE = done
+    global _DONE, _PARENT
+    _DONE, _PARENT = done, os.getppid()
 
 
-def _run_passes(stock, edge, motions, tolerances, result, report) -> list[float]:
-    """Every pass in order on ``stock``; ``report(position)`` gives the progress callback of a pass."""
-    pass_seconds = []
+def _run_passes(stock, edge, motions, tolerances, result, report) -> tuple[list[float], list[int]]:
+    """Every pass in order on ``stock``; ``report(position)`` gives the progress callback of a pass.
+    Returns the seconds of each pass and the stock's triangles after it."""
+    pass_seconds, pass_triangles = [], []
     for position, (motion, tol) in enumerate(zip(motions, tolerances, strict=True)):
         t0 = time.perf_counter()
         cut(stock, edge, motion, tol, result, report(position))
         pass_seconds.append(time.perf_counter() - t0)
-    return pass_seconds
+        pass_triangles.append(stock.triangles())
+    return pass_seconds, pass_triangles
 
 
 def _worker(gear, edge, motions, tolerances, slab, sectors):
@@ -114,16 +123,18 @@ def _worker(gear, edge, motions, tolerances, slab, sectors):
 
     def report(position: int) -> Callable[[int, int], None]:
         def tick(_done: int, _total: int) -> None:
+            if os.getppid() != _PARENT:  # the parent was killed: do not cut on as an orphan
+                os._exit(1)
             with _DONE.get_lock():
                 _DONE[position] += 1
 
         return tick
 
-    pass_seconds = _run_passes(stock, edge, motions, tolerances, result, report)
+    pass_seconds, pass_triangles = _run_passes(stock, edge, motions, tolerances, result, report)
     meshes = {}
     for key, cell in stock.cells.items():
         m = cell.to_mesh64()
         # fresh, writable arrays: Mesh64 refuses read-only views
         verts, tris = np.array(m.vert_properties, dtype=float), np.array(m.tri_verts, dtype=np.uint64)
         meshes[key] = (verts, tris, cell.get_tolerance())
-    return result, meshes, stock.z_edges, pass_seconds
+    return result, meshes, stock.z_edges, pass_seconds, pass_triangles

@@ -26,6 +26,7 @@ class CutReport:
     seconds: float
     pass_seconds: list[float]
     stock_triangles: int
+    pass_triangles: list[int]
 
 
 def default_workers() -> int:
@@ -52,7 +53,9 @@ def cut_ideal(
     result = run.result
     if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
         raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
-    return CutReport(result, edge, time.perf_counter() - t_start, run.pass_seconds, run.stock_triangles)
+    return CutReport(
+        result, edge, time.perf_counter() - t_start, run.pass_seconds, run.stock_triangles, run.pass_triangles
+    )
 
 
 def to_trimesh(solid: mf.Manifold) -> trimesh.Trimesh:

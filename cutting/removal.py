@@ -21,7 +21,7 @@ from cutting.flank import twist_rate
 from cutting.gear import Gear
 from cutting.skiving import rot_z
 from cutting.solids import blank
-from cutting.sweep import outline_points, place, sample_window, simplify_outline, tube
+from cutting.sweep import outline_points, place, sample_window, simplify_outline, split_sides, tube
 from cutting.trajectory import PassMotion
 
 
@@ -41,6 +41,7 @@ class CutResult:
     gear: mf.Manifold
     chips: list[Chip] = field(default_factory=list)
     sweep_error: float = 0.0  # largest deviation of the swept tubes from the exact sweep of the edge [mm]
+    pass_sweep_error: dict[int, float] = field(default_factory=dict)  # the same, per pass index [mm]
     subtractions: int = 0
     sweeps: int = 0
 
@@ -144,6 +145,11 @@ class Stock:
         """Remove ``tool`` from one cell; returns the removed volume [mm^3]."""
         cut = self.cells[key] - tool
         v = cut.volume()  # evaluates the lazy boolean
+        if cut.status() != mf.Error.NoError or cut.is_empty():
+            raise RuntimeError(
+                f"the subtraction left cell {key} {'empty' if cut.is_empty() else cut.status()}: a swept volume "
+                "reached through the sector; check the trajectory (poses far off the job's kinematics?)"
+            )
         removed = self.volumes[key] - v
         self.cells[key], self.volumes[key] = cut, v
         return removed
@@ -224,10 +230,21 @@ def cut(
     # the tolerance is shared: half for the outline's polygon, half for the chords of the point paths
     outline, outline_err = simplify_outline(edge.outline, tol / 2)
     sweep_tol = tol - outline_err
-    pts = outline_points(outline)
     b2 = g.face_width / 2
     total = m_last - m_first + 1
+
+    def near_blank(w: np.ndarray, margin: float = 0.1) -> np.ndarray:
+        """Points within ``margin`` [mm] of the blank (a facet wholly farther away cannot reach it)."""
+        r = np.hypot(w[..., 0], w[..., 1])
+        radial = (r > g.tip_radius - margin) if g.internal else (r < g.tip_radius + margin)
+        return radial & (np.abs(w[..., 2]) <= b2 + margin)
+
+    outline = _balanced_outline(motion, outline, sweep_tol, near_blank, (m_first + m_last) // 2, dt, step)
+    pts = outline_points(outline)
+
     for count, m in enumerate(range(m_first, m_last + 1)):
+        if progress is not None and count:
+            progress(count, total)  # the passage before this one is done (cut, or found clear of the blank)
         tm = m * step
         j = (-m) % z0  # the cutter tooth at the mesh at tm
         local = rot_z(2 * math.pi * j / z0)
@@ -248,7 +265,7 @@ def cut(
         if hit.size == 0:
             continue
         t0, t1 = probe[max(hit[0] - 1, 0)], probe[min(hit[-1] + 1, len(probe) - 1)]
-        times, err = sample_window(pose, pts, t0, t1, sweep_tol)
+        times, err = sample_window(pose, pts, t0, t1, sweep_tol, near_blank)
         rot, trans = pose(times)
         vol = 0.0
         for key, (i0, i1) in stock.reached(place(pts, rot, trans)).items():
@@ -256,6 +273,35 @@ def cut(
             result.subtractions += 1
         result.sweeps += len(times) - 1
         result.sweep_error = max(result.sweep_error, err + outline_err)
+        result.pass_sweep_error[motion.index] = max(result.pass_sweep_error.get(motion.index, 0.0), err + outline_err)
         result.chips.append(Chip(motion.index, j, tm, vol, len(times) - 1))
-        if progress is not None:
-            progress(count + 1, total)
+    if progress is not None:
+        progress(total, total)
+
+
+def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near, m: int, dt: float, step: float):
+    """The outline with its long sides split where that makes the tube cheapest.
+
+    A facet's twist grows with its side's length times the time step, the chord error with the time step
+    squared: long sides force short steps. Tried on the middle passage of the pass, the split that gives the
+    fewest facets (sides x samples) is kept; a few sample_window calls per pass.
+    """
+    z0 = motion.setup.cutter.teeth
+    local = rot_z(2 * math.pi * ((-m) % z0) / z0)
+
+    def pose(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        rot, trans = motion.pose(t)
+        return np.einsum("nij,jk->nik", rot, local), trans
+
+    tm = m * step
+    best, best_cost = outline, math.inf
+    for longest in (math.inf, 2.0, 1.0, 0.5, 0.3, 0.2, 0.1):
+        candidate = outline if longest == math.inf else split_sides(outline, longest)
+        try:
+            times, _ = sample_window(pose, outline_points(candidate), tm - dt, tm + dt, tol, near)
+        except RuntimeError:
+            continue
+        cost = len(candidate) * len(times)
+        if cost < best_cost:
+            best, best_cost = candidate, cost
+    return best

@@ -4,8 +4,8 @@ While a tooth is in the cut, every point of its rake face moves through the face
 direction (the relative velocity keeps a component along the rake-face normal of constant sign; checked
 for both shipped jobs: v.n/|v| stays within 0.39..1 external, -1..-0.66 internal). The region swept by the
 planar tooth outline is then bounded by the tube that its outline traces plus the outline at the first
-and last pose. Between poses the tube is linear, so the error of the sweep is the sagitta of the outline
-points' paths, which :func:`sample_window` bounds.
+and last pose. Between poses the tube is made of flat facets, so the error of the sweep is the sagitta of
+the outline points' paths plus the twist of each facet, which :func:`sample_window` bounds.
 """
 
 from __future__ import annotations
@@ -30,20 +30,45 @@ def place(points: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> np.ndarray:
 
 
 def sample_window(
-    pose: PoseFunction, points: np.ndarray, t0: float, t1: float, tol: float, start: int = 8, rounds: int = 12
+    pose: PoseFunction,
+    points: np.ndarray,
+    t0: float,
+    t1: float,
+    tol: float,
+    inside: Callable[[np.ndarray], np.ndarray] | None = None,
+    start: int = 8,
+    rounds: int = 16,
 ) -> tuple[np.ndarray, float]:
-    """Times in [t0, t1] such that every point's path deviates from its chords by at most ``tol`` [mm].
+    """Times in [t0, t1] such that the tube through the closed polygon ``points`` deviates from the exact
+    sweep of that polygon by at most ``tol`` [mm] wherever it can touch the workpiece.
 
-    The midpoint deviation of a chord grows with the square of its length, so an interval whose midpoint
-    is off by dev is split into ceil(sqrt(dev / tol)) equal parts; repeated until every interval passes.
-    Returns the times and the largest midpoint deviation left: the reported bound of the sweep error.
+    Two deviations are checked per interval and polygon side: the side's end point against its chord (the
+    sagitta, quadratic in the interval), and the side's true midpoint at mid-interval against the facets,
+    along their normal (the twist of the quad, linear in the interval and in the side's length). Only quads
+    with a corner where ``inside`` (points (..., 3) -> bool) is true count: the hub chord of the outline, far
+    outside the blank, may twist freely. An interval that fails is split into ceil(sqrt(dev / tol)) parts;
+    repeated until all pass. Returns the times and the largest deviation left: the reported error bound.
     """
+    side_mid = (points + np.roll(points, -1, axis=0)) / 2
     t = np.linspace(t0, t1, start)
     for _ in range(rounds):
         tm = (t[:-1] + t[1:]) / 2
         ends = place(points, *pose(t))
-        mids = place(points, *pose(tm))
-        dev = np.linalg.norm(mids - (ends[:-1] + ends[1:]) / 2, axis=2).max(axis=1)
+        rot_m, trans_m = pose(tm)
+        chord = np.linalg.norm(place(points, rot_m, trans_m) - (ends[:-1] + ends[1:]) / 2, axis=2)
+        # the facets of a quad a-b / c-d are split along a-d (see tube): how far the swept side's true midpoint
+        # lies off them, along the quad's normal
+        nxt = np.roll(ends, -1, axis=1)
+        a, b, c, d = ends[:-1], nxt[:-1], ends[1:], nxt[1:]
+        normal = np.cross(d - a, b - c)
+        normal /= np.maximum(np.linalg.norm(normal, axis=2, keepdims=True), 1e-300)
+        twist = np.abs(np.einsum("mnk,mnk->mn", place(side_mid, rot_m, trans_m) - (a + d) / 2, normal))
+        dev = np.maximum(chord, twist)
+        if inside is not None:
+            near = inside(ends)
+            near_next = np.roll(near, -1, axis=1)
+            dev = np.where(near[:-1] | near[1:] | near_next[:-1] | near_next[1:], dev, 0.0)
+        dev = dev.max(axis=1)
         if (dev <= tol).all():
             return t, float(dev.max())
         parts = np.maximum(1, np.ceil(np.sqrt(dev / tol) * 1.05)).astype(int)
@@ -117,3 +142,10 @@ def simplify_outline(outline: np.ndarray, tol: float) -> tuple[np.ndarray, float
         else:
             worst = max(worst, float(cross[k]))
     return outline[keep], worst
+
+
+def split_sides(outline: np.ndarray, longest: float) -> np.ndarray:
+    """The closed polygon with every side longer than ``longest`` [mm] cut into equal parts (same shape)."""
+    nxt = np.roll(outline, -1, axis=0)
+    parts = np.maximum(1, np.ceil(np.linalg.norm(nxt - outline, axis=1) / longest)).astype(int)
+    return np.vstack([a + (b - a) * (np.arange(k)[:, None] / k) for a, b, k in zip(outline, nxt, parts, strict=True)])

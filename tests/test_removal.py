@@ -111,8 +111,8 @@ def test_parallel_workers_cut_the_same_gear():
     st = small_setup()
     edge = involute_edge(st, 30)
     motions = ideal_passes(st)
-    one = cut_passes(st.gear, edge, motions, [8e-3], workers=1)
-    two = cut_passes(st.gear, edge, motions, [8e-3], workers=2)
+    one = cut_passes(st.gear, edge, motions, [20e-3], workers=1)
+    two = cut_passes(st.gear, edge, motions, [20e-3], workers=2)
     assert two.result.gear.volume() == pytest.approx(one.result.gear.volume(), rel=1e-12)
     a, b = one.result.gear, two.result.gear
     assert (a - b).volume() < 1e-9 and (b - a).volume() < 1e-9  # the same solid, not only the same volume
@@ -138,7 +138,7 @@ def test_slab_planes_leave_no_trace_in_a_cut_face():
     st = small_setup()
     g = Gear(16, 1.0, 20 * DEG, 0.0, 6.0)
     setup = SkivingSetup(g, st.cutter, 2000, 0.3, (2.25,))
-    out = cut_passes(g, involute_edge(setup, 30), ideal_passes(setup), [10e-3], workers=2, slab=2.0)
+    out = cut_passes(g, involute_edge(setup, 30), ideal_passes(setup), [20e-3], workers=2, slab=2.0)
     solid = out.result.gear
     for plane in (-1.0, 1.0):
         on, r_on = _section(solid, plane)

@@ -162,6 +162,7 @@ def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> N
     result["cut"] = {
         "edge": kind,
         "sweep_error_um": r.sweep_error * 1e3,
+        "pass_sweep_error_um": [r.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(st.passes))],
         "sweeps": r.sweeps,
         "subtractions": r.subtractions,
         "passages": len(r.chips),
@@ -169,6 +170,7 @@ def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> N
         "workers": workers or default_workers(),
         "seconds": report.seconds,
         "pass_seconds": report.pass_seconds,
+        "pass_stock_triangles": report.pass_triangles,
         "machine_seconds": list(st.pass_times),
         "chips": [
             {"pass": c.pass_index, "cutter_tooth": c.cutter_tooth, "time_s": c.time, "volume_mm3": c.volume}
@@ -180,7 +182,8 @@ def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> N
     write_charts(out, result)
     click.echo(format_measurement(doc, str(out / "gear.stl")))
     click.echo(
-        f"\ncut: {len(r.chips)} tooth passages, {r.sweeps} sweeps, sweep error <= {r.sweep_error * 1e3:.2f} um, "
+        f"\ncut: {len(r.chips)} tooth passages, {r.sweeps} sweeps, {r.subtractions} subtractions, sweep error <= "
+        f"{r.pass_sweep_error.get(len(st.passes) - 1, 0.0) * 1e3:.2f} um in the finishing pass, "
         f"{report.seconds:.1f} s wall for {sum(st.pass_times):.1f} s of machine time"
     )
 
