@@ -146,8 +146,9 @@ def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> N
     def progress(i: int, done: int, total: int) -> None:
         if i not in bars:
             bars[i] = tqdm(total=total, desc=f"pass {i + 1}/{len(st.passes)}", unit="passage", leave=True)
-        bars[i].n = done
-        bars[i].refresh()
+        if bars[i].n != done:  # the engine reports every 0.25 s; redraw only on progress (quiet logs)
+            bars[i].n = done
+            bars[i].refresh()
 
     kind = edge or j.cutter_options["edge"]
     report = cut_ideal(st, kind, j.process["sweep_error"], j.process["roughing_sweep_error"], progress, workers)
