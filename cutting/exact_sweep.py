@@ -36,6 +36,8 @@ class Passages:
 
 
 def passages(motion: PassMotion, edge: CuttingEdge, probes: int = 65, chunk: int = 256) -> Passages:
+    """The passages of ``motion`` as :func:`cutting.removal.cut` windows them, with bounding balls from
+    ``probes`` poses each (evaluated ``chunk`` passages at a time to bound memory)."""
     z0 = motion.setup.cutter.teeth
     half, m_first, m_last = passage_range(motion, edge)
     dt = half / motion.omega0

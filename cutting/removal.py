@@ -208,6 +208,18 @@ def passage_count(motion: PassMotion, edge: CuttingEdge) -> int:
     return last - first + 1
 
 
+def tooth_pose(motion: PassMotion, m: int):
+    """pose(t) of the cutter tooth that is at the mesh at the m-th cutter tooth pitch, tooth (-m) mod z0."""
+    z0 = motion.setup.cutter.teeth
+    local = rot_z(2 * math.pi * ((-m) % z0) / z0)
+
+    def pose(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        rot, trans = motion.pose(t)
+        return np.einsum("nij,jk->nik", rot, local), trans
+
+    return pose
+
+
 def cut(
     stock: Stock,
     edge: CuttingEdge,
@@ -227,7 +239,7 @@ def cut(
     half, m_first, m_last = passage_range(motion, edge)
     dt = half / motion.omega0
     step = 2 * math.pi / z0 / motion.omega0  # one tooth pitch of the cutter
-    # the tolerance is shared: half for the outline's polygon, half for the chords of the point paths
+    # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist)
     outline, outline_err = simplify_outline(edge.outline, tol / 2)
     sweep_tol = tol - outline_err
     b2 = g.face_width / 2
@@ -247,12 +259,7 @@ def cut(
             progress(count, total)  # the passage before this one is done (cut, or found clear of the blank)
         tm = m * step
         j = (-m) % z0  # the cutter tooth at the mesh at tm
-        local = rot_z(2 * math.pi * j / z0)
-
-        def pose(t: np.ndarray, local=local) -> tuple[np.ndarray, np.ndarray]:
-            rot, trans = motion.pose(t)
-            return np.einsum("nij,jk->nik", rot, local), trans
-
+        pose = tooth_pose(motion, m)
         t0, t1 = max(tm - dt, 0.0), min(tm + dt, motion.duration)
         if t1 <= t0:
             continue
@@ -286,13 +293,7 @@ def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near,
     squared: long sides force short steps. Tried on the middle passage of the pass, the split that gives the
     fewest facets (sides x samples) is kept; a few sample_window calls per pass.
     """
-    z0 = motion.setup.cutter.teeth
-    local = rot_z(2 * math.pi * ((-m) % z0) / z0)
-
-    def pose(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        rot, trans = motion.pose(t)
-        return np.einsum("nij,jk->nik", rot, local), trans
-
+    pose = tooth_pose(motion, m)
     tm = m * step
     best, best_cost = outline, math.inf
     for longest in (math.inf, 2.0, 1.0, 0.5, 0.3, 0.2, 0.1):
