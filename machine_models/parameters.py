@@ -1,0 +1,143 @@
+"""Physical parameters of the skiving machine model: each with its unit and where its default comes from.
+
+The defaults describe a mid-size vertical skiving machine for gears of 50-250 mm (a 1980s electronic-gearbox
+machine of seed 000 fig. 4 refitted with modern servo drives): a work table on a gear stage, a directly
+belt-driven tool spindle on a swivel head, a vertical carriage on a ball screw. They are plausible orders of
+magnitude, not one maker's data; the README's parameter table repeats them with the reasoning.
+
+Units are SI (m, kg, s, rad, N, N m) as MuJoCo uses them; the job files and the cutting engine use mm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+ARCSEC = math.pi / 180 / 3600
+
+
+@dataclass(frozen=True)
+class DriveStage:
+    """One transmission stage: motor -> (compliance + backlash) -> driven joint.
+
+    ``ratio``: driven joint motion per motor radian (rad/rad, or m/rad for a screw and nut);
+    ``stiffness``: of the stage referred to the driven joint (N m/rad, or N/m); None = rigid (a stiff
+    equality constraint, the "ideal" drive); ``backlash``: total dead band at the driven joint (rad or m);
+    ``damping``: of the stage referred to the driven joint (N m s/rad or N s/m), acting on the relative
+    velocity across the stage (lubricant film and structure).
+    """
+
+    ratio: float
+    stiffness: float | None
+    backlash: float = 0.0
+    damping: float = 0.0
+
+    def check(self, name: str) -> list[str]:
+        out = []
+        if not math.isfinite(self.ratio) or self.ratio == 0:
+            out.append(f"{name}.ratio = {self.ratio}: must be finite and non-zero")
+        if self.stiffness is not None and not (self.stiffness > 0 and math.isfinite(self.stiffness)):
+            out.append(f"{name}.stiffness = {self.stiffness}: must be > 0 (or omitted for a rigid stage)")
+        if not self.backlash >= 0:
+            out.append(f"{name}.backlash = {self.backlash}: must be >= 0")
+        if self.backlash > 0 and self.stiffness is None:
+            out.append(f"{name}.backlash = {self.backlash}: a stage with backlash needs a contact stiffness")
+        if not self.damping >= 0:
+            out.append(f"{name}.damping = {self.damping}: must be >= 0")
+        return out
+
+
+@dataclass(frozen=True)
+class SkivingMachineParams:
+    """Masses, inertias, drives and friction of the skiving machine (see the module docstring for units)."""
+
+    # ---- work spindle (B2/B4): table, fixture and blank on a gear stage from servo motor M2 -------------
+    work_inertia: float = 0.15  # kg m^2: table 300 mm x 60 mm steel (0.12) + fixture; the blank is added
+    work_friction: float = 1.5  # N m: two preloaded angular-contact bearings at speed
+    work_motor_inertia: float = 4.0e-3  # kg m^2: 10 N m class AC servo motor rotor
+    work_motor_torque: float = 60.0  # N m: peak torque of M2 (current limit of power amplifier 11)
+    #: M2 -> table: 1:2 precision spur stage, 1e6 N m/rad (table bearing + stage, referred to the table),
+    #: 20 arcsec backlash (a precision stage, DIN 3967 "reduced" class)
+    work_drive: DriveStage = field(default_factory=lambda: DriveStage(0.5, 1.0e6, 20 * ARCSEC, 60.0))
+
+    # ---- tool spindle (B1): cutter and arbor, belt from servo motor M1 ----------------------------------
+    tool_inertia: float = 0.012  # kg m^2: spindle shaft 0.006 + arbor + a 50-70 mm cutter
+    tool_friction: float = 0.5  # N m: spindle bearings
+    tool_motor_inertia: float = 3.0e-3  # kg m^2
+    tool_motor_torque: float = 40.0  # N m: M1 peak (amplifier 3)
+    #: M1 -> spindle: 1:1 toothed belt, 2e4 N m/rad torsional (belt span stiffness at the pulley radius)
+    tool_drive: DriveStage = field(default_factory=lambda: DriveStage(1.0, 2.0e4, 0.0, 8.0))
+
+    # ---- carriage (P3) on vertical ways, ball screw (TV) from servo motor M3 -----------------------------
+    carriage_mass: float = 250.0  # kg: carriage + swivel head + tool spindle unit
+    ways_friction: float = 150.0  # N: linear guides (rolling) under preload
+    #: share of the carriage weight carried by the hydraulic counterbalance; the rest keeps the nut on one flank
+    counterbalance: float = 0.85
+    screw_inertia: float = 1.5e-3  # kg m^2: 40 mm ball screw, 1.2 m long
+    feed_motor_inertia: float = 1.5e-3  # kg m^2
+    feed_motor_torque: float = 20.0  # N m: M3 peak (amplifier 18)
+    #: M3 -> screw: rigid coupling, 3e3 N m/rad torsional (the screw shaft, referred to the screw)
+    feed_drive: DriveStage = field(default_factory=lambda: DriveStage(1.0, 3.0e3, 0.0, 0.5))
+    #: screw -> carriage (ratio = pitch / 2 pi, set from the job): axial 4e8 N/m (screw, nut, bearings), 3 um play
+    nut_stiffness: float | None = 4.0e8  # N/m; None = rigid
+    nut_backlash: float = 3.0e-6  # m
+    nut_damping: float = 2.0e4  # N s/m
+
+    # ---- radial slide (pass depth): position-controlled, held stiffly during a pass ---------------------
+    radial_mass: float = 180.0  # kg
+    radial_stiffness: float = 2.0e8  # N/m: servo + screw stiffness holding the depth
+    radial_damping: float = 2.0e5  # N s/m
+
+    # ---- simulation ---------------------------------------------------------------------------------------
+    timestep: float = 1.25e-4  # s: 8 kHz physics, two sub-steps of a 4 kHz servo
+    integrator: str = "implicitfast"  # damping implicit; the stages' springs stay well below 1/(2 pi h)
+
+    def problems(self) -> list[str]:
+        out: list[str] = []
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, DriveStage):
+                out += v.check(f.name)
+            elif isinstance(v, float) and not (v >= 0 and math.isfinite(v)):
+                out.append(f"{f.name} = {v}: must be a finite number >= 0")
+        for name in ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"):
+            if not getattr(self, name) > 0:
+                out.append(f"{name} = {getattr(self, name)}: must be > 0 (a body needs mass)")
+        if self.nut_stiffness is None and self.nut_backlash > 0:
+            out.append(f"nut_backlash = {self.nut_backlash}: a nut with backlash needs nut_stiffness")
+        if not 0 <= self.counterbalance <= 1:
+            out.append(f"counterbalance = {self.counterbalance}: must be between 0 and 1")
+        if not 0 < self.timestep <= 1e-3:
+            out.append(f"timestep = {self.timestep}: must be in (0, 1e-3] s")
+        if self.integrator not in ("implicitfast", "RK4", "Euler", "implicit"):
+            out.append(f"integrator = {self.integrator!r}: use 'implicitfast', 'RK4', 'Euler' or 'implicit'")
+        return out
+
+    def stiff(self) -> SkivingMachineParams:
+        """The ideal machine: every stage rigid and free of backlash, no friction (for the proofs)."""
+        rigid = {
+            f.name: replace(getattr(self, f.name), stiffness=None, backlash=0.0)
+            for f in fields(self)
+            if isinstance(getattr(self, f.name), DriveStage)
+        }
+        return replace(
+            self, **rigid, nut_stiffness=None, nut_backlash=0.0, work_friction=0.0, tool_friction=0.0, ways_friction=0.0
+        )
+
+    def with_overrides(self, values: dict[str, Any]) -> SkivingMachineParams:
+        """Parameters changed by a flat dict; a drive stage's fields as ``"work_drive.backlash"``."""
+        top: dict[str, Any] = {}
+        stages: dict[str, dict[str, Any]] = {}
+        names = {f.name for f in fields(self)}
+        for key, value in values.items():
+            head, _, tail = key.partition(".")
+            if head not in names:
+                raise KeyError(f"unknown machine parameter {key!r}")
+            if tail:
+                stages.setdefault(head, {})[tail] = value
+            else:
+                top[head] = value
+        for head, changes in stages.items():
+            top[head] = replace(getattr(self, head), **changes)
+        return replace(self, **top)

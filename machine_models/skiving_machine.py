@@ -1,0 +1,223 @@
+"""The skiving machine as an MJCF model, generated with MjSpec from the job and :class:`SkivingMachineParams`.
+
+Machine frame = the work frame at rest (cutting/skiving.py): z up along the work axis, the common
+perpendicular of the axes on +x. Bodies and joints (seed 000 notation):
+
+- ``work_spindle``  hinge ``B2`` about z: table, fixture and blank (B2 + B4 of the seed are one joint);
+- ``carriage``      slide ``P3`` along z on vertical ways (gravity loads the lead screw);
+- ``radial_slide``  slide ``X`` along x on the carriage: the centre distance of the pass;
+- ``swivel_head``   fixed at the shaft angle (the axis turned by -Sigma about x);
+- ``tool_spindle``  hinge ``B1`` about the head's z: arbor and cutter;
+- ``lead_screw``    hinge ``TV`` about z, beside the carriage;
+- motors ``M1`` (tool), ``M2`` (work), ``M3`` (feed): hinges with their rotor inertia, torque actuators
+  of the same names.
+
+Every drive stage is a fixed tendon ``L = driven - ratio * motor`` (see :mod:`machine_models.drives`).
+Frames for the cutting engine: site ``blank_frame`` (the gear's frame: space 0 centred on +x at B2 = 0)
+and site ``cutter_frame`` (the cutter's frame: rake face at z = 0, tooth 0 on the mesh at B1 = 0).
+Lengths are metres here; the cutting engine works in mm.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from cutting.skiving import SkivingSetup
+from machine_models.drives import couple
+from machine_models.parameters import DriveStage, SkivingMachineParams
+
+MM = 1e-3
+STEEL = 7850.0  # kg/m^3
+GREY, DARK, BLUE, ORANGE, STEELC = (
+    [0.6, 0.6, 0.62, 1],
+    [0.25, 0.25, 0.28, 1],
+    [0.2, 0.4, 0.8, 1],
+    [0.95, 0.55, 0.1, 1],
+    [0.75, 0.75, 0.78, 1],
+)
+
+
+@dataclass(frozen=True)
+class MachineLayout:
+    """Where the job puts the machine: pass-independent quantities in metres and radians."""
+
+    centre_distance: float  # first pass [m]
+    carriage_start: float  # carriage position at the start of the first pass [m]
+    tilt: float  # rotation of the tool axis about x [rad] (-Sigma)
+    work_phase: float
+    cutter_phase: float
+    lead_screw_pitch: float  # [m]
+
+
+def layout_of(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
+    from cutting.trajectory import ideal_passes
+
+    first = ideal_passes(setup)[0]
+    return MachineLayout(
+        first.centre_distance * MM,
+        first.s_start * MM,
+        setup.tilt,
+        setup.work_phase,
+        setup.cutter_phase,
+        lead_screw_pitch_mm * MM,
+    )
+
+
+def _quat_z(angle: float) -> list[float]:
+    return [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
+
+
+def _quat_x(angle: float) -> list[float]:
+    return [math.cos(angle / 2), math.sin(angle / 2), 0.0, 0.0]
+
+
+def _inertial(body, mass: float, axial: float, transverse: float | None = None) -> None:
+    """Mass and principal inertia (axial about the body's z) at the body origin."""
+    body.mass = mass
+    t = axial / 2 + 1e-6 if transverse is None else transverse
+    body.inertia = [t, t, axial]
+    body.ipos = [0.0, 0.0, 0.0]  # must be set: left unset it takes the body's position
+    body.explicitinertial = True
+
+
+def _visual(body, kind, size, rgba, pos=(0, 0, 0), quat=(1, 0, 0, 0)) -> None:
+    body.add_geom(
+        type=kind,
+        size=list(size),
+        rgba=rgba,
+        pos=list(pos),
+        quat=list(quat),
+        contype=0,
+        conaffinity=0,
+        mass=0.0,
+        density=0.0,
+    )
+
+
+def build_spec(setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pitch_mm: float) -> mujoco.MjSpec:
+    """The MJCF model of the machine for ``setup`` (structure S4: motors M1, M2, M3 on their own axes)."""
+    problems = params.problems()
+    if problems:
+        raise ValueError("invalid machine parameters: " + "; ".join(problems))
+    lay = layout_of(setup, lead_screw_pitch_mm)
+    g, c = setup.gear, setup.cutter
+    spec = mujoco.MjSpec()
+    spec.modelname = "skiving_machine"
+    spec.compiler.degree = False
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    spec.option.timestep = params.timestep
+    spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{params.integrator.upper()}")
+    spec.option.gravity = [0.0, 0.0, -9.81]
+    spec.visual.global_.offwidth = 1280
+    world = spec.worldbody
+    world.add_light(pos=[0, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
+    r_blank = g.tip_radius * MM if not g.internal else (g.root_radius + 3 * g.mn) * MM
+    b = g.face_width * MM
+    _visual(world, mujoco.mjtGeom.mjGEOM_BOX, (0.45, 0.35, 0.04), DARK, pos=(0.1, 0, -b / 2 - 0.16))  # bed
+
+    # ---- work spindle B2 with the blank ----------------------------------------------------------------
+    work = world.add_body(name="work_spindle")
+    blank_mass = STEEL * math.pi * r_blank**2 * b
+    _inertial(work, 60.0 + blank_mass, params.work_inertia + blank_mass * r_blank**2 / 2)
+    work.add_joint(name="B2", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.work_friction)
+    _visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.15, 0.03), GREY, pos=(0, 0, -b / 2 - 0.09))  # table
+    _visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_blank, b / 2), STEELC)  # blank
+    _visual(work, mujoco.mjtGeom.mjGEOM_BOX, (r_blank * 0.9, 0.003, b / 2 + 0.001), ORANGE)  # angle mark
+    work.add_site(name="blank_frame", quat=_quat_z(lay.work_phase))
+    motor2 = world.add_body(name="work_motor", pos=[-0.28, 0.0, -b / 2 - 0.08])
+    _motor(spec, motor2, "M2", params.work_motor_inertia, params.work_motor_torque)
+    couple(spec, "work_drive", "B2", "M2", params.work_drive)
+
+    # ---- carriage P3, radial slide X, swivel head, tool spindle B1 --------------------------------------
+    carriage = world.add_body(name="carriage")
+    _inertial(carriage, params.carriage_mass, 10.0, 10.0)
+    carriage.gravcomp = params.counterbalance
+    carriage.add_joint(name="P3", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], frictionloss=params.ways_friction)
+    _visual(carriage, mujoco.mjtGeom.mjGEOM_BOX, (0.06, 0.2, 0.18), GREY, pos=(lay.centre_distance + 0.2, 0, 0))
+    radial = carriage.add_body(name="radial_slide")
+    _inertial(radial, params.radial_mass, 5.0, 5.0)
+    radial.gravcomp = params.counterbalance
+    radial.add_joint(name="X", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0], damping=params.radial_damping)
+    _visual(radial, mujoco.mjtGeom.mjGEOM_BOX, (0.04, 0.12, 0.12), BLUE, pos=(0.13, 0, 0))
+    head = radial.add_body(name="swivel_head", quat=_quat_x(lay.tilt))
+    _visual(head, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.08), BLUE, pos=(0, 0, 0.1))  # spindle housing
+    tool = head.add_body(name="tool_spindle")
+    _inertial(tool, 12.0, params.tool_inertia)
+    tool.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.tool_friction)
+    r_cut = setup.cutter_tip_diameter / 2 * MM
+    width = c.face_width * MM
+    _visual(tool, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_cut, width / 2), ORANGE, pos=(0, 0, -width / 2))  # cutter
+    _visual(tool, mujoco.mjtGeom.mjGEOM_BOX, (r_cut * 0.9, 0.002, width / 2 + 0.001), DARK, pos=(0, 0, -width / 2))
+    _visual(
+        tool,
+        mujoco.mjtGeom.mjGEOM_CYLINDER,
+        (setup.holder_diameter_value / 2 * MM, 0.02),
+        DARK,
+        pos=(0, 0, -width - 0.02),
+    )  # holder
+    tool.add_site(name="cutter_frame", quat=_quat_z(lay.cutter_phase))
+    motor1 = head.add_body(name="tool_motor", pos=[0.1, 0.0, 0.2])
+    _motor(spec, motor1, "M1", params.tool_motor_inertia, params.tool_motor_torque)
+    for body in (tool, motor1):  # the counterbalance carries everything that rides on the carriage
+        body.gravcomp = params.counterbalance
+    couple(spec, "tool_drive", "B1", "M1", params.tool_drive)
+    spec.add_actuator(name="X", target="X", trntype=mujoco.mjtTrn.mjTRN_JOINT).set_to_position(
+        kp=params.radial_stiffness
+    )
+
+    # ---- lead screw TV and feed motor M3 ---------------------------------------------------------------
+    screw = world.add_body(name="lead_screw", pos=[lay.centre_distance + 0.2, 0.25, 0.0])
+    _inertial(screw, 10.0, params.screw_inertia, 1.0)
+    screw.add_joint(name="TV", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+    _visual(screw, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.02, 0.3), STEELC)
+    motor3 = world.add_body(name="feed_motor", pos=[lay.centre_distance + 0.2, 0.25, 0.38])
+    _motor(spec, motor3, "M3", params.feed_motor_inertia, params.feed_motor_torque)
+    couple(spec, "feed_drive", "TV", "M3", params.feed_drive)
+    nut = DriveStage(
+        lay.lead_screw_pitch / (2 * math.pi), params.nut_stiffness, params.nut_backlash, params.nut_damping
+    )
+    couple(spec, "nut", "P3", "TV", nut)
+
+    # ---- start of the first pass -------------------------------------------------------------------------
+    spec.add_key(name="home", qpos=_home_qpos(spec, lay))
+    return spec
+
+
+def _motor(spec: mujoco.MjSpec, body, name: str, inertia: float, peak: float) -> None:
+    """A servo motor: rotor hinge ``name`` with its inertia, and a torque actuator ``name`` (ctrl in N m)."""
+    _inertial(body, 8.0, inertia)
+    body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+    _visual(body, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.07), DARK)
+    act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    act.set_to_motor()
+    act.ctrllimited = True
+    act.ctrlrange = [-peak, peak]
+
+
+def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout) -> list[float]:
+    """Joint positions at the start of the first pass; every drive stage relaxed (tendon lengths zero)."""
+    model = spec.compile()
+    q = np.zeros(model.nq)
+    q[model.joint("X").qposadr[0]] = lay.centre_distance
+    q[model.joint("P3").qposadr[0]] = lay.carriage_start
+    tv = lay.carriage_start / (lay.lead_screw_pitch / (2 * math.pi))
+    q[model.joint("TV").qposadr[0]] = tv
+    for tendon, motor, driven in (("work_drive", "M2", "B2"), ("tool_drive", "M1", "B1"), ("feed_drive", "M3", "TV")):
+        coef = _tendon_coefs(model, tendon)
+        q[model.joint(motor).qposadr[0]] = -coef[driven] * q[model.joint(driven).qposadr[0]] / coef[motor]
+    return q.tolist()
+
+
+def _tendon_coefs(model: mujoco.MjModel, tendon: str) -> dict[str, float]:
+    t = model.tendon(tendon).id
+    adr, num = int(model.tendon_adr[t]), int(model.tendon_num[t])
+    return {model.joint(int(model.wrap_objid[i])).name: float(model.wrap_prm[i]) for i in range(adr, adr + num)}
+
+
+def build_model(setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pitch_mm: float) -> mujoco.MjModel:
+    spec = build_spec(setup, params, lead_screw_pitch_mm)
+    return spec.compile()
