@@ -171,10 +171,11 @@ def test_analog_to_pulse():
     vco = AnalogToPulse(256.0)  # 0.25 pulse per tick at inp = 1, exact in binary
     assert run(vco, "inp", [1.0] * 8, dt=dt) == [0, 0, 0, 1, 0, 0, 0, 1]
     vco.reset()
-    assert run(vco, "inp", [-1.0] * 4, dt=dt) == [0, 0, 0, -1]  # integer part: truncation
+    # floor, like an encoder: the first reverse pulse comes at once, when the integral crosses 0
+    assert run(vco, "inp", [-1.0] * 4, dt=dt) == [-1, 0, 0, 0]
     vco.reset()
-    assert run(vco, "inp", [1.0, 1.0, -1.0, -1.0, -1.0], dt=dt) == [0] * 5  # the fraction keeps its sign
-    assert vco.position == 0
+    assert run(vco, "inp", [1.0, 1.0, -1.0, -1.0, -1.0], dt=dt) == [0, 0, 0, 0, -1]  # back below zero
+    assert vco.position == -1
     vco.reset()
     run(vco, "inp", [4000.0], dt=dt)  # 1000 pulses in one tick
     assert vco.out == 1000
@@ -470,3 +471,22 @@ def test_frequency_divider_reset_and_slots():
     run(div, "inp", [3, 5])
     div.reset()
     assert (div.inp, div.out, div.position, div.remainder, div.k) == (0, 0, 0, 0, 7)
+
+
+# ---- speed regulator (power amplifier's speed loop) -------------------------------------------------
+def test_speed_regulator_pi_and_anti_windup() -> None:
+    from virtual_machine.controllers import SpeedRegulator
+
+    r = SpeedRegulator(kp=2.0, ki=100.0, limit=10.0)
+    r.speed_command, r.tacho = 1.0, 0.0
+    r.update(0.01)
+    assert r.out == pytest.approx(2.0 * 1.0 + 100.0 * 0.01)  # kp e + ki e dt
+    r.speed_command = 100.0  # far beyond the limit: clamps and stops integrating
+    for _ in range(50):
+        r.update(0.01)
+    assert r.out == 10.0 and r.saturated
+    r.speed_command = 0.0  # the integral did not wind up: the output leaves the limit at once
+    r.update(0.01)
+    assert r.out == pytest.approx(100.0 * 0.01)
+    with pytest.raises(ValueError, match="limit"):
+        SpeedRegulator(kp=1.0, ki=0.0, limit=0.0)

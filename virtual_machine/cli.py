@@ -243,3 +243,82 @@ def _finite(obj: object) -> object:
 
 if __name__ == "__main__":
     main()
+
+
+@main.command(help="Run the machine through JOB's passes (no cutting); write the pose trajectory and motion record.")
+@click.argument("job", required=False, type=click.Path(path_type=Path))
+@click.option("--duration", type=click.FloatRange(min=0.0, min_open=True), help="Stop after S seconds of machine time.")
+@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
+@click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
+def simulate(job: Path | None, duration: float | None, out: Path, as_json: bool) -> None:
+    import time
+
+    from tqdm import tqdm
+
+    from virtual_machine import motion_io
+    from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.simulate import simulate as run
+
+    path = job or default_job_path()
+    try:
+        j = load_job(path)
+    except (InputError, ValueError) as exc:
+        _fail(exc)
+    st = j.skiving
+    total = duration or (sum(st.pass_times) + 0.5 + 1.2 * (len(st.passes) - 1))  # strokes + run-up + returns (approx.)
+    bar = tqdm(
+        total=round(total, 2),
+        unit="s",
+        desc="machine time",
+        disable=as_json,
+        bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s",
+    )
+    last = [0.0]
+
+    def progress(t: float) -> None:
+        if t - last[0] >= 0.05:
+            bar.update(round(t - last[0], 2))
+            last[0] = t
+
+    t0 = time.perf_counter()
+    try:
+        rec = run(j, duration=duration, progress=progress)
+    except (SimulationDivergedError, NotImplementedError) as exc:
+        bar.close()
+        _fail(exc)
+    bar.n = bar.total  # the estimate of the total is approximate: end the bar where the run ended
+    bar.close()
+    wall = time.perf_counter() - t0
+    meta = {
+        "job": str(path),
+        "structure": j.machine["structure"],
+        "synchronization": j.machine["synchronization"],
+        "adaptive_correction": j.machine["adaptive_correction"],
+        "wall_seconds": wall,
+    }
+    doc = motion_io.save(rec, out, meta, st.gear.teeth)
+    if as_json:
+        click.echo(json.dumps(doc, indent=2))
+        return
+    click.echo(
+        f"\nSIMULATION  {path}  ({j.machine['structure']}, {j.machine['synchronization']}, "
+        f"adaptive correction {'on' if j.machine['adaptive_correction'] else 'off'})"
+    )
+    click.echo(
+        f"{doc['machine_seconds']:.2f} s of machine time in {wall:.1f} s wall "
+        f"({doc['machine_seconds'] / wall:.1f}x real time)"
+    )
+    click.echo("synchronisation error while cutting (arc on the reference circle, um):")
+    click.echo(f"{'pass':>5} {'mean':>8} {'rms':>8} {'rms-mean':>9} {'p-p':>8}   peak torque M1/M2/M3 [N m]")
+    for p in doc["passes"]:
+        s, tq = p["sync_error_in_cut"], p["peak_torque_Nm"]
+        if s:
+            click.echo(
+                f"{p['pass'] + 1:>5} {s['mean_um']:8.3f} {s['rms_um']:8.3f} {s['rms_about_mean_um']:9.3f} "
+                f"{s['peak_to_peak_um']:8.3f}   {tq['M1']:.1f} / {tq['M2']:.1f} / {tq['M3']:.1f}"
+            )
+    for name, v in doc.get("periodic_part", {}).items():
+        click.echo(f"periodic part per {name.replace('_', ' ')}: {v['peak_to_peak_um']:.3f} um p-p")
+    click.echo(
+        f"written: {out / 'trajectory.npz'}, {out / 'motion.npz'}, {out / 'simulation.json'}, {out / 'sync_error.png'}"
+    )

@@ -16,6 +16,7 @@ from .encoder import Encoder
 from .hydraulic import HydraulicPulseGenerator, HydraulicSteppingMotor
 from .motors import DCMotor, SynchronousMotor
 from .pulses import FrequencyDivider, ReferenceGenerator, Summator
+from .servo import SpeedRegulator
 
 __all__ = [
     "AnalogToPulse",
@@ -32,6 +33,7 @@ __all__ = [
     "PulseToAnalog",
     "ReferenceGenerator",
     "SignDiscriminator",
+    "SpeedRegulator",
     "Summator",
     "SynchronousMotor",
 ]

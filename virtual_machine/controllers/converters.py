@@ -102,9 +102,9 @@ class CountToAnalog:
 class AnalogToPulse:
     """Analog-to-pulse converter (voltage-controlled oscillator) 32 (seed 000 fig. 4).
 
-    ``phase += gain*inp*dt; out = trunc(phase); phase -= out``: the integer part is emitted as signed
-    pulses and the signed fraction (``|phase| < 1``) is kept, so ``position = trunc(integral of
-    gain*inp dt)``.
+    ``phase += gain*inp*dt; out = floor(phase); phase -= out``: a pulse is emitted each time the integral
+    crosses a whole number, in either direction, and the fraction (``0 <= phase < 1``) is kept, so
+    ``position = floor(integral of gain*inp dt)``.
 
     Parameters
     ----------
@@ -132,7 +132,7 @@ class AnalogToPulse:
 
     def update(self, dt: float) -> None:
         phase = self._phase + self.gain * self.inp * dt
-        n = int(phase)
+        n = math.floor(phase)
         self._phase = phase - n
         self.out = n
         self.position += n

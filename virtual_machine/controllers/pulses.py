@@ -91,6 +91,14 @@ class FrequencyDivider:
         self.reset()
 
     @property
+    def fine_position(self) -> float:
+        """Output position with the counted fraction of the next pulse, ``position + remainder / k``.
+
+        The pulses of a real train are spread evenly over a tick; a converter that integrates them sees this
+        position at the tick's end, without the +-1 pulse jitter of counting whole pulses per tick."""
+        return self.position + self.remainder / self._k
+
+    @property
     def k(self) -> int:
         """Division coefficient (integer >= 1)."""
         return self._k

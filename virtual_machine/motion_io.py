@@ -1,0 +1,121 @@
+"""Files of a simulated run: the motion record, the pose trajectory (the cutting engine's input) and a summary.
+
+``trajectory.npz`` holds, per feed stroke i, ``pass{i}_t`` [s from the stroke's start], ``pass{i}_rot``
+(n, 3, 3) and ``pass{i}_trans`` (n, 3) [mm]: the cutter frame in the blank frame (cutting/skiving.py
+conventions), plus the axis values that produced them (``pass{i}_cutter_angle`` [rad], ``pass{i}_carriage``,
+``pass{i}_centre_distance`` [mm]). ``motion.npz`` holds the per-tick record (see :class:`MotionRecord`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from virtual_machine.physics import AXES
+from virtual_machine.simulate import SEGMENTS, MotionRecord, PassTrajectory
+
+TRAJECTORY_FORMAT = "skive pose trajectory 1"
+
+
+def summary(rec: MotionRecord, teeth: int | None = None) -> dict[str, Any]:
+    """Per pass and overall: synchronisation error while cutting, peak motor torques, machine time."""
+    passes = []
+    for p in rec.passes:
+        sel = rec.cutting & (rec.pass_index == p.index)
+        e = rec.sync_um[sel]
+        stroke = (rec.segment == SEGMENTS.index("feed")) & (rec.pass_index == p.index)
+        passes.append(
+            {
+                "pass": p.index,
+                "stroke_seconds": float(p.t[-1]),
+                "sync_error_in_cut": _stats(e),
+                "peak_torque_Nm": dict(
+                    zip(("M1", "M2", "M3"), np.abs(rec.torque[stroke]).max(axis=0).round(3).tolist(), strict=True)
+                ),
+            }
+        )
+    return {
+        "machine_seconds": float(rec.t[-1]),
+        "sync_error_in_cut": _stats(rec.sync_um[rec.cutting]),
+        "periodic_part": rec.periodic_part(teeth),
+        "passes": passes,
+    }
+
+
+def _stats(e: np.ndarray) -> dict[str, float]:
+    if e.size == 0:
+        return {}
+    return {
+        "mean_um": float(e.mean()),
+        "rms_um": float(np.sqrt(np.mean(e**2))),
+        "rms_about_mean_um": float(e.std()),
+        "peak_to_peak_um": float(np.ptp(e)),
+    }
+
+
+def save(rec: MotionRecord, out: Path, meta: dict[str, Any], teeth: int | None = None) -> dict[str, Any]:
+    """Write motion.npz, trajectory.npz, simulation.json (and sync_error.png) to ``out``; returns the summary."""
+    out.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(
+        out / "motion.npz",
+        t=rec.t,
+        q=rec.q,
+        axes=np.array(AXES),
+        torque=rec.torque,
+        sync_um=rec.sync_um,
+        segment=rec.segment,
+        segments=np.array(SEGMENTS),
+        pass_index=rec.pass_index,
+        cutting=rec.cutting,
+    )
+    arrays: dict[str, np.ndarray] = {
+        "format": np.array(TRAJECTORY_FORMAT),
+        "passes": np.array([p.index for p in rec.passes]),
+    }
+    for p in rec.passes:
+        for name in ("t", "rot", "trans", "cutter_angle", "carriage", "centre_distance"):
+            arrays[f"pass{p.index}_{name}"] = getattr(p, name)
+    np.savez_compressed(out / "trajectory.npz", **arrays)
+    doc = {**meta, **summary(rec, teeth)}
+    (out / "simulation.json").write_text(json.dumps(doc, indent=2))
+    _chart(rec, out / "sync_error.png")
+    return doc
+
+
+def load_trajectory(path: Path) -> list[PassTrajectory]:
+    """The pass trajectories of a trajectory.npz; a clear error when the file is not one."""
+    with np.load(path) as z:
+        if "format" not in z or str(z["format"]) != TRAJECTORY_FORMAT:
+            raise ValueError(f"{path}: not a skive pose trajectory (write one with `skive simulate JOB --out DIR`)")
+        return [
+            PassTrajectory(
+                int(i),
+                *(z[f"pass{int(i)}_{n}"] for n in ("t", "rot", "trans", "cutter_angle", "carriage", "centre_distance")),
+            )
+            for i in z["passes"]
+        ]
+
+
+def _chart(rec: MotionRecord, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    ax[0].plot(rec.t, rec.sync_um, lw=0.5, color="tab:blue")
+    cut = np.where(rec.cutting, rec.sync_um, np.nan)
+    ax[0].plot(rec.t, cut, lw=0.7, color="tab:red", label="cutter in the blank")
+    ax[0].set_ylabel("sync error [um]\n(arc on d)")
+    ax[0].legend(loc="upper right")
+    for k, name in enumerate(("M1", "M2", "M3")):
+        ax[1].plot(rec.t, rec.torque[:, k], lw=0.5, label=name)
+    ax[1].set_ylabel("motor torque [N m]")
+    ax[1].set_xlabel("machine time [s]")
+    ax[1].legend(loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

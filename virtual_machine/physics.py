@@ -1,0 +1,86 @@
+"""The physics side of the simulation loop: a compiled machine model, its state and the signals the
+controllers read (axis angles and speeds) and write (motor torques), with divergence detection."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from machine_models.parameters import SkivingMachineParams
+
+AXES = ("B1", "B2", "P3", "X", "TV", "M1", "M2", "M3")
+
+
+class SimulationDivergedError(RuntimeError):
+    """The integration blew up; the message names the stage most likely responsible and how to fix it."""
+
+
+class MachinePhysics:
+    """MuJoCo model + data with the joints and actuators of the machine resolved once (no name lookups per tick)."""
+
+    def __init__(self, model: mujoco.MjModel, params: SkivingMachineParams):
+        self.model, self.params = model, params
+        self.data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, self.data, model.key("home").id)
+        self.qadr = {a: int(model.joint(a).qposadr[0]) for a in AXES}
+        self.vadr = {a: int(model.joint(a).dofadr[0]) for a in AXES}
+        self.act = {a: int(model.actuator(a).id) for a in ("M1", "M2", "M3", "X")}
+        self.site_blank = int(model.site("blank_frame").id)
+        self.site_cutter = int(model.site("cutter_frame").id)
+        self.data.ctrl[self.act["X"]] = self.data.qpos[self.qadr["X"]]
+        mujoco.mj_forward(model, self.data)
+
+    @property
+    def time(self) -> float:
+        return float(self.data.time)
+
+    def q(self, axis: str) -> float:
+        return float(self.data.qpos[self.qadr[axis]])
+
+    def v(self, axis: str) -> float:
+        return float(self.data.qvel[self.vadr[axis]])
+
+    def set_torque(self, motor: str, torque: float) -> None:
+        self.data.ctrl[self.act[motor]] = torque
+
+    def set_radial(self, x: float) -> None:
+        """Target of the radial slide's position servo [m]."""
+        self.data.ctrl[self.act["X"]] = x
+
+    def step(self, n: int) -> None:
+        mujoco.mj_step(self.model, self.data, nstep=n)
+        bad = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
+        if bad or not math.isfinite(self.data.qpos[self.qadr["B2"]]):
+            raise SimulationDivergedError(self.diagnose())
+
+    def cutter_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """The cutter frame in the blank frame: rotation (3, 3) and translation [mm] (current state)."""
+        mujoco.mj_kinematics(self.model, self.data)
+        rb = self.data.site_xmat[self.site_blank].reshape(3, 3)
+        rc = self.data.site_xmat[self.site_cutter].reshape(3, 3)
+        pb, pc = self.data.site_xpos[self.site_blank], self.data.site_xpos[self.site_cutter]
+        return rb.T @ rc, rb.T @ (pc - pb) * 1e3
+
+    def diagnose(self) -> str:
+        """Which stage's natural frequency is too high for the time step (explicit springs need w h < ~1)."""
+        p, h = self.params, self.model.opt.timestep
+        stages = {
+            "work_drive": (p.work_drive, p.work_inertia, p.work_motor_inertia),
+            "tool_drive": (p.tool_drive, p.tool_inertia, p.tool_motor_inertia),
+            "feed_drive": (p.feed_drive, p.screw_inertia, p.feed_motor_inertia),
+        }
+        worst, worst_wh = "timestep", 0.0
+        for name, (stage, j_out, j_motor) in stages.items():
+            if stage.stiffness is None:
+                continue
+            j = 1 / (1 / j_out + stage.ratio**2 / j_motor)
+            wh = math.sqrt(stage.stiffness / j) * h
+            if wh > worst_wh:
+                worst, worst_wh = name, wh
+        return (
+            f"the simulation diverged at t = {self.time:.4f} s (MuJoCo reported bad accelerations). "
+            f"Stiffest stage: {worst} with omega*h = {worst_wh:.2f}; lower machine.{worst}.stiffness, raise its "
+            f"damping, or reduce machine.timestep (now {h:g} s)"
+        )

@@ -1,0 +1,93 @@
+"""The CNC's part program for a skiving job: run-up, then per pass infeed, feed stroke, retract and return.
+
+Segments are produced tick by tick as :class:`CncState` plus the radial slide's target; a feed stroke ends
+when the lead screw has received exactly the pass's pulses, and the rapid return undoes those pulses (and
+the B4 pulses of the helix) with a linear interpolator, so every pass starts in the same helix phase.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from cutting.skiving import SkivingSetup
+from virtual_machine.structures.mechatronic import CncState
+
+
+@dataclass(frozen=True)
+class ProgramSettings:
+    runup: float = 0.4  # s: reference generator ramp 0 -> f_ref (smooth step), all axes keep their ratios
+    settle: float = 0.1  # s: dwell at speed before the first pass
+    radial_move: float = 0.08  # s: duration of a radial infeed or retract move
+    retract: float = 1.0  # mm: radial clearance for the return stroke
+    rapid_speed: float = 60.0  # mm/s: carriage speed of the return stroke
+
+
+@dataclass
+class Tick:
+    segment: str  # "runup", "settle", "infeed", "feed", "retract", "return"
+    pass_index: int  # -1 outside a pass
+    cnc: CncState
+    radial: float  # radial slide target [m]
+
+
+def smoothstep(x: float) -> float:
+    x = min(max(x, 0.0), 1.0)
+    return x * x * (3 - 2 * x)
+
+
+def program(
+    setup: SkivingSetup, dt: float, screw_pulses_per_mm: float, machine, settings: ProgramSettings | None = None
+) -> Iterator[Tick]:
+    """Ticks of the whole job. ``machine`` is the structure: the CNC reads the pulses it has issued
+    (``screw_pulses``, ``b4_pulses``) and its B4 pulses for a screw position (``b4_for_screw``)."""
+    from cutting.trajectory import ideal_passes
+
+    settings = settings or ProgramSettings()
+    passes = ideal_passes(setup)
+    down = setup.feed_direction == "down"
+    feed_dir = -1 if down else 1
+    out_sign = -1.0 if setup.gear.internal else 1.0  # retracting increases a (external), decreases it (internal)
+    a = [m.centre_distance * 1e-3 for m in passes]
+    n = max(1, round(settings.runup / dt))
+    for k in range(n):
+        yield Tick("runup", -1, CncState(scale=smoothstep((k + 1) / n), feed_dir=feed_dir), a[0])
+    for _ in range(round(settings.settle / dt)):
+        yield Tick("settle", -1, CncState(scale=1.0, feed_dir=feed_dir), a[0])
+    moves = max(1, round(settings.radial_move / dt))
+    for i, motion in enumerate(passes):
+        target = round(motion.duration * abs(motion.v_s) * screw_pulses_per_mm)  # pulses of the stroke
+        start_screw = machine.screw_pulses
+        while abs(machine.screw_pulses - start_screw) < target:
+            yield Tick("feed", i, CncState(scale=1.0, feed=True, feed_dir=feed_dir), a[i])
+        if i == len(passes) - 1:
+            return
+        away = a[i] + out_sign * settings.retract * 1e-3
+        for k in range(moves):
+            yield Tick(
+                "retract", i, CncState(scale=1.0, feed_dir=feed_dir), a[i] + (away - a[i]) * smoothstep((k + 1) / moves)
+            )
+        # back to the start of the next pass (its travel differs with the depth), B4 following the carriage
+        next_start = round((passes[i + 1].s_start - passes[0].s_start) * screw_pulses_per_mm)
+        screw_back = next_start - machine.screw_pulses
+        b4_back = machine.b4_for_screw(next_start) - machine.b4_pulses
+        travel = abs(screw_back) / screw_pulses_per_mm
+        steps = max(1, math.ceil(travel / settings.rapid_speed / dt))
+        done_s = done_b = 0
+        for k in range(steps):
+            f = smoothstep((k + 1) / steps)
+            s, b = round(screw_back * f), round(b4_back * f)
+            yield Tick(
+                "return", i, CncState(scale=1.0, feed_dir=feed_dir, rapid_screw=s - done_s, rapid_b4=b - done_b), away
+            )
+            done_s, done_b = s, b
+        for k in range(moves):
+            yield Tick(
+                "infeed",
+                i + 1,
+                CncState(scale=1.0, feed_dir=feed_dir),
+                away + (a[i + 1] - away) * smoothstep((k + 1) / moves),
+            )
+        for _ in range(moves):  # dwell: let the radial slide and the carriage settle
+            yield Tick("infeed", i + 1, CncState(scale=1.0, feed_dir=feed_dir), a[i + 1])

@@ -1,0 +1,202 @@
+"""The simulation loop (fixed, dm_control style): CNC tick -> controllers -> physics sub-steps -> record.
+
+Controllers run at the servo rate (``servo_substeps`` physics steps per tick, torques held between); the
+record keeps per tick the axis positions, motor torques and the synchronisation error, and per pass the
+pose trajectory of the cutter in the blank frame (the cutting engine's input).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from machine_models.parameters import SkivingMachineParams
+from machine_models.skiving_machine import MM, build_spec
+from virtual_machine.job import Job
+from virtual_machine.physics import AXES, MachinePhysics
+from virtual_machine.program import ProgramSettings, program
+from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.structures.mechatronic import MechatronicS4
+
+SEGMENTS = ("runup", "settle", "infeed", "feed", "retract", "return")
+
+
+@dataclass
+class PassTrajectory:
+    """Poses of the cutter frame in the blank frame during one feed stroke: t [s] from the stroke's start."""
+
+    index: int
+    t: np.ndarray
+    rot: np.ndarray  # (n, 3, 3)
+    trans: np.ndarray  # (n, 3) mm
+    cutter_angle: np.ndarray  # B1 [rad]
+    carriage: np.ndarray  # P3 [mm]
+    centre_distance: np.ndarray  # X [mm]
+
+
+@dataclass
+class MotionRecord:
+    t: np.ndarray
+    q: np.ndarray  # (n, len(AXES)): B1, B2 [rad], P3, X [mm], TV, M1, M2, M3 [rad]
+    torque: np.ndarray  # (n, 3) M1, M2, M3 [N m]
+    sync_um: np.ndarray  # synchronisation error as arc on the work reference circle [um]
+    segment: np.ndarray  # index into SEGMENTS
+    pass_index: np.ndarray
+    cutting: np.ndarray  # feed ticks in which the cutter can be in the blank (|P3| <= b/2 + engagement)
+    passes: list[PassTrajectory] = field(default_factory=list)
+
+    def sync_stats(self, during: str = "cut") -> dict[str, float]:
+        """Synchronisation error statistics over a segment kind, or "cut": while the cutter can touch the blank."""
+        sel = self.cutting if during == "cut" else self.segment == SEGMENTS.index(during)
+        e = self.sync_um[sel]
+        if e.size == 0:
+            return {}
+        return {
+            "mean_um": float(e.mean()),
+            "rms_um": float(np.sqrt(np.mean(e**2))),
+            "rms_about_mean_um": float(e.std()),
+            "peak_to_peak_um": float(e.max() - e.min()),
+            "max_abs_um": float(np.abs(e).max()),
+        }
+
+    def periodic_part(self, teeth: int | None = None, bins: int = 64) -> dict[str, dict[str, float]]:
+        """Synchronous averages of the sync error while cutting: per work revolution (shows as pitch and runout),
+        per work tooth pitch (``teeth`` = z2; repeats in every space) and per cutter revolution. Peak-to-peak
+        and RMS of each averaged curve [um]."""
+        sel = self.cutting
+        if sel.sum() < bins:
+            return {}
+        e = self.sync_um[sel] - self.sync_um[sel].mean()
+        out = {}
+        periods = {"work_revolution": (self.q[sel, 1], 1), "cutter_revolution": (self.q[sel, 0], 1)}
+        if teeth:
+            periods["work_tooth"] = (self.q[sel, 1], teeth)
+        for name, (angle, n) in periods.items():
+            phase = np.mod(angle * n / (2 * np.pi), 1.0)
+            k = np.minimum((phase * bins).astype(int), bins - 1)
+            count = np.bincount(k, minlength=bins)
+            avg = np.bincount(k, weights=e, minlength=bins)[count > 0] / count[count > 0]
+            out[name] = {"peak_to_peak_um": float(np.ptp(avg)), "rms_um": float(np.sqrt(np.mean(avg**2)))}
+        return out
+
+
+def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, adaptive: bool | None = None):
+    """Structure S4 (equal coordinates) with the job's setting sheet; other structures follow (issue 5)."""
+    m = job.machine
+    if m["structure"] != "mechatronic" or m["synchronization"] != "equal-coordinates":
+        raise NotImplementedError(
+            f"machine.structure = {m['structure']!r} with {m['synchronization']!r}: only the mechatronic "
+            "equal-coordinates structure (S4) is simulated so far"
+        )
+    sheet = setup_sheet(job, "mechatronic")
+    st = sheet.settings
+    setup = job.skiving
+    j_tool = params.tool_motor_inertia + params.tool_inertia * params.tool_drive.ratio**2
+    j_work = params.work_motor_inertia + params.work_inertia * params.work_drive.ratio**2
+    lead = m["lead_screw_pitch"] * MM / (2 * math.pi)
+    j_feed = (
+        params.feed_motor_inertia + (params.screw_inertia + params.carriage_mass * lead**2) * params.feed_drive.ratio**2
+    )
+    ky = st["ky"].realisation.get("integer")
+    return MechatronicS4(
+        f_ref=m["reference_frequency"],
+        p=m["command_pulses_per_rev"],
+        kv=st["kv"].realisation["integer"],
+        kx=st["kx"].realisation["integer"],
+        ks=st["ks"].realisation["integer"],
+        ky=ky,
+        dir_work=1 if setup.speed_ratio > 0 else -1,
+        dir_b4=1 if setup.differential_rotation_per_mm > 0 else -1,
+        encoder_lines=m["encoder_lines"],
+        ratios=(params.tool_drive.ratio, params.work_drive.ratio, params.feed_drive.ratio),
+        inertias=(j_tool, j_work, j_feed),
+        adaptive=m["adaptive_correction"] if adaptive is None else adaptive,
+        angle0=(phys.q("B1"), phys.q("B2"), phys.q("TV")),
+    )
+
+
+def simulate(
+    job: Job,
+    params: SkivingMachineParams | None = None,
+    duration: float | None = None,
+    servo_substeps: int = 2,
+    settings: ProgramSettings | None = None,
+    disturbance: Callable[[float], float] | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> MotionRecord:
+    """Run the machine through the job's passes (no cutting). ``duration`` [s] stops early; ``disturbance(t)``
+    is an extra torque on the work spindle [N m] (tests of the correction)."""
+    params = params or SkivingMachineParams()
+    setup = job.skiving
+    phys = MachinePhysics(build_spec(setup, params, job.machine["lead_screw_pitch"]).compile(), params)
+    s4 = build_structure(job, params, phys)
+    dt = phys.model.opt.timestep * servo_substeps
+    p = job.machine["command_pulses_per_rev"]
+    ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
+    r2 = setup.gear.reference_radius
+    ratio, diff = setup.speed_ratio, setup.differential_rotation_per_mm
+    b1_0, b2_0, p3_0 = phys.q("B1"), phys.q("B2"), phys.q("P3") / MM
+    rows: list[tuple] = []
+    qpos, qvel = phys.data.qpos, phys.data.qvel
+    qa = [phys.qadr[a] for a in AXES]
+    i_b1, i_b2, i_tv = phys.qadr["B1"], phys.qadr["B2"], phys.qadr["TV"]
+    v_m1, v_m2, v_m3 = phys.vadr["M1"], phys.vadr["M2"], phys.vadr["M3"]
+    ctrl = phys.data.ctrl
+    a_m1, a_m2, a_m3 = phys.act["M1"], phys.act["M2"], phys.act["M3"]
+    qfrc = phys.data.qfrc_applied
+    dof_b2 = phys.vadr["B2"]
+    feed = SEGMENTS.index("feed")
+    t_end = math.inf if duration is None else duration
+    for tick in program(setup, dt, ppm, s4, settings or ProgramSettings()):
+        if phys.time >= t_end:
+            break
+        phys.set_radial(tick.radial)
+        torques = s4.tick(dt, tick.cnc, (qpos[i_b1], qpos[i_b2], qpos[i_tv]), (qvel[v_m1], qvel[v_m2], qvel[v_m3]))
+        ctrl[a_m1], ctrl[a_m2], ctrl[a_m3] = torques
+        if disturbance is not None:
+            qfrc[dof_b2] = disturbance(phys.time)
+        phys.step(servo_substeps)
+        rows.append((phys.time, *qpos[qa], *torques, SEGMENTS.index(tick.segment), tick.pass_index))
+        if progress is not None:
+            progress(phys.time)
+    a = np.array(rows)
+    n_ax = len(AXES)
+    q = a[:, 1 : 1 + n_ax].copy()
+    b1, b2, p3 = q[:, 0], q[:, 1], q[:, 2] / MM
+    delta = (b2 - b2_0) - ratio * (b1 - b1_0) - diff * (p3 - p3_0)
+    q[:, 2:4] /= MM  # P3, X in mm
+    segment, pass_index = a[:, 4 + n_ax].astype(int), a[:, 5 + n_ax].astype(int)
+    reach = np.array([setup.gear.face_width / 2 + setup.engagement_half_length(c) for c in setup.pass_centre_distances])
+    cutting = (segment == feed) & (np.abs(q[:, 2]) <= reach[np.clip(pass_index, 0, len(reach) - 1)])
+    rec = MotionRecord(
+        t=a[:, 0],
+        q=q,
+        torque=a[:, 1 + n_ax : 4 + n_ax],
+        sync_um=r2 * delta * 1e3,
+        segment=segment,
+        pass_index=pass_index,
+        cutting=cutting,
+    )
+    for index in sorted(set(rec.pass_index[rec.segment == feed].tolist())):
+        sel = (rec.segment == feed) & (rec.pass_index == index)
+        rot, trans = relative_pose(setup, rec.q[sel])
+        t = rec.t[sel]
+        rec.passes.append(PassTrajectory(index, t - t[0], rot, trans, rec.q[sel, 0], rec.q[sel, 2], rec.q[sel, 3]))
+    return rec
+
+
+def relative_pose(setup, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cutter frame in the blank frame for recorded axis values ``q`` (rows as MotionRecord.q).
+
+    The bodies between the two frames are rigid, so this is the forward kinematics of the model
+    (blank_frame = Rz(B2 + work_phase); cutter_frame at (X, 0, P3), Rx(tilt) Rz(B1 + cutter_phase));
+    tests check it against MuJoCo's own site poses."""
+    from cutting.skiving import rot_x, rot_z
+
+    back = rot_z(-(q[:, 1] + setup.work_phase))
+    rot = np.einsum("nij,jk,nkl->nil", back, rot_x(setup.tilt), rot_z(q[:, 0] + setup.cutter_phase))
+    centre = np.stack([q[:, 3], np.zeros(len(q)), q[:, 2]], -1)
+    return rot, np.einsum("nij,nj->ni", back, centre)
