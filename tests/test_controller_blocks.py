@@ -490,3 +490,17 @@ def test_speed_regulator_pi_and_anti_windup() -> None:
     assert r.out == pytest.approx(100.0 * 0.01)
     with pytest.raises(ValueError, match="limit"):
         SpeedRegulator(kp=1.0, ki=0.0, limit=0.0)
+
+
+def test_rate_multiplier_is_exact_on_average() -> None:
+    from virtual_machine.controllers import RateMultiplier
+
+    m = RateMultiplier(3, 7)  # 3/7 output pulse per input pulse
+    outs = [(m.__setattr__("inp", x), m.update(1e-3), m.out)[2] for x in (5, 5, 5, -15)]
+    assert outs == [2, 2, 2, -6]  # 15, 30, 45 counted -> floor(45/7) = 6; back to zero
+    assert m.position == 0 and m.remainder == 0
+    m.inp = 7
+    m.update(1e-3)
+    assert m.out == 3 and m.fine_position == 3.0
+    with pytest.raises(ValueError, match=r"^n = 0"):
+        RateMultiplier(0, 3)

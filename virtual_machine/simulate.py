@@ -19,7 +19,7 @@ from virtual_machine.job import Job
 from virtual_machine.physics import AXES, MachinePhysics
 from virtual_machine.program import ProgramSettings, program
 from virtual_machine.setup_sheet import setup_sheet
-from virtual_machine.structures.mechatronic import MechatronicS4
+from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4MasterSlave
 
 SEGMENTS = ("runup", "settle", "infeed", "feed", "retract", "return")
 
@@ -86,10 +86,9 @@ class MotionRecord:
 def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, adaptive: bool | None = None):
     """Structure S4 (equal coordinates) with the job's setting sheet; other structures follow (issue 5)."""
     m = job.machine
-    if m["structure"] != "mechatronic" or m["synchronization"] != "equal-coordinates":
+    if m["structure"] != "mechatronic":
         raise NotImplementedError(
-            f"machine.structure = {m['structure']!r} with {m['synchronization']!r}: only the mechatronic "
-            "equal-coordinates structure (S4) is simulated so far"
+            f"machine.structure = {m['structure']!r}: only the mechatronic structure (S4) is simulated so far"
         )
     sheet = setup_sheet(job, "mechatronic")
     st = sheet.settings
@@ -101,6 +100,24 @@ def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics
         params.feed_motor_inertia + (params.screw_inertia + params.carriage_mass * lead**2) * params.feed_drive.ratio**2
     )
     ky = st["ky"].realisation.get("integer")
+    adaptive = m["adaptive_correction"] if adaptive is None else adaptive
+    angle0 = (phys.q("B1"), phys.q("B2"), phys.q("TV"))
+    if m["synchronization"] == "master-slave":
+        feed_dir = -1 if setup.feed_direction == "down" else 1
+        t_tv = m["lead_screw_pitch"]
+        return MechatronicS4MasterSlave(
+            f_ref=m["reference_frequency"],
+            p=m["command_pulses_per_rev"],
+            kv=st["kv"].realisation["integer"],
+            ratio_x=setup.speed_ratio,  # work turn per tool turn
+            ratio_y=setup.differential_rotation_per_mm * t_tv / (2 * math.pi),  # work rad per screw rad (B4)
+            ratio_s=feed_dir * setup.axial_feed / t_tv * (1 if setup.speed_ratio > 0 else -1),  # screw per work
+            encoder_lines=m["encoder_lines"],
+            ratios=(params.tool_drive.ratio, params.work_drive.ratio, params.feed_drive.ratio),
+            inertias=(j_tool, j_work, j_feed),
+            adaptive=adaptive,
+            angle0=angle0,
+        )
     return MechatronicS4(
         f_ref=m["reference_frequency"],
         p=m["command_pulses_per_rev"],
@@ -113,8 +130,8 @@ def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics
         encoder_lines=m["encoder_lines"],
         ratios=(params.tool_drive.ratio, params.work_drive.ratio, params.feed_drive.ratio),
         inertias=(j_tool, j_work, j_feed),
-        adaptive=m["adaptive_correction"] if adaptive is None else adaptive,
-        angle0=(phys.q("B1"), phys.q("B2"), phys.q("TV")),
+        adaptive=adaptive,
+        angle0=angle0,
     )
 
 
@@ -125,10 +142,11 @@ def simulate(
     servo_substeps: int = 2,
     settings: ProgramSettings | None = None,
     disturbance: Callable[[float], float] | None = None,
+    disturbance_axis: str = "B2",
     progress: Callable[[float], None] | None = None,
 ) -> MotionRecord:
     """Run the machine through the job's passes (no cutting). ``duration`` [s] stops early; ``disturbance(t)``
-    is an extra torque on the work spindle [N m] (tests of the correction)."""
+    is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes)."""
     params = params or SkivingMachineParams()
     setup = job.skiving
     phys = MachinePhysics(build_spec(setup, params, job.machine["lead_screw_pitch"]).compile(), params)
@@ -147,7 +165,7 @@ def simulate(
     ctrl = phys.data.ctrl
     a_m1, a_m2, a_m3 = phys.act["M1"], phys.act["M2"], phys.act["M3"]
     qfrc = phys.data.qfrc_applied
-    dof_b2 = phys.vadr["B2"]
+    dof_dist = phys.vadr[disturbance_axis]
     feed = SEGMENTS.index("feed")
     t_end = math.inf if duration is None else duration
     for tick in program(setup, dt, ppm, s4, settings or ProgramSettings()):
@@ -157,7 +175,7 @@ def simulate(
         torques = s4.tick(dt, tick.cnc, (qpos[i_b1], qpos[i_b2], qpos[i_tv]), (qvel[v_m1], qvel[v_m2], qvel[v_m3]))
         ctrl[a_m1], ctrl[a_m2], ctrl[a_m3] = torques
         if disturbance is not None:
-            qfrc[dof_b2] = disturbance(phys.time)
+            qfrc[dof_dist] = disturbance(phys.time)
         phys.step(servo_substeps)
         rows.append((phys.time, *qpos[qa], *torques, SEGMENTS.index(tick.segment), tick.pass_index))
         if progress is not None:

@@ -15,7 +15,7 @@ from .discriminators import PhaseDiscriminator, SignDiscriminator
 from .encoder import Encoder
 from .hydraulic import HydraulicPulseGenerator, HydraulicSteppingMotor
 from .motors import DCMotor, SynchronousMotor
-from .pulses import FrequencyDivider, ReferenceGenerator, Summator
+from .pulses import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
 from .servo import SpeedRegulator
 
 __all__ = [
@@ -31,6 +31,7 @@ __all__ = [
     "PhaseDiscriminator",
     "PowerAmplifier",
     "PulseToAnalog",
+    "RateMultiplier",
     "ReferenceGenerator",
     "SignDiscriminator",
     "SpeedRegulator",

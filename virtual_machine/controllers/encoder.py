@@ -55,6 +55,12 @@ class Encoder:
         """Counts per revolution, ``lines * quadrature``."""
         return self.lines * self.quadrature
 
+    @property
+    def fine_position(self) -> float:
+        """The position with the fraction of the next count: what a converter integrating the evenly spaced
+        edges of a turning shaft sees at the tick's end (no +-1 count jitter per tick)."""
+        return (self.angle - self.angle0) * self._counts_per_rad
+
     def update(self, dt: float) -> None:
         p = math.floor((self.angle - self.angle0) * self._counts_per_rad)
         self.count = p - self.position

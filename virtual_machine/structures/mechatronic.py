@@ -144,3 +144,115 @@ class MechatronicS4:
         self.ap32.update(dt)
         t2 = self.work.update(dt, s9.out, self.ap32.position, angles[1], motor_speeds[1])
         return t1, t2, t3
+
+
+class MechatronicS4MasterSlave:
+    """S4 in master-slave form (the tracking synchronisation of seed 000 fig. 2, realised electronically).
+
+    Fv: the tool spindle is the master, run by generator 14 and divider 6 like the equal-coordinates form; the
+    work spindle's reference is built from the master's encoder IP1 through a rate multiplier (``mult_x``,
+    z0/z2) plus the B4 part from the lead-screw encoder IP3 (``mult_y``, t_TV/T). Fs: the carriage follows the
+    work encoder IP2 through ``mult_s`` (s/t_TV per work turn) while the CNC's feed gate is on. A slave thus
+    copies what its master really does, including the master's mechanical deviations (seed 001's point); the
+    equal-coordinates form compares each axis with the generator only.
+    """
+
+    def __init__(
+        self,
+        f_ref: float,
+        p: int,
+        kv: int,
+        ratio_x: float,
+        ratio_y: float,
+        ratio_s: float,
+        encoder_lines: int,
+        ratios: tuple[float, float, float],
+        inertias: tuple[float, float, float],
+        adaptive: bool,
+        tuning: S4Tuning | None = None,
+        angle0: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ):
+        from fractions import Fraction
+
+        from virtual_machine.controllers import Encoder, RateMultiplier
+
+        tuning = tuning or S4Tuning()
+        self.f_ref, self.p = f_ref, p
+        rad = 2 * math.pi / p
+        self.gen14 = ReferenceGenerator(0.0)
+        self.d6 = FrequencyDivider(kv)
+        self.pa5, self.pa8, self.pa20 = (PulseToAnalog(rad) for _ in range(3))
+        self.tool = ServoAxis(tuning.tool, p, encoder_lines, ratios[0], inertias[0], adaptive, angle0[0])
+        self.work = ServoAxis(tuning.work, p, encoder_lines, ratios[1], inertias[1], adaptive, angle0[1])
+        self.feed = ServoAxis(tuning.feed, p, encoder_lines, ratios[2], inertias[2], adaptive, angle0[2])
+        # master encoders read by the slaves' rate multipliers (the axes' own IP1..IP3 read the same shafts)
+        self.ip1, self.ip2, self.ip3 = (Encoder(encoder_lines, 4, a) for a in angle0)
+        cpr = 4 * encoder_lines
+
+        def multiplier(ratio: float) -> tuple[RateMultiplier | None, int]:
+            """Command pulses of the slave per count of the master's encoder, as n/k integers, and the sign."""
+            if ratio == 0:
+                return None, 0
+            f = Fraction(abs(ratio) * p / cpr).limit_denominator(2**24)
+            return RateMultiplier(max(1, f.numerator), f.denominator), (1 if ratio > 0 else -1)
+
+        (self.mult_x, self.sign_x), (self.mult_y, self.sign_y), (self.mult_s, self.sign_s) = (
+            multiplier(ratio_x),
+            multiplier(ratio_y),
+            multiplier(ratio_s),
+        )
+        self.screw_pulses = 0
+        self.b4_pulses = 0  # B4 follows the screw's real motion: the CNC's return needs no B4 pulses
+        self._last = [0.0, 0.0, 0.0, 0.0]
+        self._work_reference = 0
+
+    def b4_for_screw(self, screw_pulses: int) -> int:
+        return self.b4_pulses
+
+    def _fine(self, block, slot: int) -> float:
+        now = block.fine_position
+        step = now - self._last[slot]
+        self._last[slot] = now
+        return step
+
+    def tick(
+        self, dt: float, cnc: CncState, angles: tuple[float, float, float], motor_speeds: tuple[float, float, float]
+    ):
+        gen = self.gen14
+        gen.frequency = self.f_ref * cnc.scale
+        gen.update(dt)
+        for enc, angle in zip((self.ip1, self.ip2, self.ip3), angles, strict=True):
+            enc.angle = angle
+            enc.update(dt)
+        # ---- master: tool spindle from generator 14 and divider 6
+        self.d6.inp = gen.out
+        self.d6.update(dt)
+        self.pa5.inp = self._fine(self.d6, 0)
+        self.pa5.update(dt)
+        t1 = self.tool.update(dt, self.pa5.out, self.d6.position, angles[0], motor_speeds[0])
+        # ---- slave carriage: work encoder IP2 -> mult_s (feed gate) -> 20 -> 19 -> 18 -> M3
+        screw, screw_fine = cnc.rapid_screw, float(cnc.rapid_screw)
+        if self.mult_s is not None:
+            self.mult_s.inp = self.ip2.count if cnc.feed else 0
+            self.mult_s.update(dt)
+            screw += self.sign_s * self.mult_s.out
+            screw_fine += self.sign_s * self._fine(self.mult_s, 1)
+        self.screw_pulses += screw
+        self.pa20.inp = screw_fine
+        self.pa20.update(dt)
+        t3 = self.feed.update(dt, self.pa20.out, self.screw_pulses, angles[2], motor_speeds[2])
+        # ---- slave work spindle: IP1 -> mult_x, IP3 -> mult_y -> 8 -> 10 -> 11 -> M2
+        self.mult_x.inp = self.ip1.count
+        self.mult_x.update(dt)
+        ref = self.sign_x * self.mult_x.out
+        ref_fine = self.sign_x * self._fine(self.mult_x, 2)
+        if self.mult_y is not None:
+            self.mult_y.inp = self.ip3.count
+            self.mult_y.update(dt)
+            ref += self.sign_y * self.mult_y.out
+            ref_fine += self.sign_y * self._fine(self.mult_y, 3)
+        self._work_reference += ref
+        self.pa8.inp = ref_fine
+        self.pa8.update(dt)
+        t2 = self.work.update(dt, self.pa8.out, self._work_reference, angles[1], motor_speeds[1])
+        return t1, t2, t3
