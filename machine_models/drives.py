@@ -19,9 +19,16 @@ from machine_models.parameters import DriveStage
 
 def couple(spec: mujoco.MjSpec, name: str, driven: str, motor: str, stage: DriveStage) -> None:
     """Add tendon ``name`` (and for a rigid stage its equality) coupling joint ``driven`` to joint ``motor``."""
+    couple_linear(spec, name, [(driven, 1.0), (motor, -stage.ratio)], stage)
+
+
+def couple_linear(spec: mujoco.MjSpec, name: str, terms: list[tuple[str, float]], stage: DriveStage) -> None:
+    """A chain whose relation is linear in several joints: ``L = sum(coef * q) = 0`` (e.g. a differential:
+    ``B2 - a B1 - b TV``), in the units of the first joint, with the stage's stiffness, backlash and damping
+    (``stage.ratio`` is not used here: the coefficients carry the ratios)."""
     tendon = spec.add_tendon(name=name)
-    tendon.wrap_joint(driven, 1.0)
-    tendon.wrap_joint(motor, -stage.ratio)
+    for joint, coef in terms:
+        tendon.wrap_joint(joint, coef)
     if stage.stiffness is None:
         eq = spec.add_equality(name=name, type=mujoco.mjtEq.mjEQ_TENDON, name1=name)
         eq.solref = [2 * spec.option.timestep, 1.0]

@@ -89,6 +89,30 @@ class SkivingMachineParams:
     radial_stiffness: float = 2.0e8  # N/m: servo + screw stiffness holding the depth
     radial_damping: float = 2.0e5  # N s/m
 
+    # ---- S1 mechanical (seed 000 fig. 1): one main motor, change-gear chains lumped per kinematic link -------
+    main_motor_inertia: float = 0.06  # kg m^2: 11 kW 4-pole induction motor rotor + pulley
+    main_motor_torque: float = 75.0  # N m: rated torque (11 kW at 1450 rpm)
+    main_motor_slip: float = 0.03  # rated slip of the induction motor (fed by a frequency converter)
+    #: M1 -> iv -> tool spindle (ratio from the sheet): belts and gears, 1.5e4 N m/rad at the spindle
+    speed_chain: DriveStage = field(default_factory=lambda: DriveStage(1.0, 1.5e4, 0.0, 5.0))
+    #: B1 -> ix -> differential <- iy <- TV -> work spindle, referred to the work spindle: a long chain with a
+    #: dividing worm gear; 1.5e5 N m/rad and 40 arcsec total backlash (the seed names its torsional stiffness as
+    #: the accuracy limit of S1)
+    generating_chain: DriveStage = field(default_factory=lambda: DriveStage(1.0, 1.5e5, 40 * ARCSEC, 40.0))
+    #: work spindle -> is -> TV, referred to the lead screw: 600 N m/rad, 0.1 deg backlash of the feed gears
+    feed_chain: DriveStage = field(default_factory=lambda: DriveStage(1.0, 600.0, math.radians(0.1), 1.0))
+    traverse_motor_inertia: float = 1.0e-3  # kg m^2: setting-traverse motor (S1: M2 via clutch 15)
+    traverse_motor_torque: float = 15.0  # N m
+
+    # ---- S2/S3 hydraulic shaft: stepping motors GShD driving the chains -------------------------------------
+    hydraulic_motor_inertia: float = 2.0e-3  # kg m^2: vane motor rotor and its gear
+    hydraulic_stiffness: float = 3.0e3  # N m/rad: oil column between the valve and the vanes (bulk modulus)
+    hydraulic_damping: float = 3.0  # N m s/rad
+    hydraulic_leakage: float = 2.0e-5  # rad/s per N m: leakage past the vanes makes the motor slip under load
+    hydraulic_torque_limit: float = 60.0  # N m: relief pressure x displacement
+    #: GShD1/GShD2 -> differential -> work spindle (S2), GShD -> tool spindle (S3), referred to the driven spindle
+    differential_stage: DriveStage = field(default_factory=lambda: DriveStage(1.0, 1.5e5, 30 * ARCSEC, 40.0))
+
     # ---- simulation ---------------------------------------------------------------------------------------
     timestep: float = 1.25e-4  # s: 8 kHz physics, two sub-steps of a 4 kHz servo
     integrator: str = "implicitfast"  # damping implicit; the stages' springs stay well below 1/(2 pi h)

@@ -29,6 +29,7 @@ import numpy as np
 from cutting.skiving import SkivingSetup
 from machine_models.drives import couple
 from machine_models.parameters import DriveStage, SkivingMachineParams
+from machine_models.structure_drives import ChainRatios, ideal_chains
 
 MM = 1e-3
 STEEL = 7850.0  # kg/m^3
@@ -98,8 +99,15 @@ def _visual(body, kind, size, rgba, pos=(0, 0, 0), quat=(1, 0, 0, 0)) -> None:
     )
 
 
-def build_spec(setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pitch_mm: float) -> mujoco.MjSpec:
-    """The MJCF model of the machine for ``setup`` (structure S4: motors M1, M2, M3 on their own axes)."""
+def build_spec(
+    setup: SkivingSetup,
+    params: SkivingMachineParams,
+    lead_screw_pitch_mm: float,
+    structure: str = "mechatronic",
+    chains: ChainRatios | None = None,
+) -> mujoco.MjSpec:
+    """The MJCF model of the machine for ``setup`` with the drives of ``structure`` (see :mod:`machine_models.
+    structure_drives`); ``chains`` are the realised ratios of the structure's setting organs (ideal if None)."""
     problems = params.problems()
     if problems:
         raise ValueError("invalid machine parameters: " + "; ".join(problems))
@@ -128,9 +136,6 @@ def build_spec(setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pit
     _visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_blank, b / 2), STEELC)  # blank
     _visual(work, mujoco.mjtGeom.mjGEOM_BOX, (r_blank * 0.9, 0.003, b / 2 + 0.001), ORANGE)  # angle mark
     work.add_site(name="blank_frame", quat=_quat_z(lay.work_phase))
-    motor2 = world.add_body(name="work_motor", pos=[-0.28, 0.0, -b / 2 - 0.08])
-    _motor(spec, motor2, "M2", params.work_motor_inertia, params.work_motor_torque)
-    couple(spec, "work_drive", "B2", "M2", params.work_drive)
 
     # ---- carriage P3, radial slide X, swivel head, tool spindle B1 --------------------------------------
     carriage = world.add_body(name="carriage")
@@ -160,11 +165,7 @@ def build_spec(setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pit
         pos=(0, 0, -width - 0.02),
     )  # holder
     tool.add_site(name="cutter_frame", quat=_quat_z(lay.cutter_phase))
-    motor1 = head.add_body(name="tool_motor", pos=[0.1, 0.0, 0.2])
-    _motor(spec, motor1, "M1", params.tool_motor_inertia, params.tool_motor_torque)
-    for body in (tool, motor1):  # the counterbalance carries everything that rides on the carriage
-        body.gravcomp = params.counterbalance
-    couple(spec, "tool_drive", "B1", "M1", params.tool_drive)
+    tool.gravcomp = params.counterbalance  # the counterbalance carries everything that rides on the carriage
     spec.add_actuator(name="X", target="X", trntype=mujoco.mjtTrn.mjTRN_JOINT).set_to_position(
         kp=params.radial_stiffness
     )
@@ -174,21 +175,23 @@ def build_spec(setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pit
     _inertial(screw, 10.0, params.screw_inertia, 1.0)
     screw.add_joint(name="TV", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
     _visual(screw, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.02, 0.3), STEELC)
-    motor3 = world.add_body(name="feed_motor", pos=[lay.centre_distance + 0.2, 0.25, 0.38])
-    _motor(spec, motor3, "M3", params.feed_motor_inertia, params.feed_motor_torque)
-    couple(spec, "feed_drive", "TV", "M3", params.feed_drive)
     nut = DriveStage(
         lay.lead_screw_pitch / (2 * math.pi), params.nut_stiffness, params.nut_backlash, params.nut_damping
     )
     couple(spec, "nut", "P3", "TV", nut)
 
-    # ---- start of the first pass -------------------------------------------------------------------------
-    spec.add_key(name="home", qpos=_home_qpos(spec, lay))
+    # ---- the structure's motors and chains, then the start of the first pass --------------------------------
+    from machine_models.structure_drives import DRIVES
+
+    if structure not in DRIVES:
+        raise ValueError(f"unknown structure {structure!r}: use one of {', '.join(DRIVES)}")
+    drives = DRIVES[structure](spec, {"world": world, "head": head}, setup, params, chains or ideal_chains(setup))
+    spec.add_key(name="home", qpos=_home_qpos(spec, lay, drives))
     return spec
 
 
 def _motor(spec: mujoco.MjSpec, body, name: str, inertia: float, peak: float) -> None:
-    """A servo motor: rotor hinge ``name`` with its inertia, and a torque actuator ``name`` (ctrl in N m)."""
+    """A motor: rotor hinge ``name`` with its inertia, and a torque actuator ``name`` (ctrl in N m)."""
     _inertial(body, 8.0, inertia)
     body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
     _visual(body, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.07), DARK)
@@ -198,17 +201,44 @@ def _motor(spec: mujoco.MjSpec, body, name: str, inertia: float, peak: float) ->
     act.ctrlrange = [-peak, peak]
 
 
-def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout) -> list[float]:
-    """Joint positions at the start of the first pass; every drive stage relaxed (tendon lengths zero)."""
+def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, drives) -> list[float]:
+    """Joint positions at the start of the first pass: B1 = 0, the carriage at the pass start, the cutter at the
+    centre distance, B2 = 0 unless a chain sets it, and the other joints (motors, stepping motors) such that
+    every engaged chain is relaxed (least squares over the tendons; clutched chains are re-centred when they
+    engage)."""
     model = spec.compile()
     q = np.zeros(model.nq)
-    q[model.joint("X").qposadr[0]] = lay.centre_distance
-    q[model.joint("P3").qposadr[0]] = lay.carriage_start
-    tv = lay.carriage_start / (lay.lead_screw_pitch / (2 * math.pi))
-    q[model.joint("TV").qposadr[0]] = tv
-    for tendon, motor, driven in (("work_drive", "M2", "B2"), ("tool_drive", "M1", "B1"), ("feed_drive", "M3", "TV")):
-        coef = _tendon_coefs(model, tendon)
-        q[model.joint(motor).qposadr[0]] = -coef[driven] * q[model.joint(driven).qposadr[0]] / coef[motor]
+    known = {
+        "X": lay.centre_distance,
+        "P3": lay.carriage_start,
+        "TV": lay.carriage_start / (lay.lead_screw_pitch / (2 * math.pi)),
+        "B1": 0.0,
+    }
+    if "B2" not in drives.chain_driven:
+        known["B2"] = 0.0
+    for name, value in known.items():
+        q[model.joint(name).qposadr[0]] = value
+    unknown = [j for j in range(model.njnt) if model.joint(j).name not in known]
+    rows, rhs = [], []
+    for t in range(model.ntendon):
+        name = model.tendon(t).name
+        if name == "nut" or name in drives.clutched:
+            continue
+        coefs = _tendon_coefs(model, name)
+        row = np.zeros(len(unknown))
+        b = 0.0
+        for joint, c in coefs.items():
+            jid = model.joint(joint).id
+            if jid in unknown:
+                row[unknown.index(jid)] = c
+            else:
+                b -= c * q[model.jnt_qposadr[jid]]
+        rows.append(row)
+        rhs.append(b)
+    if rows:
+        sol = np.linalg.lstsq(np.array(rows), np.array(rhs), rcond=None)[0]
+        for k, jid in enumerate(unknown):
+            q[model.jnt_qposadr[jid]] = sol[k]
     return q.tolist()
 
 
@@ -218,6 +248,7 @@ def _tendon_coefs(model: mujoco.MjModel, tendon: str) -> dict[str, float]:
     return {model.joint(int(model.wrap_objid[i])).name: float(model.wrap_prm[i]) for i in range(adr, adr + num)}
 
 
-def build_model(setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pitch_mm: float) -> mujoco.MjModel:
-    spec = build_spec(setup, params, lead_screw_pitch_mm)
-    return spec.compile()
+def build_model(
+    setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pitch_mm: float, structure: str = "mechatronic"
+) -> mujoco.MjModel:
+    return build_spec(setup, params, lead_screw_pitch_mm, structure).compile()

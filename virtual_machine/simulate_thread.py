@@ -1,0 +1,206 @@
+"""One threading stroke on the lathe of seed 001 (group Fv(B1 P2)): the fixed loop of :mod:`virtual_machine.simulate`
+(controllers tick at the servo rate, physics sub-steps, record per tick) on the thread lathe model.
+
+The stroke: the spindle runs up along a smooth 0.3 s ramp of the speed command (mechanical, master-slave) or
+of the reference generator's frequency (equal coordinates), with the feed engaged from the start (the
+carriage follows the spindle all the time), then the carriage travels the threaded length at speed. Only the
+first pass's stroke is run. The record's **lead error** is the thread's synchronisation error::
+
+    e = P2 - P2_0 - (P / (2 pi)) (B1 - B1_0) hand_sign          [um]
+
+with ``hand_sign`` = -1 for a right-hand thread (see :mod:`machine_models.thread_lathe`): its variation is
+the thread's pitch error, its slope per mm of travel the relative lead error of the settings.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec, thread_layout
+from virtual_machine.job import Job
+from virtual_machine.physics import SimulationDivergedError
+from virtual_machine.setup_sheet import thread_sheet
+from virtual_machine.structures.axis import AxisTuning
+from virtual_machine.structures.thread_group import (
+    ThreadCnc,
+    ThreadEqualCoordinates,
+    ThreadMasterSlave,
+    ThreadMechanical,
+    ThreadTuning,
+)
+
+RUNUP = 0.3  # s: the run-up ramp of the spindle
+
+
+@dataclass
+class ThreadRecord:
+    """Per servo tick: time [s], B1, TV, M1, M2 [rad], P2 [mm], motor torques (M1, M2) [N m], lead error [um]."""
+
+    form: str
+    lead: float  # thread lead P [mm]
+    hand_sign: int
+    runup: float  # s
+    t: np.ndarray
+    b1: np.ndarray
+    p2: np.ndarray
+    tv: np.ndarray
+    m1: np.ndarray
+    m2: np.ndarray
+    torque: np.ndarray  # (n, 2)
+    lead_error_um: np.ndarray
+
+    def stroke(self, skip: float = 0.0) -> np.ndarray:
+        """Ticks of the stroke after the run-up (and ``skip`` seconds more)."""
+        return self.t >= self.runup + skip
+
+    def stats(self, skip: float = 0.0) -> dict[str, float]:
+        """Lead error statistics over the stroke after the run-up [um] (as MotionRecord.sync_stats)."""
+        e = self.lead_error_um[self.stroke(skip)]
+        if e.size == 0:
+            return {}
+        return {
+            "mean_um": float(e.mean()),
+            "rms_um": float(np.sqrt(np.mean(e**2))),
+            "rms_about_mean_um": float(e.std()),
+            "peak_to_peak_um": float(e.max() - e.min()),
+            "max_abs_um": float(np.abs(e).max()),
+        }
+
+    def drift(self, skip: float = 0.0) -> tuple[float, float]:
+        """The lead error's change over the stroke from a straight-line fit against the carriage position [um],
+        and the carriage travel over the stroke [mm] (signed). A realised lead P (1 + eps) drifts eps * travel."""
+        sel = self.stroke(skip)
+        z, e = self.p2[sel], self.lead_error_um[sel]
+        slope = np.polyfit(z - z[0], e, 1)[0]
+        travel = float(z[-1] - z[0])
+        return float(slope * travel), travel
+
+
+def _ramp(t: float, runup: float) -> float:
+    """Smooth run-up 0 -> 1 (half cosine: zero acceleration at both ends)."""
+    return 1.0 if t >= runup else 0.5 * (1.0 - math.cos(math.pi * t / runup))
+
+
+def build_thread_structure(job: Job, params: ThreadLatheParams, angle0: tuple[float, float], tuning=None):
+    """The controllers of the job's form with its setting sheet: ThreadMechanical / MasterSlave / EqualCoordinates."""
+    m = job.machine
+    lay = thread_layout(job, params)
+    sheet = thread_sheet(job, "mechanical" if lay.form == "mechanical" else "mechatronic")
+    st = sheet.settings
+    base = tuning or ThreadTuning()
+    tuning = ThreadTuning(
+        AxisTuning(**{**base.spindle.__dict__, "peak_torque": params.spindle_motor_torque}),
+        AxisTuning(**{**base.carriage.__dict__, "peak_torque": params.screw_motor_torque}),
+    )
+    r_sp = lay.spindle_ratio
+    j_carriage = params.screw_inertia + params.carriage_mass * lay.screw_lead**2
+    if lay.form == "mechanical":
+        j_m1 = params.spindle_motor_inertia + (params.spindle_inertia + j_carriage * lay.chain_ratio**2) * r_sp**2
+        return ThreadMechanical(lay.motor_speed, tuning.spindle, j_m1)
+    j_m1 = params.spindle_motor_inertia + params.spindle_inertia * r_sp**2
+    j_m2 = params.screw_motor_inertia + j_carriage * lay.feed_ratio**2
+    adaptive = m["adaptive_correction"]
+    if lay.form == "master-slave":
+        kx = st["kx"].realisation
+        return ThreadMasterSlave(
+            lay.motor_speed,
+            kx["block_N"],
+            kx["counter_K"],
+            lay.hand_sign,
+            m["command_pulses_per_rev"],
+            m["encoder_lines"],
+            lay.feed_ratio,
+            (j_m1, j_m2),
+            adaptive,
+            tuning,
+            angle0,
+        )
+    return ThreadEqualCoordinates(
+        m["reference_frequency"],
+        st["kv"].realisation["integer"],
+        st["kx"].realisation["integer"],
+        lay.hand_sign,
+        m["command_pulses_per_rev"],
+        m["encoder_lines"],
+        r_sp,
+        lay.feed_ratio,
+        (j_m1, j_m2),
+        adaptive,
+        tuning,
+        angle0,
+    )
+
+
+def simulate_thread(
+    job: Job,
+    params: ThreadLatheParams | None = None,
+    duration: float | None = None,
+    disturbance: Callable[[float], float] | None = None,
+    servo_substeps: int = 2,
+    runup: float = RUNUP,
+) -> ThreadRecord:
+    """Run-up and the first threading stroke of ``job``. ``duration`` [s] overrides run-up + length / feed;
+    ``disturbance(t)`` is an extra torque on the spindle [N m] (a cutting-torque transient on the master)."""
+    params = params or ThreadLatheParams()
+    lay = thread_layout(job, params)
+    model = build_thread_lathe_spec(job, params).compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    jnt = {model.joint(j).name: j for j in range(model.njnt)}
+    qadr = {n: int(model.jnt_qposadr[j]) for n, j in jnt.items()}
+    vadr = {n: int(model.jnt_dofadr[j]) for n, j in jnt.items()}
+    electronic = "M2" in jnt
+    i_b1, i_p2, i_tv, i_m1 = qadr["B1"], qadr["P2"], qadr["TV"], qadr["M1"]
+    i_m2 = qadr.get("M2")
+    v_m1, v_m2 = vadr["M1"], vadr.get("M2")
+    a_m1 = model.actuator("M1").id
+    a_m2 = model.actuator("M2").id if electronic else None
+    qpos, qvel, ctrl, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
+    dof_b1 = vadr["B1"]
+    b1_0, p2_0 = float(qpos[i_b1]), float(qpos[i_p2])
+    structure = build_thread_structure(job, params, (b1_0, float(qpos[i_tv])))
+    dt = model.opt.timestep * servo_substeps
+    feed = lay.lead * lay.spindle_speed / (2 * math.pi)  # m/s
+    t_end = duration if duration is not None else runup + lay.length / feed
+    n = int(round(t_end / dt))
+    rows = np.empty((n, 8))
+    cnc = ThreadCnc()
+    bad = mujoco.mjtWarning.mjWARN_BADQACC
+    for k in range(n):
+        t = k * dt
+        cnc.scale = _ramp(t, runup)
+        t1, t2 = structure.tick(dt, cnc, (qpos[i_b1], qpos[i_tv]), (qvel[v_m1], qvel[v_m2] if electronic else 0.0))
+        ctrl[a_m1] = t1
+        if electronic:
+            ctrl[a_m2] = t2
+        if disturbance is not None:
+            qfrc[dof_b1] = disturbance(t)
+        mujoco.mj_step(model, data, nstep=servo_substeps)
+        if data.warning[bad].number or not math.isfinite(qpos[i_p2]):
+            raise SimulationDivergedError(
+                f"the thread lathe diverged at t = {data.time:.4f} s (MuJoCo reported bad accelerations): "
+                f"lower a stage's stiffness, raise its damping or reduce the timestep (now {model.opt.timestep:g} s)"
+            )
+        rows[k] = (data.time, qpos[i_b1], qpos[i_p2], qpos[i_tv], qpos[i_m1], qpos[i_m2] if electronic else 0.0, t1, t2)
+    b1, p2 = rows[:, 1], rows[:, 2]
+    error = (p2 - p2_0) - lay.lead / (2 * math.pi) * (b1 - b1_0) * lay.hand_sign
+    return ThreadRecord(
+        form=lay.form,
+        lead=lay.lead / 1e-3,
+        hand_sign=lay.hand_sign,
+        runup=runup,
+        t=rows[:, 0],
+        b1=b1,
+        p2=p2 * 1e3,
+        tv=rows[:, 3],
+        m1=rows[:, 4],
+        m2=rows[:, 5],
+        torque=rows[:, 6:8],
+        lead_error_um=error * 1e6,
+    )
