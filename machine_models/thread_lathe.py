@@ -93,10 +93,11 @@ class ThreadLatheParams:
     nut_backlash: float = 5.0e-6  # m: a half-nut / unpreloaded nut of a lathe
     nut_damping: float = 1.0e4  # N s/m: lubricant film in the nut
 
-    # ---- layout -------------------------------------------------------------------------------------------
-    #: m: carriage start ahead of the threaded length: the run-up travel (0.3 s cosine ramp at 70 mm/s of
-    #: feed, M12 at 90 m/min: 10.5 mm) plus a clearance
-    approach: float = 0.015
+    # ---- the stroke -----------------------------------------------------------------------------------------
+    runup_time: float = 0.3  # s: half-cosine run-up of the spindle with the feed engaged (the CNC's ramp)
+    #: m: travel at speed before the tool reaches the thread: ~0.07 s for the servos to settle after the
+    #: run-up at the 70 mm/s feed of M12 at 90 m/min. The carriage starts run-up travel + clearance ahead.
+    clearance: float = 0.005
 
     # ---- simulation ---------------------------------------------------------------------------------------
     timestep: float = 1.25e-4  # s: 8 kHz physics, two sub-steps of a 4 kHz servo
@@ -110,7 +111,7 @@ class ThreadLatheParams:
                 out += v.check(f.name)
             elif isinstance(v, float) and not (v >= 0 and math.isfinite(v)):
                 out.append(f"{f.name} = {v}: must be a finite number >= 0")
-        for name in ("spindle_inertia", "spindle_mass", "carriage_mass", "screw_inertia"):
+        for name in ("spindle_inertia", "spindle_mass", "carriage_mass", "screw_inertia", "runup_time"):
             if not getattr(self, name) > 0:
                 out.append(f"{name} = {getattr(self, name)}: must be > 0 (a body needs mass)")
         for name in ("spindle_motor_inertia", "screw_motor_inertia", "spindle_motor_torque", "screw_motor_torque"):
@@ -156,7 +157,8 @@ class ThreadLayout:
     spindle_speed: float  # spindle speed the settings realise [rad/s]
     motor_speed: float  # M1 speed [rad/s] at that spindle speed
     length: float  # threaded length [m]
-    carriage_start: float  # P2 at the home keyframe [m]
+    approach: float  # carriage travel from the start to the thread: run-up travel + clearance [m]
+    carriage_start: float  # P2 at the home keyframe [m]; the thread spans [approach, approach + length]
     diameter: float  # thread major diameter [m]
 
 
@@ -202,11 +204,13 @@ def thread_layout(job, params: ThreadLatheParams, sheet=None) -> ThreadLayout:
             )
         motor = speed / spindle_ratio
     length = t["length"] * MM
-    start = length + 2 * params.approach if hand < 0 else 0.0
+    lead = t["lead"] * MM
+    approach = lead * speed / (2 * math.pi) * params.runup_time / 2 + params.clearance
+    start = length + 2 * approach if hand < 0 else 0.0
     return ThreadLayout(
         form,
         hand,
-        t["lead"] * MM,
+        lead,
         m["lead_screw_pitch"] * MM / (2 * math.pi),
         spindle_ratio,
         chain,
@@ -214,6 +218,7 @@ def thread_layout(job, params: ThreadLatheParams, sheet=None) -> ThreadLayout:
         speed,
         motor,
         length,
+        approach,
         start,
         t["diameter"] * MM,
     )
@@ -238,7 +243,7 @@ def build_thread_lathe_spec(job, params: ThreadLatheParams | None = None) -> muj
     world.add_light(pos=[0.3, 1.2, 0.4], dir=[-0.2, -1, -0.2], diffuse=[0.8, 0.8, 0.8])
     box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
     r_work = lay.diameter / 2
-    work_len = lay.length + 2 * params.approach + 0.01
+    work_len = lay.length + 2 * lay.approach
     _visual(world, box, (0.18, 0.03, 0.6), DARK, pos=(0.0, -0.25, 0.35))  # bed
     _visual(world, box, (0.14, 0.14, 0.12), GREY, pos=(0.0, -0.08, -0.2))  # headstock
 

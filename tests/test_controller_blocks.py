@@ -504,3 +504,21 @@ def test_rate_multiplier_is_exact_on_average() -> None:
     assert m.out == 3 and m.fine_position == 3.0
     with pytest.raises(ValueError, match=r"^n = 0"):
         RateMultiplier(0, 3)
+
+
+def test_induction_motor_slip_line_and_breakdown() -> None:
+    from virtual_machine.controllers import InductionMotor
+
+    m = InductionMotor(sync_speed=157.0, rated_torque=70.0, rated_slip=0.03)
+    m.scale, m.omega = 1.0, 157.0 * (1 - 0.03)
+    m.update(1e-3)
+    assert m.torque == pytest.approx(70.0)  # rated slip -> rated torque
+    m.scale = 0.5  # half frequency: the same slip speed gives the same torque
+    m.omega = 157.0 * 0.5 - 157.0 * 0.03
+    m.update(1e-3)
+    assert m.torque == pytest.approx(70.0)
+    m.omega = 0.0
+    m.update(1e-3)
+    assert m.torque == 175.0 and m.at_limit
+    with pytest.raises(ValueError, match="rated_slip"):
+        InductionMotor(sync_speed=1.0, rated_torque=1.0, rated_slip=1.5)

@@ -309,13 +309,14 @@ def simulate(job: Path | None, duration: float | None, out: Path, as_json: bool)
         f"({doc['machine_seconds'] / wall:.1f}x real time)"
     )
     click.echo("synchronisation error while cutting (arc on the reference circle, um):")
-    click.echo(f"{'pass':>5} {'mean':>8} {'rms':>8} {'rms-mean':>9} {'p-p':>8}   peak torque M1/M2/M3 [N m]")
+    motors = "/".join(doc["passes"][0]["peak_torque_Nm"]) if doc["passes"] else ""
+    click.echo(f"{'pass':>5} {'mean':>8} {'rms':>8} {'rms-mean':>9} {'p-p':>8}   peak torque {motors} [N m]")
     for p in doc["passes"]:
         s, tq = p["sync_error_in_cut"], p["peak_torque_Nm"]
         if s:
             click.echo(
                 f"{p['pass'] + 1:>5} {s['mean_um']:8.3f} {s['rms_um']:8.3f} {s['rms_about_mean_um']:9.3f} "
-                f"{s['peak_to_peak_um']:8.3f}   {tq['M1']:.1f} / {tq['M2']:.1f} / {tq['M3']:.1f}"
+                f"{s['peak_to_peak_um']:8.3f}   " + " / ".join(f"{v:.1f}" for v in tq.values())
             )
     for name, v in doc.get("periodic_part", {}).items():
         click.echo(f"periodic part per {name.replace('_', ' ')}: {v['peak_to_peak_um']:.3f} um p-p")

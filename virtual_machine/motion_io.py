@@ -33,7 +33,7 @@ def summary(rec: MotionRecord, teeth: int | None = None) -> dict[str, Any]:
                 "stroke_seconds": float(p.t[-1]),
                 "sync_error_in_cut": _stats(e),
                 "peak_torque_Nm": dict(
-                    zip(("M1", "M2", "M3"), np.abs(rec.torque[stroke]).max(axis=0).round(3).tolist(), strict=True)
+                    zip(rec.actuators, np.abs(rec.torque[stroke]).max(axis=0).round(3).tolist(), strict=True)
                 ),
             }
         )
@@ -65,6 +65,7 @@ def save(rec: MotionRecord, out: Path, meta: dict[str, Any], teeth: int | None =
         q=rec.q,
         axes=np.array(AXES),
         torque=rec.torque,
+        actuators=np.array(rec.actuators),
         sync_um=rec.sync_um,
         segment=rec.segment,
         segments=np.array(SEGMENTS),
@@ -111,7 +112,7 @@ def _chart(rec: MotionRecord, path: Path) -> None:
     ax[0].plot(rec.t, cut, lw=0.7, color="tab:red", label="cutter in the blank")
     ax[0].set_ylabel("sync error [um]\n(arc on d)")
     ax[0].legend(loc="upper right")
-    for k, name in enumerate(("M1", "M2", "M3")):
+    for k, name in enumerate(rec.actuators):
         ax[1].plot(rec.t, rec.torque[:, k], lw=0.5, label=name)
     ax[1].set_ylabel("motor torque [N m]")
     ax[1].set_xlabel("machine time [s]")

@@ -10,7 +10,7 @@ import numpy as np
 
 from machine_models.parameters import SkivingMachineParams
 
-AXES = ("B1", "B2", "P3", "X", "TV", "M1", "M2", "M3")
+AXES = ("B1", "B2", "P3", "X", "TV")  # the machine's axes, in every structure
 
 
 class SimulationDivergedError(RuntimeError):
@@ -24,9 +24,18 @@ class MachinePhysics:
         self.model, self.params = model, params
         self.data = mujoco.MjData(model)
         mujoco.mj_resetDataKeyframe(model, self.data, model.key("home").id)
-        self.qadr = {a: int(model.joint(a).qposadr[0]) for a in AXES}
-        self.vadr = {a: int(model.joint(a).dofadr[0]) for a in AXES}
-        self.act = {a: int(model.actuator(a).id) for a in ("M1", "M2", "M3", "X")}
+        joints = [model.joint(j).name for j in range(model.njnt)]
+        self.qadr = {a: int(model.joint(a).qposadr[0]) for a in joints}
+        self.vadr = {a: int(model.joint(a).dofadr[0]) for a in joints}
+        self.act = {model.actuator(a).name: a for a in range(model.nu)}
+        self._spring = {  # engaged stiffness and damping of every compliant tendon (clutches release them)
+            t: (
+                float(model.tendon_stiffness[t]),
+                float(model.tendon_damping[t]),
+                float(np.diff(model.tendon_lengthspring[t])[0]),
+            )
+            for t in range(model.ntendon)
+        }
         self.site_blank = int(model.site("blank_frame").id)
         self.site_cutter = int(model.site("cutter_frame").id)
         self.data.ctrl[self.act["X"]] = self.data.qpos[self.qadr["X"]]
@@ -48,6 +57,22 @@ class MachinePhysics:
     def set_radial(self, x: float) -> None:
         """Target of the radial slide's position servo [m]."""
         self.data.ctrl[self.act["X"]] = x
+
+    def engage(self, tendon: str, on: bool) -> None:
+        """A clutch: engage (re-centred on the chain's present relative position: the clutch takes hold where it
+        is) or release the chain ``tendon`` (no force). A rigid chain's equality is switched the same way."""
+        m, d = self.model, self.data
+        t = m.tendon(tendon).id
+        mujoco.mj_fwdPosition(m, d)  # the tendon length of the current state
+        length = float(d.ten_length[t])
+        eq = [i for i in range(m.neq) if m.eq_type[i] == mujoco.mjtEq.mjEQ_TENDON and m.eq_obj1id[i] == t]
+        if eq:
+            d.eq_active[eq[0]] = on
+            m.eq_data[eq[0], 0] = length - m.tendon_length0[t]
+            return
+        k, c, gap = self._spring[t]
+        m.tendon_stiffness[t], m.tendon_damping[t] = (k, c) if on else (0.0, 0.0)
+        m.tendon_lengthspring[t] = [length - gap / 2, length + gap / 2]
 
     def step(self, n: int) -> None:
         mujoco.mj_step(self.model, self.data, nstep=n)

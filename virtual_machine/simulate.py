@@ -15,10 +15,14 @@ import numpy as np
 
 from machine_models.parameters import SkivingMachineParams
 from machine_models.skiving_machine import MM, build_spec
+from virtual_machine.chains import chain_ratios
+from virtual_machine.controllers import InductionMotor
 from virtual_machine.job import Job
 from virtual_machine.physics import AXES, MachinePhysics
 from virtual_machine.program import ProgramSettings, program
 from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.structures.hydraulic import HydraulicS2
+from virtual_machine.structures.mechanical import MechanicalS1
 from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4MasterSlave
 
 SEGMENTS = ("runup", "settle", "infeed", "feed", "retract", "return")
@@ -40,12 +44,13 @@ class PassTrajectory:
 @dataclass
 class MotionRecord:
     t: np.ndarray
-    q: np.ndarray  # (n, len(AXES)): B1, B2 [rad], P3, X [mm], TV, M1, M2, M3 [rad]
-    torque: np.ndarray  # (n, 3) M1, M2, M3 [N m]
+    q: np.ndarray  # (n, len(AXES)): B1, B2 [rad], P3, X [mm], TV [rad]
+    torque: np.ndarray  # (n, len(actuators)) [N m]
     sync_um: np.ndarray  # synchronisation error as arc on the work reference circle [um]
     segment: np.ndarray  # index into SEGMENTS
     pass_index: np.ndarray
     cutting: np.ndarray  # feed ticks in which the cutter can be in the blank (|P3| <= b/2 + engagement)
+    actuators: tuple[str, ...] = ("M1", "M2", "M3")
     passes: list[PassTrajectory] = field(default_factory=list)
 
     def sync_stats(self, during: str = "cut") -> dict[str, float]:
@@ -86,9 +91,12 @@ class MotionRecord:
 def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, adaptive: bool | None = None):
     """Structure S4 (equal coordinates) with the job's setting sheet; other structures follow (issue 5)."""
     m = job.machine
+    if m["structure"] in ("mechanical", "hydraulic-differential"):
+        return _build_chain_structure(job, params, phys)
     if m["structure"] != "mechatronic":
         raise NotImplementedError(
-            f"machine.structure = {m['structure']!r}: only the mechatronic structure (S4) is simulated so far"
+            f"machine.structure = {m['structure']!r}: not simulated yet (S1 mechanical, S2 hydraulic-differential "
+            "and S4 mechatronic are)"
         )
     sheet = setup_sheet(job, "mechatronic")
     st = sheet.settings
@@ -135,6 +143,33 @@ def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics
     )
 
 
+def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics):
+    """S1 and S2: the main motor, and the CNC's or the hydraulic elements beside the chains of the model."""
+    m = job.machine
+    motor = InductionMotor(
+        sync_speed=m["motor_speed"] * 2 * math.pi / 60 / (1 - params.main_motor_slip),
+        rated_torque=params.main_motor_torque,
+        rated_slip=params.main_motor_slip,
+    )
+    if m["structure"] == "mechanical":
+        return MechanicalS1(
+            motor, m["command_pulses_per_rev"], m["encoder_lines"], params.traverse_motor_inertia, phys.q("TV")
+        )
+    sheet = setup_sheet(job, "hydraulic-differential")
+    windows = tuple(sheet.settings[k].realisation.get("disc_windows") for k in ("kx", "ky", "is"))
+    stepping = {
+        "steps_per_rev": m["hydraulic_steps_per_rev"],
+        "stiffness": params.hydraulic_stiffness,
+        "damping": params.hydraulic_damping,
+        "leakage": params.hydraulic_leakage,
+        "torque_limit": params.hydraulic_torque_limit,
+    }
+    home = {j: phys.q(j) for j in ("B1", "B2", "TV", "GShD1", "GShD2", "GShD3")}
+    return HydraulicS2(
+        motor, windows, stepping, m["command_pulses_per_rev"], m["encoder_lines"], chain_ratios(job).feed, home
+    )
+
+
 def simulate(
     job: Job,
     params: SkivingMachineParams | None = None,
@@ -149,8 +184,11 @@ def simulate(
     is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes)."""
     params = params or SkivingMachineParams()
     setup = job.skiving
-    phys = MachinePhysics(build_spec(setup, params, job.machine["lead_screw_pitch"]).compile(), params)
-    s4 = build_structure(job, params, phys)
+    structure = job.machine["structure"]
+    chains = chain_ratios(job) if structure != "mechatronic" else None
+    spec = build_spec(setup, params, job.machine["lead_screw_pitch"], structure, chains)
+    phys = MachinePhysics(spec.compile(), params)
+    machine = build_structure(job, params, phys)
     dt = phys.model.opt.timestep * servo_substeps
     p = job.machine["command_pulses_per_rev"]
     ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
@@ -158,26 +196,30 @@ def simulate(
     ratio, diff = setup.speed_ratio, setup.differential_rotation_per_mm
     b1_0, b2_0, p3_0 = phys.q("B1"), phys.q("B2"), phys.q("P3") / MM
     rows: list[tuple] = []
-    qpos, qvel = phys.data.qpos, phys.data.qvel
+    qpos, qvel, ctrl = phys.data.qpos, phys.data.qvel, phys.data.ctrl
     qa = [phys.qadr[a] for a in AXES]
-    i_b1, i_b2, i_tv = phys.qadr["B1"], phys.qadr["B2"], phys.qadr["TV"]
-    v_m1, v_m2, v_m3 = phys.vadr["M1"], phys.vadr["M2"], phys.vadr["M3"]
-    ctrl = phys.data.ctrl
-    a_m1, a_m2, a_m3 = phys.act["M1"], phys.act["M2"], phys.act["M3"]
+    sensors = [phys.qadr[j] for j in machine.sensors]
+    speeds = [phys.vadr[j] for j in machine.speeds]
+    acts = [phys.act[a] for a in machine.actuators]
     qfrc = phys.data.qfrc_applied
     dof_dist = phys.vadr[disturbance_axis]
     feed = SEGMENTS.index("feed")
+    clutch_state: dict[str, bool] = {}
     t_end = math.inf if duration is None else duration
-    for tick in program(setup, dt, ppm, s4, settings or ProgramSettings()):
+    for tick in program(setup, dt, ppm, machine, settings or ProgramSettings()):
         if phys.time >= t_end:
             break
         phys.set_radial(tick.radial)
-        torques = s4.tick(dt, tick.cnc, (qpos[i_b1], qpos[i_b2], qpos[i_tv]), (qvel[v_m1], qvel[v_m2], qvel[v_m3]))
-        ctrl[a_m1], ctrl[a_m2], ctrl[a_m3] = torques
+        for tendon, on in machine.clutches(tick.cnc).items():
+            if clutch_state.get(tendon) != on:
+                phys.engage(tendon, on)
+                clutch_state[tendon] = on
+        torques = machine.tick(dt, tick.cnc, tuple(qpos[sensors]), tuple(qvel[speeds]))
+        ctrl[acts] = torques
         if disturbance is not None:
             qfrc[dof_dist] = disturbance(phys.time)
         phys.step(servo_substeps)
-        rows.append((phys.time, *qpos[qa], *torques, SEGMENTS.index(tick.segment), tick.pass_index))
+        rows.append((phys.time, *qpos[qa], SEGMENTS.index(tick.segment), tick.pass_index, *torques))
         if progress is not None:
             progress(phys.time)
     a = np.array(rows)
@@ -186,13 +228,14 @@ def simulate(
     b1, b2, p3 = q[:, 0], q[:, 1], q[:, 2] / MM
     delta = (b2 - b2_0) - ratio * (b1 - b1_0) - diff * (p3 - p3_0)
     q[:, 2:4] /= MM  # P3, X in mm
-    segment, pass_index = a[:, 4 + n_ax].astype(int), a[:, 5 + n_ax].astype(int)
+    segment, pass_index = a[:, 1 + n_ax].astype(int), a[:, 2 + n_ax].astype(int)
     reach = np.array([setup.gear.face_width / 2 + setup.engagement_half_length(c) for c in setup.pass_centre_distances])
     cutting = (segment == feed) & (np.abs(q[:, 2]) <= reach[np.clip(pass_index, 0, len(reach) - 1)])
     rec = MotionRecord(
         t=a[:, 0],
         q=q,
-        torque=a[:, 1 + n_ax : 4 + n_ax],
+        torque=a[:, 3 + n_ax :],
+        actuators=tuple(machine.actuators),
         sync_um=r2 * delta * 1e3,
         segment=segment,
         pass_index=pass_index,

@@ -16,16 +16,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
 
+from machine_models.skiving_machine import MM
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec, thread_layout
 from virtual_machine.job import Job
 from virtual_machine.physics import SimulationDivergedError
 from virtual_machine.setup_sheet import thread_sheet
-from virtual_machine.structures.axis import AxisTuning
 from virtual_machine.structures.thread_group import (
     ThreadCnc,
     ThreadEqualCoordinates,
@@ -34,12 +34,11 @@ from virtual_machine.structures.thread_group import (
     ThreadTuning,
 )
 
-RUNUP = 0.3  # s: the run-up ramp of the spindle
-
 
 @dataclass
 class ThreadRecord:
-    """Per servo tick: time [s], B1, TV, M1, M2 [rad], P2 [mm], motor torques (M1, M2) [N m], lead error [um]."""
+    """Per servo tick: time [s], B1, TV, M1, M2 [rad], P2 [mm], motor torques (M1, M2) [N m], lead error [um];
+    ``on_thread``: the tool on the threaded length (after the run-up and the clearance)."""
 
     form: str
     lead: float  # thread lead P [mm]
@@ -53,14 +52,11 @@ class ThreadRecord:
     m2: np.ndarray
     torque: np.ndarray  # (n, 2)
     lead_error_um: np.ndarray
+    on_thread: np.ndarray
 
-    def stroke(self, skip: float = 0.0) -> np.ndarray:
-        """Ticks of the stroke after the run-up (and ``skip`` seconds more)."""
-        return self.t >= self.runup + skip
-
-    def stats(self, skip: float = 0.0) -> dict[str, float]:
-        """Lead error statistics over the stroke after the run-up [um] (as MotionRecord.sync_stats)."""
-        e = self.lead_error_um[self.stroke(skip)]
+    def stats(self) -> dict[str, float]:
+        """Lead error statistics while the tool is on the thread [um] (as MotionRecord.sync_stats)."""
+        e = self.lead_error_um[self.on_thread]
         if e.size == 0:
             return {}
         return {
@@ -71,11 +67,10 @@ class ThreadRecord:
             "max_abs_um": float(np.abs(e).max()),
         }
 
-    def drift(self, skip: float = 0.0) -> tuple[float, float]:
-        """The lead error's change over the stroke from a straight-line fit against the carriage position [um],
-        and the carriage travel over the stroke [mm] (signed). A realised lead P (1 + eps) drifts eps * travel."""
-        sel = self.stroke(skip)
-        z, e = self.p2[sel], self.lead_error_um[sel]
+    def drift(self) -> tuple[float, float]:
+        """The lead error's change along the thread from a straight-line fit against the carriage position [um],
+        and the carriage travel on the thread [mm] (signed). A realised lead P (1 + eps) drifts eps * travel."""
+        z, e = self.p2[self.on_thread], self.lead_error_um[self.on_thread]
         slope = np.polyfit(z - z[0], e, 1)[0]
         travel = float(z[-1] - z[0])
         return float(slope * travel), travel
@@ -93,9 +88,9 @@ def build_thread_structure(job: Job, params: ThreadLatheParams, angle0: tuple[fl
     sheet = thread_sheet(job, "mechanical" if lay.form == "mechanical" else "mechatronic")
     st = sheet.settings
     base = tuning or ThreadTuning()
-    tuning = ThreadTuning(
-        AxisTuning(**{**base.spindle.__dict__, "peak_torque": params.spindle_motor_torque}),
-        AxisTuning(**{**base.carriage.__dict__, "peak_torque": params.screw_motor_torque}),
+    tuning = ThreadTuning(  # the amplifiers' current limits are the motors' peak torques of the model
+        replace(base.spindle, peak_torque=params.spindle_motor_torque),
+        replace(base.carriage, peak_torque=params.screw_motor_torque),
     )
     r_sp = lay.spindle_ratio
     j_carriage = params.screw_inertia + params.carriage_mass * lay.screw_lead**2
@@ -142,10 +137,10 @@ def simulate_thread(
     duration: float | None = None,
     disturbance: Callable[[float], float] | None = None,
     servo_substeps: int = 2,
-    runup: float = RUNUP,
 ) -> ThreadRecord:
-    """Run-up and the first threading stroke of ``job``. ``duration`` [s] overrides run-up + length / feed;
-    ``disturbance(t)`` is an extra torque on the spindle [N m] (a cutting-torque transient on the master)."""
+    """Run-up and the first threading stroke of ``job``, until the tool leaves the thread (``duration`` [s]
+    overrides that). ``disturbance(t)`` is an extra torque on the spindle [N m] (a load on the master).
+    Raises :class:`SimulationDivergedError` when MuJoCo reports bad accelerations."""
     params = params or ThreadLatheParams()
     lay = thread_layout(job, params)
     model = build_thread_lathe_spec(job, params).compile()
@@ -167,8 +162,9 @@ def simulate_thread(
     structure = build_thread_structure(job, params, (b1_0, float(qpos[i_tv])))
     dt = model.opt.timestep * servo_substeps
     feed = lay.lead * lay.spindle_speed / (2 * math.pi)  # m/s
-    t_end = duration if duration is not None else runup + lay.length / feed
-    n = int(round(t_end / dt))
+    runup = params.runup_time
+    t_end = duration if duration is not None else runup + (lay.approach - feed * runup / 2 + lay.length) / feed
+    n = round(t_end / dt)
     rows = np.empty((n, 8))
     cnc = ThreadCnc()
     bad = mujoco.mjtWarning.mjWARN_BADQACC
@@ -190,9 +186,10 @@ def simulate_thread(
         rows[k] = (data.time, qpos[i_b1], qpos[i_p2], qpos[i_tv], qpos[i_m1], qpos[i_m2] if electronic else 0.0, t1, t2)
     b1, p2 = rows[:, 1], rows[:, 2]
     error = (p2 - p2_0) - lay.lead / (2 * math.pi) * (b1 - b1_0) * lay.hand_sign
+    travel = np.abs(p2 - p2_0)
     return ThreadRecord(
         form=lay.form,
-        lead=lay.lead / 1e-3,
+        lead=lay.lead / MM,
         hand_sign=lay.hand_sign,
         runup=runup,
         t=rows[:, 0],
@@ -203,4 +200,5 @@ def simulate_thread(
         m2=rows[:, 5],
         torque=rows[:, 6:8],
         lead_error_um=error * 1e6,
+        on_thread=(travel >= lay.approach) & (travel <= lay.approach + lay.length),
     )

@@ -14,7 +14,7 @@ from .converters import AnalogToPulse, CountToAnalog, PulseToAnalog
 from .discriminators import PhaseDiscriminator, SignDiscriminator
 from .encoder import Encoder
 from .hydraulic import HydraulicPulseGenerator, HydraulicSteppingMotor
-from .motors import DCMotor, SynchronousMotor
+from .motors import DCMotor, InductionMotor, SynchronousMotor
 from .pulses import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
 from .servo import SpeedRegulator
 
@@ -26,6 +26,7 @@ __all__ = [
     "FrequencyDivider",
     "HydraulicPulseGenerator",
     "HydraulicSteppingMotor",
+    "InductionMotor",
     "Key",
     "ParallelSummator",
     "PhaseDiscriminator",

@@ -146,3 +146,69 @@ class SynchronousMotor:
         self.current = 0.0
         self.torque = 0.0
         self.at_limit = False
+
+
+@dataclass(slots=True, kw_only=True)
+class InductionMotor:
+    """Squirrel-cage induction motor on a frequency converter: the main motor M of S1-S3 (seed 000 figs. 1-3)
+    and the master spindle motor of seed 001 fig. 2 ("asynchronous with a frequency converter").
+
+    The linear part of the torque-slip curve, with the converter's frequency as a fraction of nominal
+    (V/f control keeps the slip speed for a given torque)::
+
+        omega_sync = scale * sync_speed
+        torque = clamp(rated_torque * (omega_sync - omega) / (rated_slip * sync_speed), +-breakdown * rated_torque)
+
+    Parameters
+    ----------
+    sync_speed : float
+        Synchronous speed at nominal frequency [rad/s], > 0.
+    rated_torque : float
+        [N m], > 0.
+    rated_slip : float
+        Slip at rated torque, in (0, 1).
+    breakdown : float
+        Breakdown torque over rated torque, > 1 (2.5 typical).
+
+    Attributes
+    ----------
+    scale : float
+        Input: converter frequency / nominal (run-up ramp), >= 0.
+    omega : float
+        Input: rotor speed [rad/s].
+    torque : float
+        Output: [N m].
+    at_limit : bool
+        Output: True at the breakdown torque.
+    """
+
+    sync_speed: float
+    rated_torque: float
+    rated_slip: float
+    breakdown: float = 2.5
+    scale: float = field(default=0.0, init=False)
+    omega: float = field(default=0.0, init=False)
+    torque: float = field(default=0.0, init=False)
+    at_limit: bool = field(default=False, init=False)
+
+    def __post_init__(self) -> None:
+        self.sync_speed = positive("sync_speed", self.sync_speed)
+        self.rated_torque = positive("rated_torque", self.rated_torque)
+        if not 0.0 < self.rated_slip < 1.0:
+            raise ValueError(f"rated_slip = {self.rated_slip!r}: must be between 0 and 1 (0.02-0.05 typical)")
+        if not self.breakdown > 1.0:
+            raise ValueError(f"breakdown = {self.breakdown!r}: must be > 1 (2-3 typical)")
+
+    def update(self, dt: float) -> None:
+        t = self.rated_torque * (self.scale * self.sync_speed - self.omega) / (self.rated_slip * self.sync_speed)
+        limit = self.breakdown * self.rated_torque
+        self.at_limit = not -limit <= t <= limit
+        if self.at_limit:
+            t = limit if t > 0.0 else -limit
+        self.torque = t
+
+    def reset(self) -> None:
+        self.scale = 0.0
+        self.omega = 0.0
+        self.torque = 0.0
+        self.at_limit = False

@@ -53,6 +53,13 @@ class S4Tuning:
 class MechatronicS4:
     """The wiring of fig. 4. ``dirs``: signs of B1, B2 (speed ratio) and B4 per feed pulse."""
 
+    sensors = ("B1", "B2", "TV")  # angles the encoders IP1..IP3 read
+    speeds = ("M1", "M2", "M3")  # tachogenerators
+    actuators = ("M1", "M2", "M3")
+
+    def clutches(self, cnc: CncState) -> dict[str, bool]:
+        return {}
+
     def __init__(
         self,
         f_ref: float,
@@ -156,6 +163,13 @@ class MechatronicS4MasterSlave:
     copies what its master really does, including the master's mechanical deviations (seed 001's point); the
     equal-coordinates form compares each axis with the generator only.
     """
+
+    sensors = ("B1", "B2", "TV")
+    speeds = ("M1", "M2", "M3")
+    actuators = ("M1", "M2", "M3")
+
+    def clutches(self, cnc: CncState) -> dict[str, bool]:
+        return {}
 
     def __init__(
         self,

@@ -57,7 +57,9 @@ class SpeedDrive:
         w = 2 * math.pi * tuning.speed_bandwidth
         kp_torque = inertia * w
         limit = tuning.peak_torque / tuning.torque_constant
-        self.regulator = SpeedRegulator(kp_torque / tuning.torque_constant, kp_torque * w / 4 / tuning.torque_constant, limit)
+        self.regulator = SpeedRegulator(
+            kp_torque / tuning.torque_constant, kp_torque * w / 4 / tuning.torque_constant, limit
+        )
         self.motor = SynchronousMotor(
             torque_constant=tuning.torque_constant, current_limit=limit, bandwidth=tuning.current_bandwidth
         )
@@ -216,7 +218,5 @@ class ThreadEqualCoordinates:
         self.carriage_pulses += self.direction * self.d10.out
         self.pa21.inp = self.direction * self._fine(self.d10, 1)
         self.pa21.update(dt)
-        t2 = self.carriage.update(
-            dt, self.pa21.out, self.carriage_pulses, angles[1] / self.feed_ratio, motor_speeds[1]
-        )
+        t2 = self.carriage.update(dt, self.pa21.out, self.carriage_pulses, angles[1] / self.feed_ratio, motor_speeds[1])
         return t1, t2

@@ -1,0 +1,94 @@
+"""S2 hydraulic shaft with differential (seed 000 fig. 2): pulse generators and hydraulic stepping motors.
+
+The main motor M (induction, frequency converter) drives the tool spindle through iv. Master-slave links:
+GGI1 on the tool spindle feeds GShD1, GGI2 on the lead screw feeds GShD2; both drive differential 4 to the work
+spindle (B2 + B4). GGI3 on the work spindle feeds GShD3, which turns the lead screw (the feed; the CNC gates it
+and feeds GShD3 its own pulses for the return stroke). Each ratio is the disc's windows over the motor's steps
+per turn: a discrete set, realised by the setting sheet.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from virtual_machine.controllers import (
+    Encoder,
+    HydraulicPulseGenerator,
+    HydraulicSteppingMotor,
+    InductionMotor,
+    RateMultiplier,
+)
+from virtual_machine.structures.mechatronic import CncState
+
+
+class HydraulicS2:
+    sensors = ("B1", "TV", "B2", "GShD1", "GShD2", "GShD3")
+    speeds = ("M1", "GShD1", "GShD2", "GShD3")
+    actuators = ("M1", "GShD1", "GShD2", "GShD3")
+
+    def __init__(
+        self,
+        motor: InductionMotor,
+        windows: tuple[int, int | None, int],
+        stepping: dict,
+        p: int,
+        encoder_lines: int,
+        feed_ratio: float,
+        home: dict[str, float],
+    ):
+        """``windows``: discs of GGI1..GGI3 (None: GGI2 disengaged, spur gear); ``stepping``: parameters of the
+        GShD; ``feed_ratio``: TV per GShD3 rad (signed); ``home``: joint angles at the start."""
+        self.p, self.m = p, motor
+        self.ggi1 = HydraulicPulseGenerator(windows[0], home["B1"])
+        self.ggi2 = HydraulicPulseGenerator(windows[1], home["TV"]) if windows[1] else None
+        self.ggi3 = HydraulicPulseGenerator(windows[2], home["B2"])
+        self.gshd1, self.gshd2, self.gshd3 = (HydraulicSteppingMotor(**stepping) for _ in range(3))
+        self.home = (home["GShD1"], home["GShD2"], home["GShD3"])
+        self.encoder = Encoder(encoder_lines, 4, home["TV"])  # the CNC's stroke counter
+        q = stepping["steps_per_rev"]
+        f = Fraction(q / (p * abs(feed_ratio))).limit_denominator(2**20)  # GShD3 steps per screw pulse
+        self.rapid = RateMultiplier(f.numerator, f.denominator)
+        self.rapid_sign = 1 if feed_ratio > 0 else -1
+        self.screw_pulses = 0
+        self.b4_pulses = 0  # B4 follows the screw through GGI2
+
+    def b4_for_screw(self, screw_pulses: int) -> int:
+        return self.b4_pulses
+
+    def clutches(self, cnc: CncState) -> dict[str, bool]:
+        return {}
+
+    def tick(self, dt: float, cnc: CncState, angles: tuple[float, ...], speeds: tuple[float, ...]):
+        b1, tv, b2, h1, h2, h3 = angles
+        self.m.scale, self.m.omega = cnc.scale, speeds[0]
+        self.m.update(dt)
+        enc = self.encoder
+        enc.angle = tv
+        enc.update(dt)
+        self.screw_pulses = enc.position * self.p // enc.counts_per_rev
+        # GGI1 (tool) -> GShD1 ; GGI2 (screw) -> GShD2 ; GGI3 (work) -> GShD3 while feeding, else the CNC's pulses
+        self.ggi1.angle = b1
+        self.ggi1.update(dt)
+        pulses2 = 0
+        if self.ggi2 is not None:
+            self.ggi2.angle = tv
+            self.ggi2.update(dt)
+            pulses2 = self.ggi2.out
+        self.ggi3.angle = b2
+        self.ggi3.update(dt)
+        self.rapid.inp = cnc.rapid_screw
+        self.rapid.update(dt)
+        pulses3 = self.ggi3.out if cnc.feed else self.rapid_sign * self.rapid.out
+        out = [self.m.torque]
+        for motor, pulses, angle, home, omega in zip(
+            (self.gshd1, self.gshd2, self.gshd3),
+            (self.ggi1.out, pulses2, pulses3),
+            (h1, h2, h3),
+            self.home,
+            speeds[1:],
+            strict=True,
+        ):
+            motor.pulses, motor.angle, motor.omega = pulses, angle - home, omega
+            motor.update(dt)
+            out.append(motor.torque)
+        return tuple(out)
