@@ -29,17 +29,21 @@ import numpy as np
 from cutting.skiving import SkivingSetup
 from machine_models.drives import couple
 from machine_models.parameters import DriveStage, SkivingMachineParams
-from machine_models.structure_drives import ChainRatios, ideal_chains
-
-MM = 1e-3
-STEEL = 7850.0  # kg/m^3
-GREY, DARK, BLUE, ORANGE, STEELC = (
-    [0.6, 0.6, 0.62, 1],
-    [0.25, 0.25, 0.28, 1],
-    [0.2, 0.4, 0.8, 1],
-    [0.95, 0.55, 0.1, 1],
-    [0.75, 0.75, 0.78, 1],
+from machine_models.parts import (
+    BLUE,
+    DARK,
+    GREY,
+    MM,
+    ORANGE,
+    STEEL,
+    STEELC,
+    inertial,
+    quat_x,
+    quat_z,
+    tendon_coefs,
+    visual,
 )
+from machine_models.structure_drives import ChainRatios, ideal_chains
 
 
 @dataclass(frozen=True)
@@ -65,37 +69,6 @@ def layout_of(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
         setup.work_phase,
         setup.cutter_phase,
         lead_screw_pitch_mm * MM,
-    )
-
-
-def _quat_z(angle: float) -> list[float]:
-    return [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
-
-
-def _quat_x(angle: float) -> list[float]:
-    return [math.cos(angle / 2), math.sin(angle / 2), 0.0, 0.0]
-
-
-def _inertial(body, mass: float, axial: float, transverse: float | None = None) -> None:
-    """Mass and principal inertia (axial about the body's z) at the body origin."""
-    body.mass = mass
-    t = axial / 2 + 1e-6 if transverse is None else transverse
-    body.inertia = [t, t, axial]
-    body.ipos = [0.0, 0.0, 0.0]  # must be set: left unset it takes the body's position
-    body.explicitinertial = True
-
-
-def _visual(body, kind, size, rgba, pos=(0, 0, 0), quat=(1, 0, 0, 0)) -> None:
-    body.add_geom(
-        type=kind,
-        size=list(size),
-        rgba=rgba,
-        pos=list(pos),
-        quat=list(quat),
-        contype=0,
-        conaffinity=0,
-        mass=0.0,
-        density=0.0,
     )
 
 
@@ -125,46 +98,46 @@ def build_spec(
     world.add_light(pos=[0, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
     r_blank = g.tip_radius * MM if not g.internal else (g.root_radius + 3 * g.mn) * MM
     b = g.face_width * MM
-    _visual(world, mujoco.mjtGeom.mjGEOM_BOX, (0.45, 0.35, 0.04), DARK, pos=(0.1, 0, -b / 2 - 0.16))  # bed
+    visual(world, mujoco.mjtGeom.mjGEOM_BOX, (0.45, 0.35, 0.04), DARK, pos=(0.1, 0, -b / 2 - 0.16))  # bed
 
     # ---- work spindle B2 with the blank ----------------------------------------------------------------
     work = world.add_body(name="work_spindle")
     blank_mass = STEEL * math.pi * r_blank**2 * b
-    _inertial(work, 60.0 + blank_mass, params.work_inertia + blank_mass * r_blank**2 / 2)
+    inertial(work, 60.0 + blank_mass, params.work_inertia + blank_mass * r_blank**2 / 2)
     work.add_joint(name="B2", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.work_friction)
-    _visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.15, 0.03), GREY, pos=(0, 0, -b / 2 - 0.09))  # table
-    _visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_blank, b / 2), STEELC)  # blank
-    _visual(work, mujoco.mjtGeom.mjGEOM_BOX, (r_blank * 0.9, 0.003, b / 2 + 0.001), ORANGE)  # angle mark
-    work.add_site(name="blank_frame", quat=_quat_z(lay.work_phase))
+    visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.15, 0.03), GREY, pos=(0, 0, -b / 2 - 0.09))  # table
+    visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_blank, b / 2), STEELC)  # blank
+    visual(work, mujoco.mjtGeom.mjGEOM_BOX, (r_blank * 0.9, 0.003, b / 2 + 0.001), ORANGE)  # angle mark
+    work.add_site(name="blank_frame", quat=quat_z(lay.work_phase))
 
     # ---- carriage P3, radial slide X, swivel head, tool spindle B1 --------------------------------------
     carriage = world.add_body(name="carriage")
-    _inertial(carriage, params.carriage_mass, 10.0, 10.0)
+    inertial(carriage, params.carriage_mass, 10.0, 10.0)
     carriage.gravcomp = params.counterbalance
     carriage.add_joint(name="P3", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], frictionloss=params.ways_friction)
-    _visual(carriage, mujoco.mjtGeom.mjGEOM_BOX, (0.06, 0.2, 0.18), GREY, pos=(lay.centre_distance + 0.2, 0, 0))
+    visual(carriage, mujoco.mjtGeom.mjGEOM_BOX, (0.06, 0.2, 0.18), GREY, pos=(lay.centre_distance + 0.2, 0, 0))
     radial = carriage.add_body(name="radial_slide")
-    _inertial(radial, params.radial_mass, 5.0, 5.0)
+    inertial(radial, params.radial_mass, 5.0, 5.0)
     radial.gravcomp = params.counterbalance
     radial.add_joint(name="X", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0], damping=params.radial_damping)
-    _visual(radial, mujoco.mjtGeom.mjGEOM_BOX, (0.04, 0.12, 0.12), BLUE, pos=(0.13, 0, 0))
-    head = radial.add_body(name="swivel_head", quat=_quat_x(lay.tilt))
-    _visual(head, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.08), BLUE, pos=(0, 0, 0.1))  # spindle housing
+    visual(radial, mujoco.mjtGeom.mjGEOM_BOX, (0.04, 0.12, 0.12), BLUE, pos=(0.13, 0, 0))
+    head = radial.add_body(name="swivel_head", quat=quat_x(lay.tilt))
+    visual(head, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.08), BLUE, pos=(0, 0, 0.1))  # spindle housing
     tool = head.add_body(name="tool_spindle")
-    _inertial(tool, 12.0, params.tool_inertia)
+    inertial(tool, 12.0, params.tool_inertia)
     tool.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.tool_friction)
     r_cut = setup.cutter_tip_diameter / 2 * MM
     width = c.face_width * MM
-    _visual(tool, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_cut, width / 2), ORANGE, pos=(0, 0, -width / 2))  # cutter
-    _visual(tool, mujoco.mjtGeom.mjGEOM_BOX, (r_cut * 0.9, 0.002, width / 2 + 0.001), DARK, pos=(0, 0, -width / 2))
-    _visual(
+    visual(tool, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_cut, width / 2), ORANGE, pos=(0, 0, -width / 2))  # cutter
+    visual(tool, mujoco.mjtGeom.mjGEOM_BOX, (r_cut * 0.9, 0.002, width / 2 + 0.001), DARK, pos=(0, 0, -width / 2))
+    visual(
         tool,
         mujoco.mjtGeom.mjGEOM_CYLINDER,
         (setup.holder_diameter_value / 2 * MM, 0.02),
         DARK,
         pos=(0, 0, -width - 0.02),
     )  # holder
-    tool.add_site(name="cutter_frame", quat=_quat_z(lay.cutter_phase))
+    tool.add_site(name="cutter_frame", quat=quat_z(lay.cutter_phase))
     tool.gravcomp = params.counterbalance  # the counterbalance carries everything that rides on the carriage
     spec.add_actuator(name="X", target="X", trntype=mujoco.mjtTrn.mjTRN_JOINT).set_to_position(
         kp=params.radial_stiffness
@@ -172,9 +145,9 @@ def build_spec(
 
     # ---- lead screw TV and feed motor M3 ---------------------------------------------------------------
     screw = world.add_body(name="lead_screw", pos=[lay.centre_distance + 0.2, 0.25, 0.0])
-    _inertial(screw, 10.0, params.screw_inertia, 1.0)
+    inertial(screw, 10.0, params.screw_inertia, 1.0)
     screw.add_joint(name="TV", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
-    _visual(screw, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.02, 0.3), STEELC)
+    visual(screw, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.02, 0.3), STEELC)
     nut = DriveStage(
         lay.lead_screw_pitch / (2 * math.pi), params.nut_stiffness, params.nut_backlash, params.nut_damping
     )
@@ -188,17 +161,6 @@ def build_spec(
     drives = DRIVES[structure](spec, {"world": world, "head": head}, setup, params, chains or ideal_chains(setup))
     spec.add_key(name="home", qpos=_home_qpos(spec, lay, drives))
     return spec
-
-
-def _motor(spec: mujoco.MjSpec, body, name: str, inertia: float, peak: float) -> None:
-    """A motor: rotor hinge ``name`` with its inertia, and a torque actuator ``name`` (ctrl in N m)."""
-    _inertial(body, 8.0, inertia)
-    body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
-    _visual(body, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.07), DARK)
-    act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-    act.set_to_motor()
-    act.ctrllimited = True
-    act.ctrlrange = [-peak, peak]
 
 
 def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, drives) -> list[float]:
@@ -224,7 +186,7 @@ def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, drives) -> list[float]:
         name = model.tendon(t).name
         if name == "nut" or name in drives.clutched:
             continue
-        coefs = _tendon_coefs(model, name)
+        coefs = tendon_coefs(model, name)
         row = np.zeros(len(unknown))
         b = 0.0
         for joint, c in coefs.items():
@@ -240,12 +202,6 @@ def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, drives) -> list[float]:
         for k, jid in enumerate(unknown):
             q[model.jnt_qposadr[jid]] = sol[k]
     return q.tolist()
-
-
-def _tendon_coefs(model: mujoco.MjModel, tendon: str) -> dict[str, float]:
-    t = model.tendon(tendon).id
-    adr, num = int(model.tendon_adr[t]), int(model.tendon_num[t])
-    return {model.joint(int(model.wrap_objid[i])).name: float(model.wrap_prm[i]) for i in range(adr, adr + num)}
 
 
 def build_model(

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 from cutting.skiving import SkivingSetup
 from machine_models.drives import couple, couple_linear
 from machine_models.parameters import SkivingMachineParams
+from machine_models.parts import motor
 
 
 @dataclass(frozen=True)
@@ -49,9 +50,7 @@ class Drives:
 
 
 def _motor_body(spec, parent, name: str, pos, inertia: float, peak: float) -> None:
-    from machine_models.skiving_machine import _motor
-
-    _motor(spec, parent.add_body(name=f"{name}_rotor", pos=list(pos)), name, inertia, peak)
+    motor(spec, parent.add_body(name=f"{name}_rotor", pos=list(pos)), name, inertia, peak)
 
 
 def mechatronic(spec, bodies, setup: SkivingSetup, params: SkivingMachineParams, chains: ChainRatios) -> Drives:

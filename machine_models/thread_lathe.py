@@ -35,7 +35,7 @@ import numpy as np
 
 from machine_models.drives import couple
 from machine_models.parameters import ARCSEC, DriveStage
-from machine_models.skiving_machine import (
+from machine_models.parts import (
     BLUE,
     DARK,
     GREY,
@@ -43,10 +43,10 @@ from machine_models.skiving_machine import (
     ORANGE,
     STEEL,
     STEELC,
-    _inertial,
-    _motor,
-    _tendon_coefs,
-    _visual,
+    inertial,
+    motor,
+    tendon_coefs,
+    visual,
 )
 
 FORMS = ("mechanical", "master-slave", "equal-coordinates")
@@ -244,44 +244,44 @@ def build_thread_lathe_spec(job, params: ThreadLatheParams | None = None) -> muj
     box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
     r_work = lay.diameter / 2
     work_len = lay.length + 2 * lay.approach
-    _visual(world, box, (0.18, 0.03, 0.6), DARK, pos=(0.0, -0.25, 0.35))  # bed
-    _visual(world, box, (0.14, 0.14, 0.12), GREY, pos=(0.0, -0.08, -0.2))  # headstock
+    visual(world, box, (0.18, 0.03, 0.6), DARK, pos=(0.0, -0.25, 0.35))  # bed
+    visual(world, box, (0.14, 0.14, 0.12), GREY, pos=(0.0, -0.08, -0.2))  # headstock
 
     # ---- spindle B1: chuck and workpiece ------------------------------------------------------------------
     spindle = world.add_body(name="spindle")
     work_mass = STEEL * math.pi * r_work**2 * work_len
-    _inertial(spindle, params.spindle_mass + work_mass, params.spindle_inertia + work_mass * r_work**2 / 2)
+    inertial(spindle, params.spindle_mass + work_mass, params.spindle_inertia + work_mass * r_work**2 / 2)
     spindle.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.spindle_friction)
-    _visual(spindle, cyl, (0.1, 0.04), GREY, pos=(0, 0, -0.045))  # chuck
+    visual(spindle, cyl, (0.1, 0.04), GREY, pos=(0, 0, -0.045))  # chuck
     for k in range(3):  # jaws
         a = 2 * math.pi * k / 3
         c, s = math.cos(a), math.sin(a)
-        _visual(spindle, box, (0.012, 0.012, 0.015), DARK, pos=(c * (r_work + 0.012), s * (r_work + 0.012), -0.005))
-    _visual(spindle, cyl, (r_work, work_len / 2), STEELC, pos=(0, 0, work_len / 2))  # workpiece
-    _visual(spindle, box, (r_work * 0.9, 0.001, work_len / 2 + 0.001), ORANGE, pos=(0, 0, work_len / 2))  # mark
+        visual(spindle, box, (0.012, 0.012, 0.015), DARK, pos=(c * (r_work + 0.012), s * (r_work + 0.012), -0.005))
+    visual(spindle, cyl, (r_work, work_len / 2), STEELC, pos=(0, 0, work_len / 2))  # workpiece
+    visual(spindle, box, (r_work * 0.9, 0.001, work_len / 2 + 0.001), ORANGE, pos=(0, 0, work_len / 2))  # mark
     motor1 = world.add_body(name="spindle_motor", pos=[0.0, -0.2, -0.3])
-    _motor(spec, motor1, "M1", params.spindle_motor_inertia, params.spindle_motor_torque)
+    motor(spec, motor1, "M1", params.spindle_motor_inertia, params.spindle_motor_torque)
     couple(spec, "spindle_drive", "B1", "M1", replace(params.spindle_drive, ratio=lay.spindle_ratio))
 
     # ---- carriage P2 with the threading tool -----------------------------------------------------------------
     carriage = world.add_body(name="carriage")
-    _inertial(carriage, params.carriage_mass, 2.0, 2.0)
+    inertial(carriage, params.carriage_mass, 2.0, 2.0)
     carriage.add_joint(name="P2", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], frictionloss=params.ways_friction)
-    _visual(carriage, box, (0.16, 0.03, 0.08), BLUE, pos=(0.0, -0.19, 0.0))  # saddle
-    _visual(carriage, box, (0.04, 0.04, 0.04), BLUE, pos=(r_work + 0.07, -0.12, 0.0))  # tool post
-    _visual(carriage, box, (0.03, 0.006, 0.006), ORANGE, pos=(r_work + 0.03, 0.0, 0.0))  # tool
+    visual(carriage, box, (0.16, 0.03, 0.08), BLUE, pos=(0.0, -0.19, 0.0))  # saddle
+    visual(carriage, box, (0.04, 0.04, 0.04), BLUE, pos=(r_work + 0.07, -0.12, 0.0))  # tool post
+    visual(carriage, box, (0.03, 0.006, 0.006), ORANGE, pos=(r_work + 0.03, 0.0, 0.0))  # tool
     carriage.add_site(name="tool_tip", pos=[r_work, 0.0, 0.0], size=[0.001, 0.001, 0.001])
 
     # ---- lead screw TV -----------------------------------------------------------------------------------
     screw = world.add_body(name="lead_screw", pos=[0.12, -0.22, 0.0])
-    _inertial(screw, 3.9, params.screw_inertia, 0.3)
+    inertial(screw, 3.9, params.screw_inertia, 0.3)
     screw.add_joint(name="TV", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.screw_friction)
-    _visual(screw, cyl, (0.0125, 0.5), STEELC, pos=(0, 0, 0.35))
+    visual(screw, cyl, (0.0125, 0.5), STEELC, pos=(0, 0, 0.35))
     if lay.form == "mechanical":
         couple(spec, "gear_chain", "TV", "B1", replace(params.gear_chain, ratio=lay.chain_ratio))
     else:
         motor2 = world.add_body(name="screw_motor", pos=[0.12, -0.22, 0.92])
-        _motor(spec, motor2, "M2", params.screw_motor_inertia, params.screw_motor_torque)
+        motor(spec, motor2, "M2", params.screw_motor_inertia, params.screw_motor_torque)
         couple(spec, "feed_drive", "TV", "M2", replace(params.feed_drive, ratio=lay.feed_ratio))
     nut = DriveStage(lay.screw_lead, params.nut_stiffness, params.nut_backlash, params.nut_damping)
     couple(spec, "nut", "P2", "TV", nut)
@@ -299,12 +299,12 @@ def _home_qpos(spec: mujoco.MjSpec, lay: ThreadLayout) -> list[float]:
     q[adr["P2"]] = lay.carriage_start
     q[adr["TV"]] = lay.carriage_start / lay.screw_lead
     if lay.form == "mechanical":
-        coef = _tendon_coefs(model, "gear_chain")
+        coef = tendon_coefs(model, "gear_chain")
         q[adr["B1"]] = -coef["TV"] * q[adr["TV"]] / coef["B1"]
     else:
-        coef = _tendon_coefs(model, "feed_drive")
+        coef = tendon_coefs(model, "feed_drive")
         q[adr["M2"]] = -coef["TV"] * q[adr["TV"]] / coef["M2"]
-    coef = _tendon_coefs(model, "spindle_drive")
+    coef = tendon_coefs(model, "spindle_drive")
     q[adr["M1"]] = -coef["B1"] * q[adr["B1"]] / coef["M1"]
     return q.tolist()
 
