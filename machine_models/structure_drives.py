@@ -10,7 +10,9 @@
   (GGI2 on TV) drive the differential: ``B2 = g1 GShD1 + g2 GShD2``; GShD3 (GGI3 on B2, or the CNC's rapid
   pulses) drives the lead screw: ``TV = g3 GShD3``.
 - ``hydraulic-shaft`` (S3, fig. 3): M1 -> iv -> B2 (the master of the setting ``kx``: one work turn ->
-  (z2/z0)(1 + s/T) cutter turns); GShD (GGI on B2) drives the tool: ``B1 = g1 GShD``; feed ``TV = k B2`` (is).
+  (z2/z0)(1 + s/T) cutter turns); GShD (GGI on B2) drives the tool: ``B1 = g1 GShD``; feed ``TV = k B2`` (is)
+  with a reversing gear for the return stroke and a brake on the screw. (The seed's chain listing runs from
+  B1 to B2; the setting formula makes the work the master, which is what is built.)
 
 Every chain is a tendon relation with the stage's stiffness, backlash and damping (drives.couple_linear).
 """
@@ -107,8 +109,12 @@ def hydraulic_shaft(spec, bodies, setup, params: SkivingMachineParams, chains: C
     couple(spec, "speed_chain", "B2", "M1", replace(params.speed_chain, ratio=chains.speed))
     _stepping_motor(spec, world, "GShD", (-0.3, -0.2, -0.1), params)
     couple(spec, "generating_chain", "B1", "GShD", replace(params.differential_stage, ratio=chains.generating))
+    # the feed chain with its reversing gear (forward for the stroke, reverse for the return), and the screw's
+    # brake that holds the carriage while neither is engaged
     couple_linear(spec, "feed_chain", [("TV", 1.0), ("B2", -chains.feed)], params.feed_chain)
-    return Drives(("M1", "GShD"), clutched=frozenset({"feed_chain"}))
+    couple_linear(spec, "feed_reverse", [("TV", 1.0), ("B2", chains.feed)], params.feed_chain)
+    couple_linear(spec, "screw_brake", [("TV", 1.0)], params.feed_chain)
+    return Drives(("M1", "GShD"), frozenset({"B1"}), frozenset({"feed_chain", "feed_reverse", "screw_brake"}))
 
 
 DRIVES: dict[str, Callable[..., Drives]] = {

@@ -154,12 +154,14 @@ def _drift_per_work_rev(rec) -> float:
     [
         ("mechanical", {"change_gears": [20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 80]}, "ix"),
         ("hydraulic-differential", {"hydraulic_steps_per_rev": 997}, "kx"),
+        ("hydraulic-shaft", {}, "kx"),
     ],
 )
 def test_chain_structures_hold_the_ratio_their_sheet_realises(structure: str, machine: dict, setting: str) -> None:
-    """S1 with a coarse change-gear set (ix realised 1.14872 for 1.15) and S2 with a 997-step hydraulic motor
-    (kx = 1147/997 for 1.15): the simulated work spindle drifts against the tool by the sheet's own figure,
-    pitch_um_per_work_rev = eps pi d (stiff chains: the rest of the machine adds no drift)."""
+    """S1 with a coarse change-gear set (ix realised 1.14872 for 1.15), S2 with a 997-step hydraulic motor
+    (kx = 1147/997 for 1.15), S3 with its 3600-step motor (kx = 6261/3600 for 40/23): the simulated work spindle
+    drifts against the tool by the sheet's own figure, pitch_um_per_work_rev = eps pi d (stiff chains: the rest
+    of the machine adds no drift). S3's kx is cutter turns per work turn, so its error acts with the other sign."""
     from virtual_machine.setup_sheet import setup_sheet
 
     job = _job("spur_external", structure=structure, **machine)
@@ -170,13 +172,25 @@ def test_chain_structures_hold_the_ratio_their_sheet_realises(structure: str, ma
     assert rec.cutting.sum() > 1000
     slope = _drift_per_work_rev(rec)
     dir_work = 1.0 if job.skiving.speed_ratio > 0 else -1.0
-    assert slope == pytest.approx(dir_work * expected, rel=0.05), (slope, expected, eps)
+    sign = -1.0 if structure == "hydraulic-shaft" else 1.0
+    assert slope == pytest.approx(sign * dir_work * expected, rel=0.05), (slope, expected, eps)
 
 
-@pytest.mark.parametrize("structure", ["mechanical", "hydraulic-differential"])
-def test_chain_structures_run_a_helical_job(structure: str) -> None:
-    """The helix chains (iy with the differential; GGI2 -> GShD2) add B4 with the right sign and size: on the
-    default compliant machine the sync error varies by a few micrometres while cutting, not by millimetres."""
-    rec = simulate(_job("helical_internal", structure=structure), duration=2.5)
-    stats = rec.sync_stats("cut")
-    assert stats["peak_to_peak_um"] < 10.0, stats
+@pytest.mark.parametrize(
+    ("structure", "setting"), [("mechanical", "ix"), ("hydraulic-differential", "kx"), ("hydraulic-shaft", "kx")]
+)
+def test_chain_structures_run_a_helical_job(structure: str, setting: str) -> None:
+    """The helix chains (iy with the differential; GGI2 -> GShD2; S3's kx with (1 + s/T)) add B4 with the right
+    sign and size: on the default compliant machine, once the drift the sheet predicts from its realised ratio is
+    taken out, the sync error varies by a few micrometres while cutting (a wrong B4 would drift by mm)."""
+    from virtual_machine.setup_sheet import setup_sheet
+
+    job = _job("helical_internal", structure=structure)
+    rec = simulate(job, duration=2.5)
+    effect = setup_sheet(job, structure).settings[setting].effect["pitch_um_per_work_rev"]
+    sel = rec.cutting
+    revs = np.abs(rec.q[sel, 1] - rec.q[sel, 1][0]) / (2 * math.pi)
+    dir_work = 1.0 if job.skiving.speed_ratio > 0 else -1.0
+    sign = -1.0 if structure == "hydraulic-shaft" else 1.0
+    residual = rec.sync_um[sel] - sign * dir_work * effect * revs
+    assert np.ptp(residual) < 10.0, (np.ptp(residual), effect)

@@ -73,7 +73,12 @@ def program(
         screw_back = next_start - machine.screw_pulses
         b4_back = machine.b4_for_screw(next_start) - machine.b4_pulses
         travel = abs(screw_back) / screw_pulses_per_mm
-        steps = max(1, math.ceil(travel / settings.rapid_speed / dt))
+        if getattr(machine, "returns_by_reversing", False):
+            # no traverse drive: the feed chain runs backwards at the feed rate (S3) until the screw is back
+            while (next_start - machine.screw_pulses) * -feed_dir > 0:
+                yield Tick("return", i, CncState(scale=1.0, feed_dir=feed_dir, reverse=True), away)
+            travel = 0.0
+        steps = math.ceil(travel / settings.rapid_speed / dt)
         done_s = done_b = 0
         for k in range(steps):
             f = smoothstep((k + 1) / steps)

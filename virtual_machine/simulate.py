@@ -7,6 +7,7 @@ pose trajectory of the cutter in the blank frame (the cutting engine's input).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -21,7 +22,7 @@ from virtual_machine.job import Job
 from virtual_machine.physics import AXES, MachinePhysics
 from virtual_machine.program import ProgramSettings, program
 from virtual_machine.setup_sheet import setup_sheet
-from virtual_machine.structures.hydraulic import HydraulicS2
+from virtual_machine.structures.hydraulic import HydraulicS2, HydraulicS3
 from virtual_machine.structures.mechanical import MechanicalS1
 from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4MasterSlave
 
@@ -91,13 +92,10 @@ class MotionRecord:
 def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, adaptive: bool | None = None):
     """Structure S4 (equal coordinates) with the job's setting sheet; other structures follow (issue 5)."""
     m = job.machine
-    if m["structure"] in ("mechanical", "hydraulic-differential"):
+    if m["structure"] in ("mechanical", "hydraulic-differential", "hydraulic-shaft"):
         return _build_chain_structure(job, params, phys)
     if m["structure"] != "mechatronic":
-        raise NotImplementedError(
-            f"machine.structure = {m['structure']!r}: not simulated yet (S1 mechanical, S2 hydraulic-differential "
-            "and S4 mechatronic are)"
-        )
+        raise NotImplementedError(f"machine.structure = {m['structure']!r}: unknown structure")
     sheet = setup_sheet(job, "mechatronic")
     st = sheet.settings
     setup = job.skiving
@@ -155,8 +153,6 @@ def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: Machine
         return MechanicalS1(
             motor, m["command_pulses_per_rev"], m["encoder_lines"], params.traverse_motor_inertia, phys.q("TV")
         )
-    sheet = setup_sheet(job, "hydraulic-differential")
-    windows = tuple(sheet.settings[k].realisation.get("disc_windows") for k in ("kx", "ky", "is"))
     stepping = {
         "steps_per_rev": m["hydraulic_steps_per_rev"],
         "stiffness": params.hydraulic_stiffness,
@@ -164,6 +160,14 @@ def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: Machine
         "leakage": params.hydraulic_leakage,
         "torque_limit": params.hydraulic_torque_limit,
     }
+    if m["structure"] == "hydraulic-shaft":
+        reverse = "up" if job.process["feed_direction"] == "down" else "down"
+        back = dataclasses.replace(job, process=dict(job.process, feed_direction=reverse))
+        discs = tuple(setup_sheet(j, "hydraulic-shaft").settings["kx"].realisation["disc_windows"] for j in (job, back))
+        home = {j: phys.q(j) for j in ("B2", "TV", "GShD")}
+        return HydraulicS3(motor, discs, stepping, m["command_pulses_per_rev"], m["encoder_lines"], home)
+    sheet = setup_sheet(job, "hydraulic-differential")
+    windows = tuple(sheet.settings[k].realisation.get("disc_windows") for k in ("kx", "ky", "is"))
     home = {j: phys.q(j) for j in ("B1", "B2", "TV", "GShD1", "GShD2", "GShD3")}
     return HydraulicS2(
         motor, windows, stepping, m["command_pulses_per_rev"], m["encoder_lines"], chain_ratios(job).feed, home

@@ -51,6 +51,12 @@ class HydraulicPulseGenerator:
         self.angle0 = finite("angle0", self.angle0)
         self.reset()
 
+    @property
+    def fine_position(self) -> float:
+        """Windows passed, with the fraction of the next: what the stepping motor integrates when its steps come
+        faster than the servo tick (then they are spread evenly over it, not lumped at its end)."""
+        return (self.angle - self.angle0) * self.windows / TWO_PI
+
     def update(self, dt: float) -> None:
         p = math.floor((self.angle - self.angle0) * self.windows / TWO_PI)
         self.out = p - self.position

@@ -21,6 +21,24 @@ from virtual_machine.controllers import (
 from virtual_machine.structures.mechatronic import CncState
 
 
+class StepFeed:
+    """Pulses from a coding disc to a stepping motor, per tick. Faster than a step per tick the steps are spread
+    evenly over the tick (the disc's fine position): lumping them at the tick's end would kick the oil column
+    by +-1 step (and its damping by a step per tick) at the servo rate, an artefact of the sampling. Slower,
+    the motor steps as the steps come: the staircase is real and shows as periodic error."""
+
+    __slots__ = ("last",)
+
+    def __init__(self) -> None:
+        self.last = 0.0
+
+    def pulses(self, disc: HydraulicPulseGenerator) -> float:
+        fine = disc.fine_position
+        step = fine - self.last
+        self.last = fine
+        return step if abs(step) >= 1.0 else float(disc.out)
+
+
 class HydraulicS2:
     sensors = ("B1", "TV", "B2", "GShD1", "GShD2", "GShD3")
     speeds = ("M1", "GShD1", "GShD2", "GShD3")
@@ -45,6 +63,7 @@ class HydraulicS2:
         self.gshd1, self.gshd2, self.gshd3 = (HydraulicSteppingMotor(**stepping) for _ in range(3))
         self.home = (home["GShD1"], home["GShD2"], home["GShD3"])
         self.encoder = Encoder(encoder_lines, 4, home["TV"])  # the CNC's stroke counter
+        self.feeds = (StepFeed(), StepFeed(), StepFeed())
         q = stepping["steps_per_rev"]
         f = Fraction(q / (p * abs(feed_ratio))).limit_denominator(2**20)  # GShD3 steps per screw pulse
         self.rapid = RateMultiplier(f.numerator, f.denominator)
@@ -69,20 +88,23 @@ class HydraulicS2:
         # GGI1 (tool) -> GShD1 ; GGI2 (screw) -> GShD2 ; GGI3 (work) -> GShD3 while feeding, else the CNC's pulses
         self.ggi1.angle = b1
         self.ggi1.update(dt)
-        pulses2 = 0
+        pulses1 = self.feeds[0].pulses(self.ggi1)
+        pulses2 = 0.0
         if self.ggi2 is not None:
             self.ggi2.angle = tv
             self.ggi2.update(dt)
-            pulses2 = self.ggi2.out
+            pulses2 = self.feeds[1].pulses(self.ggi2)
         self.ggi3.angle = b2
         self.ggi3.update(dt)
+        pulses3 = self.feeds[2].pulses(self.ggi3)
         self.rapid.inp = cnc.rapid_screw
         self.rapid.update(dt)
-        pulses3 = self.ggi3.out if cnc.feed else self.rapid_sign * self.rapid.out
+        if not cnc.feed:
+            pulses3 = self.rapid_sign * self.rapid.out
         out = [self.m.torque]
         for motor, pulses, angle, home, omega in zip(
             (self.gshd1, self.gshd2, self.gshd3),
-            (self.ggi1.out, pulses2, pulses3),
+            (pulses1, pulses2, pulses3),
             (h1, h2, h3),
             self.home,
             speeds[1:],
@@ -92,3 +114,62 @@ class HydraulicS2:
             motor.update(dt)
             out.append(motor.torque)
         return tuple(out)
+
+
+class HydraulicS3:
+    """S3 hydraulic shaft without differential (seed 000 fig. 3): mathematical summation.
+
+    The main motor M drives the work spindle (the master of ``kx``); the pulse generator's coding disc on it
+    feeds the stepping motor GShD that turns the tool: one work turn -> (z2/z0)(1 + s/T) cutter turns, the
+    helix folded into the ratio. The feed chain (is) moves the carriage from the work spindle. Without a
+    traverse drive the return stroke reverses the feed chain, and a second disc with (z2/z0)(1 - s/T) keeps the
+    helix phase while the carriage climbs back ("the number of discs = the number of available ratios").
+    """
+
+    sensors = ("B2", "TV", "GShD")
+    speeds = ("M1", "GShD")
+    actuators = ("M1", "GShD")
+    returns_by_reversing = True
+
+    def __init__(
+        self,
+        motor: InductionMotor,
+        windows: tuple[int, int],
+        stepping: dict,
+        p: int,
+        encoder_lines: int,
+        home: dict[str, float],
+    ):
+        self.p, self.m = p, motor
+        self.disc_down = HydraulicPulseGenerator(windows[0], home["B2"])  # the stroke's disc
+        self.disc_up = HydraulicPulseGenerator(windows[1], home["B2"])  # the return's disc
+        self.gshd = HydraulicSteppingMotor(**stepping)
+        self.feed_down, self.feed_up = StepFeed(), StepFeed()
+        self.home = home["GShD"]
+        self.encoder = Encoder(encoder_lines, 4, home["TV"])
+        self.screw_pulses = 0
+        self.b4_pulses = 0
+
+    def b4_for_screw(self, screw_pulses: int) -> int:
+        return self.b4_pulses
+
+    def clutches(self, cnc: CncState) -> dict[str, bool]:
+        return {"feed_chain": cnc.feed, "feed_reverse": cnc.reverse, "screw_brake": not (cnc.feed or cnc.reverse)}
+
+    def tick(self, dt: float, cnc: CncState, angles: tuple[float, ...], speeds: tuple[float, ...]):
+        b2, tv, h = angles
+        self.m.scale, self.m.omega = cnc.scale, speeds[0]
+        self.m.update(dt)
+        enc = self.encoder
+        enc.angle = tv
+        enc.update(dt)
+        self.screw_pulses = enc.position * self.p // enc.counts_per_rev
+        for disc in (self.disc_down, self.disc_up):  # both discs turn with the work; one is read
+            disc.angle = b2
+            disc.update(dt)
+        down, up = self.feed_down.pulses(self.disc_down), self.feed_up.pulses(self.disc_up)
+        g = self.gshd
+        g.pulses = up if cnc.reverse else down
+        g.angle, g.omega = h - self.home, speeds[1]
+        g.update(dt)
+        return self.m.torque, g.torque

@@ -41,6 +41,7 @@ class CncState:
     feed_dir: int = -1  # carriage direction of the feed (-1: down)
     rapid_screw: int = 0  # interpolated pulses this tick for the lead-screw axis (rapid moves)
     rapid_b4: int = 0  # and for the B4 input of summator 9
+    reverse: bool = False  # return stroke by reversing the feed chain (S3 has no traverse drive)
 
 
 @dataclass(frozen=True)
