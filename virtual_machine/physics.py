@@ -40,6 +40,8 @@ class MachinePhysics:
         self.site_cutter = int(model.site("cutter_frame").id)
         self.data.ctrl[self.act["X"]] = self.data.qpos[self.qadr["X"]]
         mujoco.mj_forward(model, self.data)
+        self._badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]  # a live view: cheap to poll
+        self._b2 = self.qadr["B2"]
 
     @property
     def time(self) -> float:
@@ -76,8 +78,7 @@ class MachinePhysics:
 
     def step(self, n: int) -> None:
         mujoco.mj_step(self.model, self.data, nstep=n)
-        bad = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
-        if bad or not math.isfinite(self.data.qpos[self.qadr["B2"]]):
+        if self._badqacc.number or not math.isfinite(self.data.qpos[self._b2]):
             raise SimulationDivergedError(self.diagnose())
 
     def cutter_pose(self) -> tuple[np.ndarray, np.ndarray]:

@@ -53,14 +53,16 @@ def program(
     n = max(1, round(settings.runup / dt))
     for k in range(n):
         yield Tick("runup", -1, CncState(scale=smoothstep((k + 1) / n), feed_dir=feed_dir), a[0])
+    settle = Tick("settle", -1, CncState(scale=1.0, feed_dir=feed_dir), a[0])  # constant ticks are shared
     for _ in range(round(settings.settle / dt)):
-        yield Tick("settle", -1, CncState(scale=1.0, feed_dir=feed_dir), a[0])
+        yield settle
     moves = max(1, round(settings.radial_move / dt))
     for i, motion in enumerate(passes):
         target = round(motion.duration * abs(motion.v_s) * screw_pulses_per_mm)  # pulses of the stroke
         start_screw = machine.screw_pulses
+        feed = Tick("feed", i, CncState(scale=1.0, feed=True, feed_dir=feed_dir), a[i])
         while abs(machine.screw_pulses - start_screw) < target:
-            yield Tick("feed", i, CncState(scale=1.0, feed=True, feed_dir=feed_dir), a[i])
+            yield feed
         if i == len(passes) - 1:
             return
         away = a[i] + out_sign * settings.retract * 1e-3
@@ -75,8 +77,9 @@ def program(
         travel = abs(screw_back) / screw_pulses_per_mm
         if getattr(machine, "returns_by_reversing", False):
             # no traverse drive: the feed chain runs backwards at the feed rate (S3) until the screw is back
+            back = Tick("return", i, CncState(scale=1.0, feed_dir=feed_dir, reverse=True), away)
             while (next_start - machine.screw_pulses) * -feed_dir > 0:
-                yield Tick("return", i, CncState(scale=1.0, feed_dir=feed_dir, reverse=True), away)
+                yield back
             travel = 0.0
         steps = math.ceil(travel / settings.rapid_speed / dt)
         done_s = done_b = 0

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -183,9 +184,11 @@ def simulate(
     disturbance: Callable[[float], float] | None = None,
     disturbance_axis: str = "B2",
     progress: Callable[[float], None] | None = None,
+    timing: dict[str, float] | None = None,
 ) -> MotionRecord:
     """Run the machine through the job's passes (no cutting). ``duration`` [s] stops early; ``disturbance(t)``
-    is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes)."""
+    is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes).
+    ``timing``, if given, receives the seconds spent in the physics and in the controllers (benchmarks)."""
     params = params or SkivingMachineParams()
     setup = job.skiving
     structure = job.machine["structure"]
@@ -210,6 +213,9 @@ def simulate(
     feed = SEGMENTS.index("feed")
     clutch_state: dict[str, bool] = {}
     t_end = math.inf if duration is None else duration
+    segment_index = {name: k for k, name in enumerate(SEGMENTS)}
+    clock = time.perf_counter
+    t_phys = t_ctrl = 0.0
     for tick in program(setup, dt, ppm, machine, settings or ProgramSettings()):
         if phys.time >= t_end:
             break
@@ -218,14 +224,21 @@ def simulate(
             if clutch_state.get(tendon) != on:
                 phys.engage(tendon, on)
                 clutch_state[tendon] = on
-        torques = machine.tick(dt, tick.cnc, tuple(qpos[sensors]), tuple(qvel[speeds]))
+        c0 = clock()
+        torques = machine.tick(dt, tick.cnc, qpos.take(sensors).tolist(), qvel.take(speeds).tolist())
+        c1 = clock()
         ctrl[acts] = torques
         if disturbance is not None:
             qfrc[dof_dist] = disturbance(phys.time)
         phys.step(servo_substeps)
-        rows.append((phys.time, *qpos[qa], SEGMENTS.index(tick.segment), tick.pass_index, *torques))
+        c2 = clock()
+        t_ctrl += c1 - c0
+        t_phys += c2 - c1
+        rows.append((phys.data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
         if progress is not None:
             progress(phys.time)
+    if timing is not None:
+        timing.update(physics=t_phys, control=t_ctrl)
     a = np.array(rows)
     n_ax = len(AXES)
     q = a[:, 1 : 1 + n_ax].copy()

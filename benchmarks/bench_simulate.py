@@ -1,0 +1,56 @@
+"""Benchmark (run on demand): simulated machine time per wall second, per structure, and where the time goes.
+
+    python benchmarks/bench_simulate.py [--job spur_external] [--seconds 3]
+
+For each structure the job's machine is simulated through the run-up and the start of the finishing pass
+(the rate is the same in every pass); prints machine s / wall s and the split of the loop between the
+physics (mj_step), the controllers (the structure's tick) and the rest (CNC program, recording).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import time
+
+import mujoco
+
+from virtual_machine.job import load_job
+from virtual_machine.simulate import simulate
+
+STRUCTURES = (
+    ("mechatronic", "equal-coordinates"),
+    ("mechatronic", "master-slave"),
+    ("mechanical", "equal-coordinates"),
+    ("hydraulic-differential", "equal-coordinates"),
+    ("hydraulic-shaft", "equal-coordinates"),
+)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--job", default="spur_external")
+    ap.add_argument("--seconds", type=float, default=3.0, help="machine time simulated per structure")
+    a = ap.parse_args()
+    base = load_job(f"assets/jobs/{a.job}.toml")
+    # the finishing pass alone: one pass at the full depth has the finishing pass's geometry and feed
+    depth = sum(base.process["passes"])
+    base = dataclasses.replace(base, process=dict(base.process, passes=[depth]))
+    print(f"{a.job}: {a.seconds:.1f} s of machine time per structure (run-up 0.4 s, then the finishing stroke)")
+    print(f"{'structure':40s} {'wall s':>7} {'x real':>7} {'physics':>8} {'control':>8} {'other':>7}")
+    for structure, sync in STRUCTURES:
+        job = dataclasses.replace(base, machine=dict(base.machine, structure=structure, synchronization=sync))
+        timing: dict[str, float] = {}
+        t0 = time.perf_counter()
+        simulate(job, duration=a.seconds, timing=timing)
+        wall = time.perf_counter() - t0
+        other = wall - timing["physics"] - timing["control"]
+        print(
+            f"{structure + ' / ' + sync:40s} {wall:7.2f} {a.seconds / wall:7.1f} "
+            f"{timing['physics'] / wall:8.0%} {timing['control'] / wall:8.0%} {other / wall:7.0%}"
+        )
+    print(f"mujoco {mujoco.__version__}; physics 8 kHz (2 sub-steps per 4 kHz servo tick)")
+
+
+if __name__ == "__main__":
+    main()
