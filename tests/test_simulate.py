@@ -112,8 +112,10 @@ def test_simulate_cli_writes_the_trajectory_and_the_record(tmp_path) -> None:
     doc = json.loads(res.output)
     assert doc["machine_seconds"] == pytest.approx(1.2, abs=1e-3)
     assert doc["passes"][0]["sync_error_in_cut"]["rms_um"] < 2.0  # 0.7 s of feed: the cut began after 1 mm
-    for name in ("trajectory.npz", "motion.npz", "simulation.json", "sync_error.png"):
+    for name in ("trajectory.npz", "motion.npz", "simulation.json", "sync_error.png", "machine.xml", "scene.xml"):
         assert (out / name).stat().st_size > 0
+    scene = mujoco.MjModel.from_xml_path(str(out / "scene.xml"))  # what the plain viewer opens
+    assert scene.body("tool_spindle").id > 0 and scene.site("cutter_frame").id >= 0
     (p,) = motion_io.load_trajectory(out / "trajectory.npz")
     assert p.index == 0 and p.rot.shape == (len(p.t), 3, 3)
     # the poses are rigid and follow the recorded axes
@@ -194,3 +196,19 @@ def test_chain_structures_run_a_helical_job(structure: str, setting: str) -> Non
     sign = -1.0 if structure == "hydraulic-shaft" else 1.0
     residual = rec.sync_um[sel] - sign * dir_work * effect * revs
     assert np.ptp(residual) < 10.0, (np.ptp(residual), effect)
+
+
+def test_simulate_cli_runs_a_thread_job(tmp_path) -> None:
+    import json
+
+    from click.testing import CliRunner
+
+    from virtual_machine.cli import main
+
+    res = CliRunner().invoke(main, ["simulate", "assets/jobs/thread_m12.toml", "--out", str(tmp_path), "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.output)
+    assert doc["form"] == "master-slave" and doc["lead_mm"] == 1.75
+    assert doc["lead_error_on_thread"]["peak_to_peak_um"] < 1.0  # the shipped lathe, no load
+    assert abs(doc["travel_mm"]) == pytest.approx(30.0, abs=0.5)
+    assert mujoco.MjModel.from_xml_path(str(tmp_path / "scene.xml")).nbody >= 4

@@ -264,6 +264,9 @@ def simulate(job: Path | None, duration: float | None, out: Path, as_json: bool)
         j = load_job(path)
     except (InputError, ValueError) as exc:
         _fail(exc)
+    if j.kind == "thread":
+        _simulate_thread(j, path, duration, out, as_json)
+        return
     st = j.skiving
     total = duration or (sum(st.pass_times) + 0.5 + 1.2 * (len(st.passes) - 1))  # strokes + run-up + returns (approx.)
     bar = tqdm(
@@ -323,3 +326,58 @@ def simulate(job: Path | None, duration: float | None, out: Path, as_json: bool)
     click.echo(
         f"written: {out / 'trajectory.npz'}, {out / 'motion.npz'}, {out / 'simulation.json'}, {out / 'sync_error.png'}"
     )
+
+
+def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: bool) -> None:
+    """skive simulate for a thread job (seed 001): one threading stroke on the lathe, its lead error."""
+    import time
+
+    import numpy as np
+
+    from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
+    from virtual_machine import motion_io
+    from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.simulate_thread import simulate_thread
+
+    t0 = time.perf_counter()
+    try:
+        rec = simulate_thread(j, duration=duration)
+    except (SimulationDivergedError, ValueError) as exc:
+        _fail(exc)
+    wall = time.perf_counter() - t0
+    out.mkdir(parents=True, exist_ok=True)
+    motion_io.write_model(build_thread_lathe_spec(j, ThreadLatheParams()).to_xml(), out)
+    np.savez_compressed(
+        out / "thread_motion.npz",
+        t=rec.t,
+        b1=rec.b1,
+        p2=rec.p2,
+        tv=rec.tv,
+        torque=rec.torque,
+        lead_error_um=rec.lead_error_um,
+        on_thread=rec.on_thread,
+    )
+    drift, travel = rec.drift() if rec.on_thread.sum() > 2 else (0.0, 0.0)
+    doc = {
+        "job": str(path),
+        "form": rec.form,
+        "lead_mm": rec.lead,
+        "machine_seconds": float(rec.t[-1]),
+        "wall_seconds": wall,
+        "lead_error_on_thread": rec.stats(),
+        "lead_drift_um": drift,
+        "travel_mm": travel,
+    }
+    (out / "simulation.json").write_text(json.dumps(doc, indent=2))
+    if as_json:
+        click.echo(json.dumps(doc, indent=2))
+        return
+    s = doc["lead_error_on_thread"]
+    click.echo(f"THREAD SIMULATION  {path}  ({rec.form}), lead {rec.lead} mm")
+    click.echo(f"{doc['machine_seconds']:.2f} s of machine time in {wall:.1f} s wall")
+    if s:
+        click.echo(
+            f"lead error on the thread: mean {s['mean_um']:.3f} um, p-p {s['peak_to_peak_um']:.3f} um, "
+            f"drift {drift:+.3f} um over {abs(travel):.1f} mm"
+        )
+    click.echo(f"written: {out / 'thread_motion.npz'}, {out / 'simulation.json'}, {out / 'scene.xml'}")

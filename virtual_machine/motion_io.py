@@ -80,10 +80,33 @@ def save(rec: MotionRecord, out: Path, meta: dict[str, Any], teeth: int | None =
         for name in ("t", "rot", "trans", "cutter_angle", "carriage", "centre_distance"):
             arrays[f"pass{p.index}_{name}"] = getattr(p, name)
     np.savez_compressed(out / "trajectory.npz", **arrays)
+    if rec.model_xml:
+        write_model(rec.model_xml, out)
     doc = {**meta, **summary(rec, teeth)}
     (out / "simulation.json").write_text(json.dumps(doc, indent=2))
     _chart(rec, out / "sync_error.png")
     return doc
+
+
+SCENE = """<mujoco model="skive scene">
+  <!-- open with: python -m mujoco.viewer --mjcf=scene.xml -->
+  <include file="{machine}"/>
+  <visual><headlight ambient="0.4 0.4 0.4"/></visual>
+  <worldbody>
+    <light pos="0.5 -1 2" dir="-0.3 0.5 -1"/>
+    <geom name="floor" type="plane" size="2 2 0.1" pos="0 0 -0.4" rgba="0.85 0.85 0.85 1" contype="0" conaffinity="0"/>
+  </worldbody>
+</mujoco>
+"""
+
+
+def write_model(xml: str, out: Path, name: str = "machine.xml") -> Path:
+    """The run's MJCF and a scene that includes it (floor and light), loadable in the plain MuJoCo viewer."""
+    out.mkdir(parents=True, exist_ok=True)
+    (out / name).write_text(xml)
+    scene = out / "scene.xml"
+    scene.write_text(SCENE.format(machine=name))
+    return scene
 
 
 def load_trajectory(path: Path) -> list[PassTrajectory]:

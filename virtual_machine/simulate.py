@@ -53,6 +53,7 @@ class MotionRecord:
     pass_index: np.ndarray
     cutting: np.ndarray  # feed ticks in which the cutter can be in the blank (|P3| <= b/2 + engagement)
     actuators: tuple[str, ...] = ("M1", "M2", "M3")
+    model_xml: str = ""  # the MJCF the run used
     passes: list[PassTrajectory] = field(default_factory=list)
 
     def sync_stats(self, during: str = "cut") -> dict[str, float]:
@@ -253,6 +254,7 @@ def simulate(
         q=q,
         torque=a[:, 3 + n_ax :],
         actuators=tuple(machine.actuators),
+        model_xml=spec.to_xml(),
         sync_um=r2 * delta * 1e3,
         segment=segment,
         pass_index=pass_index,
