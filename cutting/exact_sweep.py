@@ -40,11 +40,10 @@ def passages(motion: PassMotion, edge: CuttingEdge, probes: int = 65, chunk: int
     ``probes`` poses each (evaluated ``chunk`` passages at a time to bound memory)."""
     z0 = motion.setup.cutter.teeth
     half, m_first, m_last = passage_range(motion, edge)
-    dt = half / motion.omega0
-    step = 2 * math.pi / z0 / motion.omega0
     m = np.arange(m_first, m_last + 1)
-    tm = m * step
-    t0, t1 = tm - dt, tm + dt
+    pitch = 2 * math.pi / z0
+    t0 = np.asarray(motion.time_at_angle(m * pitch - half), dtype=float)
+    t1 = np.asarray(motion.time_at_angle(m * pitch + half), dtype=float)
     angle = 2 * np.pi * ((-m) % z0) / z0
     # a bounding ball per passage, from the outline simplified to 20 um (the margin covers that and the hull)
     coarse, _ = simplify_outline(edge.outline, 0.02)

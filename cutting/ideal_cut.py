@@ -42,13 +42,15 @@ def cut_ideal(
     progress: Callable[[int, int, int], None] | None = None,
     workers: int | None = None,
     slab: float = DEFAULT_SLAB,
+    motions: list | None = None,
 ) -> CutReport:
-    """Cut every pass with the ideal motion. ``progress(pass_index, done, total)`` reports tooth passages."""
+    """Cut every pass with the ideal motion, or along ``motions`` (e.g. a simulated machine's sampled passes,
+    cutting.sampled_motion). ``progress(pass_index, done, total)`` reports tooth passages."""
     t_start = time.perf_counter()
     edge = make_edge(setup, edge_kind)
-    motions = ideal_passes(setup)
+    motions = ideal_passes(setup) if motions is None else motions
     check_holder_side(motions, edge, setup.cutter.face_width, setup.holder_diameter_value)
-    tols = [finishing_tol if m.index == len(motions) - 1 else roughing_tol for m in motions]
+    tols = [finishing_tol if m.index == len(setup.passes) - 1 else roughing_tol for m in motions]
     run = cut_passes(setup.gear, edge, motions, tols, workers or default_workers(), slab, progress)
     result = run.result
     if result.gear.status() != mf.Error.NoError or result.gear.is_empty():

@@ -196,11 +196,13 @@ def engagement_half_angle(motion: PassMotion, edge: CuttingEdge) -> float:
 
 
 def passage_range(motion: PassMotion, edge: CuttingEdge) -> tuple[float, int, int]:
-    """Engagement half angle [rad] and the first and last cutter tooth pitch m whose passage (at t = m * pitch
-    time) can meet the blank during the pass."""
+    """Engagement half angle [rad] and the first and last cutter tooth pitch m whose passage (the cutter at the
+    angle m * pitch) can meet the blank during the pass."""
     half = engagement_half_angle(motion, edge)
     pitch = 2 * math.pi / motion.setup.cutter.teeth
-    return half, math.ceil(-half / pitch), math.floor((motion.omega0 * motion.duration + half) / pitch)
+    phi0 = motion.phi_start
+    phi1 = phi0 + motion.omega0 * motion.duration if not hasattr(motion, "phi") else float(motion.phi[-1])
+    return half, math.ceil((phi0 - half) / pitch), math.floor((phi1 + half) / pitch)
 
 
 def passage_count(motion: PassMotion, edge: CuttingEdge) -> int:
@@ -237,8 +239,7 @@ def cut(
     z0 = setup.cutter.teeth
     g = setup.gear
     half, m_first, m_last = passage_range(motion, edge)
-    dt = half / motion.omega0
-    step = 2 * math.pi / z0 / motion.omega0  # one tooth pitch of the cutter
+    pitch = 2 * math.pi / z0  # one tooth pitch of the cutter [rad]
     # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist)
     outline, outline_err = simplify_outline(edge.outline, tol / 2)
     sweep_tol = tol - outline_err
@@ -251,16 +252,17 @@ def cut(
         radial = (r > g.tip_radius - margin) if g.internal else (r < g.tip_radius + margin)
         return radial & (np.abs(w[..., 2]) <= b2 + margin)
 
-    outline = _balanced_outline(motion, outline, sweep_tol, near_blank, (m_first + m_last) // 2, dt, step)
+    outline = _balanced_outline(motion, outline, sweep_tol, near_blank, (m_first + m_last) // 2, half)
     pts = outline_points(outline)
 
     for count, m in enumerate(range(m_first, m_last + 1)):
         if progress is not None and count:
             progress(count, total)  # the passage before this one is done (cut, or found clear of the blank)
-        tm = m * step
+        tm = motion.time_at_angle(m * pitch)
         j = (-m) % z0  # the cutter tooth at the mesh at tm
         pose = tooth_pose(motion, m)
-        t0, t1 = max(tm - dt, 0.0), min(tm + dt, motion.duration)
+        t0 = max(motion.time_at_angle(m * pitch - half), 0.0)
+        t1 = min(motion.time_at_angle(m * pitch + half), motion.duration)
         if t1 <= t0:
             continue
         # keep the part of the window in which the tooth can meet the blank (radius and face), one sample wider
@@ -286,7 +288,7 @@ def cut(
         progress(total, total)
 
 
-def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near, m: int, dt: float, step: float):
+def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near, m: int, half: float):
     """The outline with its long sides split where that makes the tube cheapest.
 
     A facet's twist grows with its side's length times the time step, the chord error with the time step
@@ -294,12 +296,13 @@ def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near,
     fewest facets (sides x samples) is kept; a few sample_window calls per pass.
     """
     pose = tooth_pose(motion, m)
-    tm = m * step
+    pitch = 2 * math.pi / motion.setup.cutter.teeth
+    lo, hi = motion.time_at_angle(m * pitch - half), motion.time_at_angle(m * pitch + half)
     best, best_cost = outline, math.inf
     for longest in (math.inf, 2.0, 1.0, 0.5, 0.3, 0.2, 0.1):
         candidate = outline if longest == math.inf else split_sides(outline, longest)
         try:
-            times, _ = sample_window(pose, outline_points(candidate), tm - dt, tm + dt, tol, near)
+            times, _ = sample_window(pose, outline_points(candidate), lo, hi, tol, near)
         except RuntimeError:
             continue
         cost = len(candidate) * len(times)

@@ -39,6 +39,12 @@ class PassMotion:
     def cutter_angle(self, t: np.ndarray) -> np.ndarray:
         return self.omega0 * np.asarray(t, dtype=float)
 
+    phi_start = 0.0  # cutter angle at t = 0 [rad]
+
+    def time_at_angle(self, phi: np.ndarray | float) -> np.ndarray | float:
+        """When the cutter is at angle ``phi`` [rad]."""
+        return phi / self.omega0
+
     def carriage(self, t: np.ndarray) -> np.ndarray:
         return self.s_start + self.v_s * np.asarray(t, dtype=float)
 

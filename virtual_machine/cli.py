@@ -127,7 +127,12 @@ def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) 
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 @click.option("--edge", type=click.Choice(["conjugate", "involute"]), help="Override the job's cutter.edge.")
 @click.option("--workers", type=click.IntRange(1, 64), help="Worker processes (default: one per core, at most 8).")
-def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> None:
+@click.option(
+    "--trajectory",
+    type=click.Path(exists=True, dir_okay=False, path_type=Path),
+    help="Cut along a simulated pose trajectory (trajectory.npz of `skive simulate`) instead of the ideal motion.",
+)
+def cut(job: Path | None, out: Path, edge: str | None, workers: int | None, trajectory: Path | None) -> None:
     from tqdm import tqdm
 
     from cutting.ideal_cut import cut_ideal, default_workers, to_trimesh
@@ -151,7 +156,21 @@ def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> N
             bars[i].refresh()
 
     kind = edge or j.cutter_options["edge"]
-    report = cut_ideal(st, kind, j.process["sweep_error"], j.process["roughing_sweep_error"], progress, workers)
+    motions = None
+    if trajectory is not None:
+        from cutting.sampled_motion import sampled_passes
+        from virtual_machine.motion_io import load_trajectory
+
+        try:
+            motions = sampled_passes(st, load_trajectory(trajectory))
+        except (InputError, ValueError, OSError) as exc:
+            _fail(exc)
+    try:
+        report = cut_ideal(
+            st, kind, j.process["sweep_error"], j.process["roughing_sweep_error"], progress, workers, motions=motions
+        )
+    except InputError as exc:
+        _fail(exc)
     for b in bars.values():
         b.close()
     out.mkdir(parents=True, exist_ok=True)
@@ -162,6 +181,7 @@ def cut(job: Path | None, out: Path, edge: str | None, workers: int | None) -> N
     r = report.result
     result["cut"] = {
         "edge": kind,
+        "motion": "ideal" if trajectory is None else str(trajectory),
         "sweep_error_um": r.sweep_error * 1e3,
         "pass_sweep_error_um": [r.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(st.passes))],
         "sweeps": r.sweeps,
