@@ -150,18 +150,27 @@ class SkivingMachineParams:
         )
 
     def with_overrides(self, values: dict[str, Any]) -> SkivingMachineParams:
-        """Parameters changed by a flat dict; a drive stage's fields as ``"work_drive.backlash"``."""
-        top: dict[str, Any] = {}
-        stages: dict[str, dict[str, Any]] = {}
-        names = {f.name for f in fields(self)}
-        for key, value in values.items():
-            head, _, tail = key.partition(".")
-            if head not in names:
-                raise KeyError(f"unknown machine parameter {key!r}")
-            if tail:
-                stages.setdefault(head, {})[tail] = value
-            else:
-                top[head] = value
-        for head, changes in stages.items():
-            top[head] = replace(getattr(self, head), **changes)
-        return replace(self, **top)
+        return override(self, values)
+
+
+def override(params, values: dict[str, Any]):
+    """``params`` (a frozen dataclass of machine parameters) changed by a flat dict; a drive stage's fields as
+    ``"work_drive.backlash"``. Unknown names raise KeyError naming them."""
+    top: dict[str, Any] = {}
+    stages: dict[str, dict[str, Any]] = {}
+    names = {f.name for f in fields(params)}
+    for key, value in values.items():
+        head, _, tail = key.partition(".")
+        if head not in names:
+            raise KeyError(f"unknown machine parameter {key!r}")
+        if tail:
+            if not isinstance(getattr(params, head), DriveStage):
+                raise KeyError(f"{head!r} is not a drive stage: {key!r} names nothing")
+            if tail not in {f.name for f in fields(DriveStage)}:
+                raise KeyError(f"unknown drive stage field {key!r} (use ratio, stiffness, backlash, damping)")
+            stages.setdefault(head, {})[tail] = value
+        else:
+            top[head] = value
+    for head, changes in stages.items():
+        top[head] = replace(getattr(params, head), **changes)
+    return replace(params, **top)

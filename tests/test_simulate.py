@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -212,3 +213,26 @@ def test_simulate_cli_runs_a_thread_job(tmp_path) -> None:
     assert doc["lead_error_on_thread"]["peak_to_peak_um"] < 1.0  # the shipped lathe, no load
     assert abs(doc["travel_mm"]) == pytest.approx(30.0, abs=0.5)
     assert mujoco.MjModel.from_xml_path(str(tmp_path / "scene.xml")).nbody >= 4
+
+
+def test_job_overrides_machine_parameters(tmp_path) -> None:
+    """[machine.model] changes the MuJoCo machine (here the work drive's backlash, 1e-4 rad); unknown or invalid
+    parameters are reported with their key and the valid names."""
+    from cutting.errors import InputError
+    from virtual_machine.simulate import machine_params
+
+    text = tmp_path / "j.toml"
+    base = Path("assets/jobs/spur_external.toml").read_text()
+    text.write_text(base + "\n[machine.model.work_drive]\nbacklash = 1e-4\n")
+    params = machine_params(load_job(text))
+    assert (
+        params.work_drive.backlash == 1e-4
+        and params.work_drive.stiffness == SkivingMachineParams().work_drive.stiffness
+    )
+    m = build_spec(load_job(text).skiving, params, 10.0).compile()
+    assert np.diff(m.tendon_lengthspring[m.tendon("work_drive").id])[0] == pytest.approx(1e-4)
+    text.write_text(base + "\n[machine.model]\ncarriage_mas = 300.0\n[machine.model.work_drive]\nbacklash = -1.0\n")
+    with pytest.raises(InputError) as info:
+        load_job(text)
+    msg = str(info.value)
+    assert "machine.model.carriage_mas" in msg and "carriage_mass" in msg and "must be >= 0" in msg

@@ -186,6 +186,13 @@ MACHINE_KEYS: dict[str, Key] = {
     "change_gears": Key(list, None, "", "change-gear set (tooth counts; repeat a count for two gears)", _change_gears),
     "i0": Key(float, 1.0, "", "thread group: ratio motor M2 -> lead screw (seed 001 fig 2)", _positive),
     "i01": Key(float, 1.0, "", "thread group: product of the fixed ratios spindle -> lead screw (seed 001)", _positive),
+    "model": Key(
+        dict,
+        None,
+        "SI",
+        "physical parameters of the MuJoCo machine overriding the defaults of machine_models/parameters.py "
+        "(README table), e.g. [machine.model.work_drive] backlash = 1e-4",
+    ),
 }
 
 MEASUREMENT_KEYS: dict[str, Key] = {
@@ -213,6 +220,42 @@ def machine_constants(machine: dict[str, Any], structure: str) -> dict[str, Any]
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
 OPTIONAL_SECTIONS = {"measurement": MEASUREMENT_KEYS}
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
+
+
+def flatten_model(model: dict[str, Any] | None) -> dict[str, Any]:
+    """[machine.model] as flat keys: nested tables become dotted names ("work_drive.backlash")."""
+    out: dict[str, Any] = {}
+    for k, v in (model or {}).items():
+        if isinstance(v, dict):
+            out.update({f"{k}.{kk}": vv for kk, vv in flatten_model(v).items()})
+        else:
+            out[k] = v
+    return out
+
+
+def model_problems(model: dict[str, Any] | None, kind: str) -> list[Problem]:
+    """Every key of [machine.model] must name a parameter of the job's machine, with a valid value."""
+    if not model:
+        return []
+    from dataclasses import fields
+
+    from machine_models.parameters import SkivingMachineParams, override
+    from machine_models.thread_lathe import ThreadLatheParams
+
+    base = ThreadLatheParams() if kind == "thread" else SkivingMachineParams()
+    names = ", ".join(f.name for f in fields(base))
+    out = []
+    good = {}
+    for key, value in flatten_model(model).items():
+        try:
+            override(base, {key: value})
+            good[key] = value
+        except (KeyError, TypeError) as exc:
+            out.append(Problem(f"machine.model.{key}", value, str(exc.args[0]), f"valid parameters: {names}"))
+    params = override(base, good)
+    return out + [
+        Problem("machine.model", good, p, "see the machine parameter table in the README") for p in params.problems()
+    ]
 
 
 def _type_name(kind: type | tuple[type, ...]) -> str:
@@ -347,6 +390,7 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
     measurement = parse_section("measurement", data.get("measurement", {}), MEASUREMENT_KEYS, problems)
     machine = parsed["machine"]
+    problems += model_problems(machine.get("model"), "thread" if is_thread else "gear")
     if is_thread:
         if problems:
             raise InputError(problems, source)

@@ -15,11 +15,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from machine_models.parameters import SkivingMachineParams
+from machine_models.parameters import SkivingMachineParams, override
 from machine_models.skiving_machine import MM, build_spec
 from virtual_machine.chains import chain_ratios
 from virtual_machine.controllers import InductionMotor
-from virtual_machine.job import Job
+from virtual_machine.job import Job, flatten_model
 from virtual_machine.physics import AXES, MachinePhysics
 from virtual_machine.program import ProgramSettings, program
 from virtual_machine.setup_sheet import setup_sheet
@@ -89,6 +89,11 @@ class MotionRecord:
             avg = np.bincount(k, weights=e, minlength=bins)[count > 0] / count[count > 0]
             out[name] = {"peak_to_peak_um": float(np.ptp(avg)), "rms_um": float(np.sqrt(np.mean(avg**2)))}
         return out
+
+
+def machine_params(job: Job) -> SkivingMachineParams:
+    """The default machine with the job's [machine.model] overrides."""
+    return override(SkivingMachineParams(), flatten_model(job.machine.get("model")))
 
 
 def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, adaptive: bool | None = None):
@@ -190,7 +195,7 @@ def simulate(
     """Run the machine through the job's passes (no cutting). ``duration`` [s] stops early; ``disturbance(t)``
     is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes).
     ``timing``, if given, receives the seconds spent in the physics and in the controllers (benchmarks)."""
-    params = params or SkivingMachineParams()
+    params = params or machine_params(job)
     setup = job.skiving
     structure = job.machine["structure"]
     chains = chain_ratios(job) if structure != "mechatronic" else None

@@ -21,9 +21,10 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
+from machine_models.parameters import override
 from machine_models.skiving_machine import MM
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec, thread_layout
-from virtual_machine.job import Job
+from virtual_machine.job import Job, flatten_model
 from virtual_machine.physics import SimulationDivergedError
 from virtual_machine.setup_sheet import thread_sheet
 from virtual_machine.structures.thread_group import (
@@ -141,7 +142,7 @@ def simulate_thread(
     """Run-up and the first threading stroke of ``job``, until the tool leaves the thread (``duration`` [s]
     overrides that). ``disturbance(t)`` is an extra torque on the spindle [N m] (a load on the master).
     Raises :class:`SimulationDivergedError` when MuJoCo reports bad accelerations."""
-    params = params or ThreadLatheParams()
+    params = params or override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
     lay = thread_layout(job, params)
     model = build_thread_lathe_spec(job, params).compile()
     data = mujoco.MjData(model)
