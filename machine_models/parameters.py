@@ -95,9 +95,13 @@ class SkivingMachineParams:
     main_motor_slip: float = 0.03  # rated slip of the induction motor (fed by a frequency converter)
     #: M1 -> iv -> tool spindle (ratio from the sheet): belts and gears, 1.5e4 N m/rad at the spindle
     speed_chain: DriveStage = field(default_factory=lambda: DriveStage(1.0, 1.5e4, 0.0, 5.0))
-    #: B1 -> ix -> differential <- iy <- TV -> work spindle, referred to the work spindle: a long chain with a
-    #: dividing worm gear; 1.5e5 N m/rad and 40 arcsec total backlash (the seed names its torsional stiffness as
-    #: the accuracy limit of S1)
+    #: B1 -> 3 -> 4 -> ix -> 5 and TV -> 11 -> 13 -> iy -> 14: the change-gear guitars on their banjos, referred to
+    #: the guitar's output shaft (5 or 14): 2e4 N m/rad and 2 arcmin (change gears run with generous backlash)
+    ix_stage: DriveStage = field(default_factory=lambda: DriveStage(1.0, 2.0e4, 120 * ARCSEC, 2.0))
+    iy_stage: DriveStage = field(default_factory=lambda: DriveStage(1.0, 2.0e4, 120 * ARCSEC, 2.0))
+    guitar_shaft_inertia: float = 3.0e-3  # kg m^2: shaft 5 / 14 with its change gears
+    #: differential -> 6 -> 7 -> 8 -> work spindle 9, referred to the work spindle: the dividing worm gear;
+    #: 1.5e5 N m/rad and 40 arcsec (the seed names the chain's torsional stiffness as S1's accuracy limit)
     generating_chain: DriveStage = field(default_factory=lambda: DriveStage(1.0, 1.5e5, 40 * ARCSEC, 40.0))
     #: work spindle -> is -> TV, referred to the lead screw: 600 N m/rad, 0.1 deg backlash of the feed gears
     feed_chain: DriveStage = field(default_factory=lambda: DriveStage(1.0, 600.0, math.radians(0.1), 1.0))

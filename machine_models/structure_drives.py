@@ -1,11 +1,13 @@
 """The drives of each kinematic structure of seed 000, added to the common machine (bodies of skiving_machine).
 
 - ``mechatronic`` (S4, fig. 4): servo motors M1 -> B1, M2 -> B2, M3 -> TV, each through its stage.
-- ``mechanical`` (S1, fig. 1): the main motor M1 -> speed chain (iv) -> B1; the generating chain and the helix
-  chain lumped into one linear relation ``B2 = a B1 + b TV`` (ix and the differential with iy); the feed chain
-  ``TV = k B2`` (is) behind clutch 12; the setting-traverse motor M2 drives TV through clutch 15. (In the seed
-  the helix chain leaves the lead screw behind clutch 12; here B4 always follows TV, so a rapid return keeps
-  the helix phase, which the real machine gets by re-indexing.)
+- ``mechanical`` (S1, fig. 1): the main motor M1 -> speed chain (iv) -> B1; guitar ix from B1 to shaft 5 and
+  guitar iy from TV to shaft 14 (``shaft5``, ``shaft14``: hinges with the change gears' inertia), the differential
+  with the dividing chain to the work spindle ``B2 = g5 shaft5 + g14 shaft14`` (c1 iS, c2 iS), each stage with
+  its own stiffness and backlash; the feed chain ``TV = k B2`` (is) behind clutch 12; the setting-traverse motor
+  M2 drives TV through clutch 15. (In the seed the helix chain leaves the lead screw behind clutch 12; here B4
+  always follows TV, so a rapid return keeps the helix phase, which the real machine gets by re-indexing.) With
+  iy disengaged (spur gear) shaft 14 is held by the differential's self-locking worm.
 - ``hydraulic-differential`` (S2, fig. 2): M1 -> iv -> B1; stepping motors GShD1 (fed by GGI1 on B1) and GShD2
   (GGI2 on TV) drive the differential: ``B2 = g1 GShD1 + g2 GShD2``; GShD3 (GGI3 on B2, or the CNC's rapid
   pulses) drives the lead screw: ``TV = g3 GShD3``.
@@ -22,10 +24,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
+import mujoco
+
 from cutting.skiving import SkivingSetup
 from machine_models.drives import couple, couple_linear
 from machine_models.parameters import SkivingMachineParams
-from machine_models.parts import motor
+from machine_models.parts import GREY, inertial, motor, visual
 
 
 @dataclass(frozen=True)
@@ -33,8 +37,10 @@ class ChainRatios:
     """Signed, realised ratios of a structure's chains (rad per rad; TV in rad)."""
 
     speed: float = 1.0  # spindle driven by the main motor, per motor rad (iv c3)
-    generating: float = 0.0  # S1: B2 per B1 (c1 iS ix); S2: B2 per GShD1 rad (c1 iS); S3: B1 per GShD rad (c1)
-    helix: float = 0.0  # S1: B2 per TV rad (c2 iS iy); S2: B2 per GShD2 rad (c2 iS)
+    generating: float = 0.0  # S1: B2 per shaft-5 rad; S2: B2 per GShD1 rad (both c1 iS); S3: B1 per GShD rad (c1)
+    helix: float = 0.0  # S1: B2 per shaft-14 rad; S2: B2 per GShD2 rad (both c2 iS)
+    ix: float = 0.0  # S1: shaft 5 per B1 rad (the realised guitar ix)
+    iy: float = 0.0  # S1: shaft 14 per TV rad (the realised guitar iy; 0: disengaged)
     feed: float = 0.0  # S1, S3: TV per B2 rad (c4 is / t_TV); S2: TV per GShD3 rad (c4 / t_TV)
 
 
@@ -72,15 +78,25 @@ def mechanical(spec, bodies, setup: SkivingSetup, params: SkivingMachineParams, 
     _motor_body(spec, world, "M1", (-0.3, 0.3, 0.3), params.main_motor_inertia, 2.5 * params.main_motor_torque)
     _motor_body(spec, world, "M2", (0.35, 0.25, 0.38), params.traverse_motor_inertia, params.traverse_motor_torque)
     couple(spec, "speed_chain", "B1", "M1", replace(params.speed_chain, ratio=chains.speed))
+    for name, pos in (("shaft5", (-0.25, 0.2, -0.1)), ("shaft14", (-0.25, 0.3, -0.1))):
+        body = world.add_body(name=name, pos=list(pos))
+        inertial(body, 2.0, params.guitar_shaft_inertia)
+        body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
+        visual(body, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.04, 0.01), GREY)
+    couple(spec, "ix", "shaft5", "B1", replace(params.ix_stage, ratio=chains.ix))
+    if chains.iy:
+        couple(spec, "iy", "shaft14", "TV", replace(params.iy_stage, ratio=chains.iy))
+    else:  # spur gear: the iy guitar is out; the differential's worm holds shaft 14
+        couple_linear(spec, "iy", [("shaft14", 1.0)], replace(params.iy_stage, stiffness=None, backlash=0.0))
     couple_linear(
         spec,
         "generating_chain",
-        [("B2", 1.0), ("B1", -chains.generating), ("TV", -chains.helix)],
+        [("B2", 1.0), ("shaft5", -chains.generating), ("shaft14", -chains.helix)],
         params.generating_chain,
     )
     couple_linear(spec, "feed_chain", [("TV", 1.0), ("B2", -chains.feed)], params.feed_chain)  # clutch 12
     couple(spec, "traverse", "TV", "M2", params.feed_drive)  # clutch 15
-    return Drives(("M1", "M2"), frozenset({"B2"}), frozenset({"feed_chain", "traverse"}))
+    return Drives(("M1", "M2"), frozenset({"B2", "shaft5", "shaft14"}), frozenset({"feed_chain", "traverse"}))
 
 
 def _stepping_motor(spec, world, name: str, pos, params: SkivingMachineParams) -> None:

@@ -28,9 +28,11 @@ def chain_ratios(job: Job) -> ChainRatios:
     if structure == "mechanical":
         return ChainRatios(
             speed=speed,
-            generating=dir_work * m["c1"] * m["i_sigma"] * _realised(sheet, "ix"),
-            helix=sign_h * m["c2"] * m["i_sigma"] * abs(_realised(sheet, "iy")),
+            generating=dir_work * m["c1"] * m["i_sigma"],
+            helix=sign_h * m["c2"] * m["i_sigma"],
             feed=feed_dir * dir_work * m["c4"] * _realised(sheet, "is") / t,
+            ix=_realised(sheet, "ix"),
+            iy=abs(_realised(sheet, "iy")),
         )
     if structure == "hydraulic-differential":
         return ChainRatios(
