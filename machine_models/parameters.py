@@ -122,39 +122,49 @@ class SkivingMachineParams:
     integrator: str = "implicitfast"  # damping implicit; the stages' springs stay well below 1/(2 pi h)
 
     def problems(self) -> list[str]:
-        out: list[str] = []
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, DriveStage):
-                out += v.check(f.name)
-            elif isinstance(v, float) and not (v >= 0 and math.isfinite(v)):
-                out.append(f"{f.name} = {v}: must be a finite number >= 0")
-        for name in ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"):
-            if not getattr(self, name) > 0:
-                out.append(f"{name} = {getattr(self, name)}: must be > 0 (a body needs mass)")
-        if self.nut_stiffness is None and self.nut_backlash > 0:
-            out.append(f"nut_backlash = {self.nut_backlash}: a nut with backlash needs nut_stiffness")
+        out = common_problems(self, ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"))
         if not 0 <= self.counterbalance <= 1:
             out.append(f"counterbalance = {self.counterbalance}: must be between 0 and 1")
-        if not 0 < self.timestep <= 1e-3:
-            out.append(f"timestep = {self.timestep}: must be in (0, 1e-3] s")
-        if self.integrator not in ("implicitfast", "RK4", "Euler", "implicit"):
-            out.append(f"integrator = {self.integrator!r}: use 'implicitfast', 'RK4', 'Euler' or 'implicit'")
         return out
 
     def stiff(self) -> SkivingMachineParams:
         """The ideal machine: every stage rigid and free of backlash, no friction (for the proofs)."""
-        rigid = {
-            f.name: replace(getattr(self, f.name), stiffness=None, backlash=0.0)
-            for f in fields(self)
-            if isinstance(getattr(self, f.name), DriveStage)
-        }
-        return replace(
-            self, **rigid, nut_stiffness=None, nut_backlash=0.0, work_friction=0.0, tool_friction=0.0, ways_friction=0.0
-        )
+        return rigid(self, work_friction=0.0, tool_friction=0.0, ways_friction=0.0)
 
     def with_overrides(self, values: dict[str, Any]) -> SkivingMachineParams:
         return override(self, values)
+
+
+def common_problems(params, positive: tuple[str, ...]) -> list[str]:
+    """The checks every machine's parameters share: stages, non-negative finite numbers, the named positive
+    ones, a nut's backlash needing its stiffness, the time step and the integrator."""
+    out: list[str] = []
+    for f in fields(params):
+        v = getattr(params, f.name)
+        if isinstance(v, DriveStage):
+            out += v.check(f.name)
+        elif isinstance(v, float) and not (v >= 0 and math.isfinite(v)):
+            out.append(f"{f.name} = {v}: must be a finite number >= 0")
+    for name in positive:
+        if not getattr(params, name) > 0:
+            out.append(f"{name} = {getattr(params, name)}: must be > 0 (a body needs mass, a motor torque)")
+    if params.nut_stiffness is None and params.nut_backlash > 0:
+        out.append(f"nut_backlash = {params.nut_backlash}: a nut with backlash needs nut_stiffness")
+    if not 0 < params.timestep <= 1e-3:
+        out.append(f"timestep = {params.timestep}: must be in (0, 1e-3] s")
+    if params.integrator not in ("implicitfast", "RK4", "Euler", "implicit"):
+        out.append(f"integrator = {params.integrator!r}: use 'implicitfast', 'RK4', 'Euler' or 'implicit'")
+    return out
+
+
+def rigid(params, **also: Any):
+    """``params`` with every drive stage rigid and free of backlash, a rigid nut, and ``also`` (no friction)."""
+    stages = {
+        f.name: replace(getattr(params, f.name), stiffness=None, backlash=0.0)
+        for f in fields(params)
+        if isinstance(getattr(params, f.name), DriveStage)
+    }
+    return replace(params, **stages, nut_stiffness=None, nut_backlash=0.0, **also)
 
 
 def override(params, values: dict[str, Any]):

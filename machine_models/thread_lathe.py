@@ -28,13 +28,13 @@ Lengths are metres here; the job and the records use mm.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
 
 from machine_models.drives import couple
-from machine_models.parameters import ARCSEC, DriveStage
+from machine_models.parameters import ARCSEC, DriveStage, common_problems, rigid
 from machine_models.parts import (
     BLUE,
     DARK,
@@ -104,43 +104,24 @@ class ThreadLatheParams:
     integrator: str = "implicitfast"  # damping implicit; the stages' springs stay below omega h ~ 0.4
 
     def problems(self) -> list[str]:
-        out: list[str] = []
-        for f in fields(self):
-            v = getattr(self, f.name)
-            if isinstance(v, DriveStage):
-                out += v.check(f.name)
-            elif isinstance(v, float) and not (v >= 0 and math.isfinite(v)):
-                out.append(f"{f.name} = {v}: must be a finite number >= 0")
-        for name in ("spindle_inertia", "spindle_mass", "carriage_mass", "screw_inertia", "runup_time"):
-            if not getattr(self, name) > 0:
-                out.append(f"{name} = {getattr(self, name)}: must be > 0 (a body needs mass)")
-        for name in ("spindle_motor_inertia", "screw_motor_inertia", "spindle_motor_torque", "screw_motor_torque"):
-            if not getattr(self, name) > 0:
-                out.append(f"{name} = {getattr(self, name)}: must be > 0")
-        if self.nut_stiffness is None and self.nut_backlash > 0:
-            out.append(f"nut_backlash = {self.nut_backlash}: a nut with backlash needs nut_stiffness")
-        if not 0 < self.timestep <= 1e-3:
-            out.append(f"timestep = {self.timestep}: must be in (0, 1e-3] s")
-        if self.integrator not in ("implicitfast", "RK4", "Euler", "implicit"):
-            out.append(f"integrator = {self.integrator!r}: use 'implicitfast', 'RK4', 'Euler' or 'implicit'")
-        return out
+        return common_problems(
+            self,
+            (
+                "spindle_inertia",
+                "spindle_mass",
+                "carriage_mass",
+                "screw_inertia",
+                "runup_time",
+                "spindle_motor_inertia",
+                "screw_motor_inertia",
+                "spindle_motor_torque",
+                "screw_motor_torque",
+            ),
+        )
 
     def stiff(self) -> ThreadLatheParams:
         """The ideal lathe: every stage rigid and free of backlash, no friction (for the proofs)."""
-        rigid = {
-            f.name: replace(getattr(self, f.name), stiffness=None, backlash=0.0)
-            for f in fields(self)
-            if isinstance(getattr(self, f.name), DriveStage)
-        }
-        return replace(
-            self,
-            **rigid,
-            nut_stiffness=None,
-            nut_backlash=0.0,
-            spindle_friction=0.0,
-            screw_friction=0.0,
-            ways_friction=0.0,
-        )
+        return rigid(self, spindle_friction=0.0, screw_friction=0.0, ways_friction=0.0)
 
 
 @dataclass(frozen=True)

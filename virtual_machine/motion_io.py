@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from virtual_machine.physics import AXES
-from virtual_machine.simulate import SEGMENTS, MotionRecord, PassTrajectory
+from virtual_machine.simulate import SEGMENTS, MotionRecord, PassTrajectory, error_stats
 
 TRAJECTORY_FORMAT = "skive pose trajectory 1"
 
@@ -31,7 +31,7 @@ def summary(rec: MotionRecord, teeth: int | None = None) -> dict[str, Any]:
             {
                 "pass": p.index,
                 "stroke_seconds": float(p.t[-1]),
-                "sync_error_in_cut": _stats(e),
+                "sync_error_in_cut": error_stats(e),
                 "peak_torque_Nm": dict(
                     zip(rec.actuators, np.abs(rec.torque[stroke]).max(axis=0).round(3).tolist(), strict=True)
                 ),
@@ -39,20 +39,9 @@ def summary(rec: MotionRecord, teeth: int | None = None) -> dict[str, Any]:
         )
     return {
         "machine_seconds": float(rec.t[-1]),
-        "sync_error_in_cut": _stats(rec.sync_um[rec.cutting]),
+        "sync_error_in_cut": error_stats(rec.sync_um[rec.cutting]),
         "periodic_part": rec.periodic_part(teeth),
         "passes": passes,
-    }
-
-
-def _stats(e: np.ndarray) -> dict[str, float]:
-    if e.size == 0:
-        return {}
-    return {
-        "mean_um": float(e.mean()),
-        "rms_um": float(np.sqrt(np.mean(e**2))),
-        "rms_about_mean_um": float(e.std()),
-        "peak_to_peak_um": float(np.ptp(e)),
     }
 
 

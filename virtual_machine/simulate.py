@@ -30,6 +30,19 @@ from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4M
 SEGMENTS = ("runup", "settle", "infeed", "feed", "retract", "return")
 
 
+def error_stats(e: np.ndarray) -> dict[str, float]:
+    """Mean, RMS, RMS about the mean, peak-to-peak and largest magnitude of an error series [um] ({} if empty)."""
+    if e.size == 0:
+        return {}
+    return {
+        "mean_um": float(e.mean()),
+        "rms_um": float(np.sqrt(np.mean(e**2))),
+        "rms_about_mean_um": float(e.std()),
+        "peak_to_peak_um": float(e.max() - e.min()),
+        "max_abs_um": float(np.abs(e).max()),
+    }
+
+
 @dataclass
 class PassTrajectory:
     """Poses of the cutter frame in the blank frame during one feed stroke: t [s] from the stroke's start."""
@@ -59,16 +72,7 @@ class MotionRecord:
     def sync_stats(self, during: str = "cut") -> dict[str, float]:
         """Synchronisation error statistics over a segment kind, or "cut": while the cutter can touch the blank."""
         sel = self.cutting if during == "cut" else self.segment == SEGMENTS.index(during)
-        e = self.sync_um[sel]
-        if e.size == 0:
-            return {}
-        return {
-            "mean_um": float(e.mean()),
-            "rms_um": float(np.sqrt(np.mean(e**2))),
-            "rms_about_mean_um": float(e.std()),
-            "peak_to_peak_um": float(e.max() - e.min()),
-            "max_abs_um": float(np.abs(e).max()),
-        }
+        return error_stats(self.sync_um[sel])
 
     def periodic_part(self, teeth: int | None = None, bins: int = 64) -> dict[str, dict[str, float]]:
         """Synchronous averages of the sync error while cutting: per work revolution (shows as pitch and runout),

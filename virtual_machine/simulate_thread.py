@@ -27,6 +27,7 @@ from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_sp
 from virtual_machine.job import Job, flatten_model
 from virtual_machine.physics import SimulationDivergedError
 from virtual_machine.setup_sheet import thread_sheet
+from virtual_machine.simulate import error_stats
 from virtual_machine.structures.thread_group import (
     ThreadCnc,
     ThreadEqualCoordinates,
@@ -57,16 +58,7 @@ class ThreadRecord:
 
     def stats(self) -> dict[str, float]:
         """Lead error statistics while the tool is on the thread [um] (as MotionRecord.sync_stats)."""
-        e = self.lead_error_um[self.on_thread]
-        if e.size == 0:
-            return {}
-        return {
-            "mean_um": float(e.mean()),
-            "rms_um": float(np.sqrt(np.mean(e**2))),
-            "rms_about_mean_um": float(e.std()),
-            "peak_to_peak_um": float(e.max() - e.min()),
-            "max_abs_um": float(np.abs(e).max()),
-        }
+        return error_stats(self.lead_error_um[self.on_thread])
 
     def drift(self) -> tuple[float, float]:
         """The lead error's change along the thread from a straight-line fit against the carriage position [um],

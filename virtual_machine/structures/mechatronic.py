@@ -51,15 +51,30 @@ class S4Tuning:
     feed: AxisTuning = field(default_factory=lambda: AxisTuning(40.0, 60.0, peak_torque=20.0))
 
 
-class MechatronicS4:
-    """The wiring of fig. 4. ``dirs``: signs of B1, B2 (speed ratio) and B4 per feed pulse."""
+class _ServoAxes:
+    """What both S4 forms share: three servo axes read by encoders IP1..IP3 on B1, B2, TV, tachogenerators on
+    the motors, no clutches; converters fed pulse-train increments with their fractions (``_fine``)."""
 
     sensors = ("B1", "B2", "TV")  # angles the encoders IP1..IP3 read
     speeds = ("M1", "M2", "M3")  # tachogenerators
     actuators = ("M1", "M2", "M3")
+    _last: list[float]
 
     def clutches(self, cnc: CncState) -> dict[str, bool]:
         return {}
+
+    def _fine(self, block, slot: int) -> float:
+        """Pulses of ``block`` (a divider or rate multiplier) during this tick counted with their fractions (its
+        ``fine_position``): the pulse-to-analog converters integrate an evenly spaced train, not whole pulses per
+        tick."""
+        now = block.fine_position
+        step = now - self._last[slot]
+        self._last[slot] = now
+        return step
+
+
+class MechatronicS4(_ServoAxes):
+    """The wiring of fig. 4. ``dirs``: signs of B1, B2 (speed ratio) and B4 per feed pulse."""
 
     def __init__(
         self,
@@ -95,14 +110,6 @@ class MechatronicS4:
         self.screw_pulses = 0
         self._last = [0.0, 0.0, 0.0, 0.0]  # fine positions of dividers 6, 21, 7, 22 at the last tick
         self._b4_per_screw = 0.0 if ky is None else dir_b4 * ks / ky
-
-    def _fine(self, divider: FrequencyDivider, slot: int) -> float:
-        """Pulses of ``divider`` during this tick counted with their fractions (see ``fine_position``): the
-        pulse-to-analog converters integrate an evenly spaced train, not whole pulses per tick."""
-        now = divider.fine_position
-        step = now - self._last[slot]
-        self._last[slot] = now
-        return step
 
     def b4_for_screw(self, screw_pulses: int) -> int:
         """The B4 pulses that belong to a lead-screw pulse position (the CNC's return move keeps this relation)."""
@@ -154,7 +161,7 @@ class MechatronicS4:
         return t1, t2, t3
 
 
-class MechatronicS4MasterSlave:
+class MechatronicS4MasterSlave(_ServoAxes):
     """S4 in master-slave form (the tracking synchronisation of seed 000 fig. 2, realised electronically).
 
     Fv: the tool spindle is the master, run by generator 14 and divider 6 like the equal-coordinates form; the
@@ -164,13 +171,6 @@ class MechatronicS4MasterSlave:
     copies what its master really does, including the master's mechanical deviations (seed 001's point); the
     equal-coordinates form compares each axis with the generator only.
     """
-
-    sensors = ("B1", "B2", "TV")
-    speeds = ("M1", "M2", "M3")
-    actuators = ("M1", "M2", "M3")
-
-    def clutches(self, cnc: CncState) -> dict[str, bool]:
-        return {}
 
     def __init__(
         self,
@@ -223,12 +223,6 @@ class MechatronicS4MasterSlave:
 
     def b4_for_screw(self, screw_pulses: int) -> int:
         return self.b4_pulses
-
-    def _fine(self, block, slot: int) -> float:
-        now = block.fine_position
-        step = now - self._last[slot]
-        self._last[slot] = now
-        return step
 
     def tick(
         self, dt: float, cnc: CncState, angles: tuple[float, float, float], motor_speeds: tuple[float, float, float]
