@@ -64,19 +64,23 @@ def run(setup: SkivingSetup, kind: str, tol: float, passes: list[int], workers: 
         f"slab {slab} mm, {workers} workers, peak RSS {peak_rss_mib():.0f} MiB",
         flush=True,
     )
+    mesh.export("/tmp/bench_cut_gear.ply")  # kept, so a failed or changed measurement needs no new cut
     try:
         doc = measure_gear(check_mesh(mesh), setup.gear)
     except Exception as exc:  # keep the timing line; say why the gear could not be measured
-        mesh.export("/tmp/bench_cut_gear.ply")
         print(f"    not measured ({exc}); gear written to /tmp/bench_cut_gear.ply", flush=True)
         return
-    p, h, sp = doc["profile"], doc["helix"], doc["thickness"]["span"]
+    p, h, sp, balls = doc["profile"], doc["helix"], doc["thickness"]["span"], doc["thickness"]["over_balls"]
+    size = (
+        f"dW {(sp['W_k_mm'] - sp['W_k_nominal_mm']) * 1e3:+6.2f} um"
+        if sp.get("W_k_mm") is not None  # an internal gear has no span: its size over balls
+        else f"dM_dK {(balls['M_dK_mm'] - balls['M_dK_nominal_mm']) * 1e3:+6.2f} um"
+    )
     print(
         "    "
         f"f_Ha {max(abs(p[s]['f_Halpha']) for s in p):5.2f} f_fa {max(p[s]['f_falpha'] for s in p):5.2f} "
         f"f_Hb {max(abs(h[s]['f_Hbeta']) for s in h):5.2f} f_fb {max(h[s]['f_fbeta'] for s in h):5.2f} "
-        f"f_p {max(doc['pitch'][s]['f_p'] for s in doc['pitch']):5.2f} "
-        f"dW {(sp['W_k_mm'] - sp['W_k_nominal_mm']) * 1e3:+6.2f} um",
+        f"f_p {max(doc['pitch'][s]['f_p'] for s in doc['pitch']):5.2f} " + size,
         flush=True,
     )
 
