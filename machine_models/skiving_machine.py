@@ -93,6 +93,8 @@ def build_spec(
     spec.option.timestep = params.timestep
     spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{params.integrator.upper()}")
     spec.option.gravity = [0.0, 0.0, -9.81]
+    # no body touches another (the cut is the cutting engine's business): skip collision detection entirely
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     spec.visual.global_.offwidth = 1280
     world = spec.worldbody
     world.add_light(pos=[0, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])

@@ -219,6 +219,8 @@ def build_thread_lathe_spec(job, params: ThreadLatheParams | None = None) -> muj
     spec.option.timestep = params.timestep
     spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{params.integrator.upper()}")
     spec.option.gravity = [0.0, -9.81, 0.0]
+    # no body touches another (the cut is the cutting engine's business): skip collision detection entirely
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     spec.visual.global_.offwidth = 1280
     world = spec.worldbody
     world.add_light(pos=[0.3, 1.2, 0.4], dir=[-0.2, -1, -0.2], diffuse=[0.8, 0.8, 0.8])

@@ -273,3 +273,19 @@ def test_divider_quantisation_bounds_the_error_by_one_command_pulse() -> None:
         assert stats["peak_to_peak_um"] < 0.2 * pulse_um, stats
         pp[p] = stats["peak_to_peak_um"]
     assert 2.0 < pp[500] / pp[2000] < 8.0, pp  # the pulse is 4x larger
+
+
+def test_simulate_cli_overrides_the_structure(tmp_path) -> None:
+    import json
+
+    from click.testing import CliRunner
+
+    from virtual_machine.cli import main
+
+    args = ["simulate", "assets/jobs/spur_external.toml", "--duration", "0.7", "--out", str(tmp_path), "--json"]
+    res = CliRunner().invoke(main, [*args, "--structure", "mechanical"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.output)
+    assert doc["structure"] == "mechanical" and list(doc["passes"][0]["peak_torque_Nm"]) == ["M1", "M2"]
+    res = CliRunner().invoke(main, ["simulate", "assets/jobs/thread_m12.toml", "--structure", "hydraulic-shaft"])
+    assert res.exit_code == 2 and "hydraulic" in res.output

@@ -270,7 +270,22 @@ if __name__ == "__main__":
 @click.option("--duration", type=click.FloatRange(min=0.0, min_open=True), help="Stop after S seconds of machine time.")
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as JSON.")
-def simulate(job: Path | None, duration: float | None, out: Path, as_json: bool) -> None:
+@click.option("--structure", type=click.Choice(STRUCTURES), help="Override the job's machine.structure.")
+@click.option(
+    "--synchronization", type=click.Choice(["equal-coordinates", "master-slave"]), help="Override the scheme."
+)
+@click.option(
+    "--correction/--no-correction", default=None, help="Override machine.adaptive_correction (S4 and the thread group)."
+)
+def simulate(
+    job: Path | None,
+    duration: float | None,
+    out: Path,
+    as_json: bool,
+    structure: str | None,
+    synchronization: str | None,
+    correction: bool | None,
+) -> None:
     import time
 
     from tqdm import tqdm
@@ -284,6 +299,12 @@ def simulate(job: Path | None, duration: float | None, out: Path, as_json: bool)
         j = load_job(path)
     except (InputError, ValueError) as exc:
         _fail(exc)
+    overrides = {"structure": structure, "synchronization": synchronization, "adaptive_correction": correction}
+    overrides = {k: v for k, v in overrides.items() if v is not None}
+    if overrides:
+        import dataclasses
+
+        j = dataclasses.replace(j, machine={**j.machine, **overrides})
     if j.kind == "thread":
         _simulate_thread(j, path, duration, out, as_json)
         return
