@@ -106,12 +106,12 @@ def test_simulate_cli_writes_the_trajectory_and_the_record(tmp_path) -> None:
     from virtual_machine.cli import main
 
     out = tmp_path / "sim"
-    res = CliRunner().invoke(
-        main, ["simulate", "assets/jobs/spur_external.toml", "--duration", "1.2", "--out", str(out), "--json"]
-    )
+    args = ["simulate", "assets/jobs/spur_external.toml", "--duration", "1.2", "--out", str(out), "--json"]
+    res = CliRunner().invoke(main, [*args, "--rrd", str(tmp_path / "run.rrd")])
     assert res.exit_code == 0, res.output
     doc = json.loads(res.output)
     assert doc["machine_seconds"] == pytest.approx(1.2, abs=1e-3)
+    assert (tmp_path / "run.rrd").stat().st_size > 100_000 and doc["recording"].endswith("run.rrd")
     assert doc["passes"][0]["sync_error_in_cut"]["rms_um"] < 2.0  # 0.7 s of feed: the cut began after 1 mm
     for name in ("trajectory.npz", "motion.npz", "simulation.json", "sync_error.png", "machine.xml", "scene.xml"):
         assert (out / name).stat().st_size > 0

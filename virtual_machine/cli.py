@@ -277,6 +277,7 @@ if __name__ == "__main__":
 @click.option(
     "--correction/--no-correction", default=None, help="Override machine.adaptive_correction (S4 and the thread group)."
 )
+@click.option("--rrd", type=click.Path(dir_okay=False, path_type=Path), help="Also write a Rerun recording of the run.")
 def simulate(
     job: Path | None,
     duration: float | None,
@@ -285,6 +286,7 @@ def simulate(
     structure: str | None,
     synchronization: str | None,
     correction: bool | None,
+    rrd: Path | None,
 ) -> None:
     import time
 
@@ -341,6 +343,11 @@ def simulate(
         "wall_seconds": wall,
     }
     doc = motion_io.save(rec, out, meta, st.gear.teeth)
+    if rrd is not None:
+        from virtual_machine.recording import write_recording
+
+        write_recording(rrd, model_xml=rec.model_xml, motion=rec, setup=st, charts=[out / "sync_error.png"])
+        doc["recording"] = str(rrd)
     if as_json:
         click.echo(json.dumps(doc, indent=2))
         return

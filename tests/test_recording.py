@@ -1,0 +1,221 @@
+"""The Rerun recording of a run: written once from a short real simulation (0.8 s of spur_external), a real gear
+mesh with an imposed +3 um on one flank, its measurement and charts, two blank snapshots; read back with
+rerun.chunk.RrdReader."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from rerun.chunk import RrdReader
+
+from metrology.charts import write_charts
+from metrology.measure import measure_gear
+from metrology.reference_gear import reference_gear_mesh
+from metrology.sections import MeshData
+from virtual_machine.job import load_job
+from virtual_machine.recording import decimation, deviation_colors, write_recording
+from virtual_machine.simulate import simulate
+
+JOB = Path(__file__).resolve().parents[1] / "assets/jobs/spur_external.toml"
+DURATION, RATE = 0.8, 200.0
+EXCESS_MM = 3e-3  # imposed on the left flank of tooth 0
+
+
+def _deviation(value: float):
+    return lambda side, tooth, L, z: np.where((side == "left") & (np.asarray(tooth) == 0), value, 0.0)
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    """Simulate, build the meshes, measure, chart and write one recording."""
+    job = load_job(JOB)
+    motion = simulate(job, duration=DURATION)
+    gear = job.skiving.gear
+    cut = reference_gear_mesh(gear, _deviation(EXCESS_MM), flank_points=12)
+    perfect = reference_gear_mesh(gear, _deviation(0.0), flank_points=12)  # same topology, nothing imposed
+    out = tmp_path_factory.mktemp("recording")
+    measurement = measure_gear(MeshData(cut.vertices, cut.faces), gear)
+    charts = write_charts(out / "charts", measurement)
+    snapshots = [
+        (0.2, *(lambda m: (m.vertices, m.faces))(trimesh.creation.cylinder(radius=42.0, height=20.0))),
+        (0.6, *(lambda m: (m.vertices, m.faces))(trimesh.creation.cylinder(radius=40.0, height=20.0))),
+    ]
+    force = np.column_stack([np.sin(motion.t), np.cos(motion.t)])
+    path = write_recording(
+        out / "run.rrd",
+        model_xml=motion.model_xml,
+        motion=motion,
+        setup=job.skiving,
+        snapshots=snapshots,
+        gear_mesh=(cut.vertices, cut.faces),
+        measurement=measurement,
+        charts=charts,
+        series={"cutting_force": (motion.t, force)},
+        rate_hz=RATE,
+    )
+    return {"job": job, "motion": motion, "path": path, "cut": cut, "perfect": perfect}
+
+
+def chunks(path: Path, entity: str, static: bool | None = None):
+    return RrdReader(path).stream().filter(content=entity, is_static=static).to_chunks()
+
+
+def column(entity_chunks, name: str) -> list:
+    """One value per row (a list of instances for a component)."""
+    return [v for c in entity_chunks for v in c.to_record_batch().column(name).to_pylist()]
+
+
+def instances(entity_chunks, name: str) -> list:
+    """The instances of a component over all rows."""
+    return [v for row in column(entity_chunks, name) for v in row]
+
+
+def rows(path: Path, entity: str) -> int:
+    return sum(c.num_rows for c in chunks(path, entity, static=False))
+
+
+def test_entities_and_timeline(run):
+    all_chunks = RrdReader(run["path"]).stream().to_chunks()
+    entities = {c.entity_path for c in all_chunks}
+    expected = {
+        "/machine/work_spindle",
+        "/machine/tool_spindle",
+        "/machine/carriage",
+        "/machine/radial_slide",
+        "/machine/work_spindle/blank_frame",
+        "/machine/work_spindle/blank_frame/blank",
+        "/signals/sync_error",
+        "/signals/torque",
+        "/signals/axes/spindles",
+        "/signals/axes/slides",
+        "/signals/program/segment",
+        "/signals/program/events",
+        "/signals/extra/cutting_force",
+        "/gear/finished",
+        "/measurement/summary",
+        "/measurement/profile",
+        "/measurement/helix",
+        "/measurement/pitch",
+        "/measurement/flank_deviation",
+    }
+    assert run["motion"].passes, "the 0.8 s run reaches the first feed stroke"
+    expected.add("/gear/cutter_path/pass_0")
+    assert expected <= entities
+    assert any(e.startswith("/machine/tool_spindle/") for e in entities)  # the cutter's geoms
+    timelines = {t for c in all_chunks for t in c.timeline_names}
+    assert timelines == {"sim_time"}  # no wall clock
+    reader = RrdReader(run["path"])
+    (blueprint,) = reader.blueprints()
+    views = {c.entity_path for c in reader.stream(store=blueprint).to_chunks() if c.entity_path.count("/") == 2}
+    # 3D machine and gear; sync, torques, spindles, slides, program, 1 extra; 3 charts, 2 documents, events
+    assert sum(v.startswith("/view/") for v in views) == 2 + 6 + 6
+
+
+def test_row_counts(run):
+    motion, path = run["motion"], run["path"]
+    n = len(motion.t)
+    assert n == 3200
+    frames = len(decimation(motion.t, RATE))
+    assert frames == round(DURATION * RATE) == 160
+    for body in ("work_spindle", "tool_spindle", "carriage", "lead_screw"):
+        assert rows(path, f"/machine/{body}") == frames
+    for entity in ("/signals/sync_error", "/signals/torque", "/signals/axes/slides", "/signals/extra/cutting_force"):
+        assert rows(path, entity) == n
+    torque = column(chunks(path, "/signals/torque", static=False), "Scalars:scalars")  # 3 instances per row
+    assert np.allclose(np.array(torque), motion.torque)
+    slides = column(chunks(path, "/signals/axes/slides", static=False), "Scalars:scalars")
+    assert np.allclose(np.array(slides), motion.q[:, 2:4])  # P3, X [mm]
+    sync = instances(chunks(path, "/signals/sync_error", static=False), "Scalars:scalars")
+    assert np.allclose(np.ravel(sync), motion.sync_um)
+    events = instances(chunks(path, "/signals/program/events", static=False), "TextLog:text")
+    assert events[0] == "runup" and "feed, pass 0" in events
+
+
+def test_body_poses_follow_the_axes(run):
+    """Transforms are MuJoCo's kinematics of the recorded axes, in mm: B2 turns the table about z, P3 lifts the
+    carriage, X moves the radial slide."""
+    motion, path = run["motion"], run["path"]
+    q = motion.q[decimation(motion.t, RATE)]
+    work = chunks(path, "/machine/work_spindle", static=False)
+    quat = np.array(instances(work, "Transform3D:quaternion"))
+    b2 = 2 * np.arctan2(quat[:, 2], quat[:, 3])
+    assert np.allclose(np.angle(np.exp(1j * (b2 - q[:, 1]))), 0.0, atol=1e-6)  # Rerun stores float32
+    assert np.allclose(quat[:, :2], 0.0, atol=1e-7)
+    carriage = np.array(instances(chunks(path, "/machine/carriage", static=False), "Transform3D:translation"))
+    assert np.allclose(carriage[:, 2], q[:, 2], atol=1e-4)
+    radial = np.array(instances(chunks(path, "/machine/radial_slide", static=False), "Transform3D:translation"))
+    assert np.allclose(radial[:, 0], q[:, 3], atol=1e-4)
+
+
+def test_snapshots_and_cutter_path(run):
+    path, motion = run["path"], run["motion"]
+    snaps = chunks(path, "/machine/work_spindle/blank_frame/blank", static=False)
+    assert sum(c.num_rows for c in snaps) == 2
+    times = column(snaps, "sim_time")
+    assert [t.total_seconds() for t in times] == [0.2, 0.6]
+    cleared = column(chunks(path, "/machine/work_spindle/blank_model", static=False), "sim_time")
+    assert sorted(t.total_seconds() for t in cleared) == [0.0, 0.2]  # model blank shown until the first snapshot
+    strip = np.array(instances(chunks(path, "/gear/cutter_path/pass_0", static=True), "LineStrips3D:strips")[0])
+    first = motion.passes[0]
+    assert 10 < len(strip) < len(first.trans)  # decimated
+    assert np.allclose(np.hypot(strip[:, 0], strip[:, 1]), np.hypot(first.trans[0, 0], first.trans[0, 1]), atol=1e-3)
+    assert np.allclose(strip[[0, -1]], first.trans[[0, -1]], atol=1e-4)
+
+
+def _rgba(packed: list[int]) -> np.ndarray:
+    p = np.array(packed, dtype=np.uint32)
+    return np.stack([(p >> 24) & 255, (p >> 16) & 255, (p >> 8) & 255, p & 255], -1).astype(int)
+
+
+def test_finished_gear_colours(run):
+    cut, perfect = run["cut"], run["perfect"]
+    rgba = _rgba(instances(chunks(run["path"], "/gear/finished", static=True), "Mesh3D:vertex_colors"))
+    assert rgba.shape == (len(cut.vertices), 4)
+    grey = np.all(rgba[:, :3] == 128, axis=1)
+    moved = np.linalg.norm(cut.vertices - perfect.vertices, axis=1) > 1e-6
+    red = moved & ~grey
+    assert red.sum() >= 100
+    expected = deviation_colors(np.array([EXCESS_MM * 1e3]))[0]  # (255, 102, 102): 3/5 of the way to red
+    assert np.all(np.abs(rgba[red] - expected) <= 1)
+    flank = ~moved & ~grey
+    assert flank.sum() > 5000
+    assert np.all(rgba[flank, :3] >= 252)  # zero deviation: white
+    r = np.hypot(cut.vertices[:, 0], cut.vertices[:, 1])
+    gear = run["job"].skiving.gear
+    assert np.all(grey[np.abs(r - gear.tip_radius) < 1e-6])  # tip
+    assert np.all(grey[np.abs(cut.vertices[:, 2]) > gear.face_width / 2 - 1e-6])  # end faces
+    text = instances(chunks(run["path"], "/measurement/flank_deviation"), "TextDocument:text")[0]
+    assert "+3.00" in text
+
+
+def test_measurement_documents(run):
+    summary = instances(chunks(run["path"], "/measurement/summary"), "TextDocument:text")[0]
+    assert "f_falpha" in summary and "class" in summary
+    blob = instances(chunks(run["path"], "/measurement/profile"), "EncodedImage:blob")[0]
+    assert bytes(blob[:8]) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bad_input_is_a_value_error(run, tmp_path):
+    motion, job = run["motion"], run["job"]
+    kw = {"motion": motion, "setup": job.skiving}
+    bare = "<mujoco><worldbody><body name='other'><joint name='B1'/><geom size='0.1'/></body></worldbody></mujoco>"
+    with pytest.raises(ValueError, match="work_spindle"):
+        write_recording(tmp_path / "a.rrd", model_xml=bare, **kw)
+    with pytest.raises(ValueError, match="does not compile"):
+        write_recording(tmp_path / "b.rrd", model_xml="<mujoco><nonsense/>", **kw)
+    short = dataclasses.replace(motion, sync_um=motion.sync_um[:-1])
+    with pytest.raises(ValueError, match=r"motion\.sync_um"):
+        write_recording(tmp_path / "c.rrd", model_xml=motion.model_xml, motion=short, setup=job.skiving)
+    with pytest.raises(ValueError, match="series"):
+        write_recording(tmp_path / "d.rrd", model_xml=motion.model_xml, series={"f": (motion.t, motion.t[:5])}, **kw)
+    bad_mesh = (np.zeros((3, 3)), np.array([[0, 1, 3]]))
+    with pytest.raises(ValueError, match="gear_mesh"):
+        write_recording(tmp_path / "e.rrd", model_xml=motion.model_xml, gear_mesh=bad_mesh, **kw)
+    with pytest.raises(ValueError, match="rate_hz"):
+        write_recording(tmp_path / "f.rrd", model_xml=motion.model_xml, rate_hz=math.nan, **kw)
+    assert not list(tmp_path.glob("*.rrd"))

@@ -1,0 +1,582 @@
+"""One Rerun recording (.rrd) of a simulated run: the machine moving, the blank as it is cut, the cutter path,
+the signals, the measurement and the finished gear coloured by its flank deviation.
+
+Entities (lengths in mm everywhere, timeline ``sim_time`` = simulated seconds):
+
+- ``/machine/<body>``: every body of the MJCF, its pose over time from MuJoCo's forward kinematics of the
+  recorded axes (``Transform3D``, decimated to ``rate_hz``); ``/machine/<body>/<geom>``: its visual geoms (static,
+  in the body frame); ``/machine/<blank body>/blank_frame/blank``: the blank snapshots (``Mesh3D`` at their times);
+- ``/gear/cutter_path/pass_<i>``: the cutter centre in the blank frame per feed stroke; ``/gear/finished``: the
+  finished gear coloured by deviation (blue -limit, white 0, red +limit, grey off the flanks);
+- ``/signals/axes/spindles`` (B1, B2, TV [rad]), ``/signals/axes/slides`` (P3, X [mm]), ``/signals/sync_error``,
+  ``/signals/torque``, ``/signals/program/{segment,cutting,events}``, ``/signals/extra/<name>``: time series at
+  the record's full rate (``send_columns``);
+- ``/measurement/<chart stem>`` (PNG), ``/measurement/summary`` (ISO 1328 class table),
+  ``/measurement/flank_deviation`` (range of the colour map's data).
+
+The file carries a default blueprint and no wall clock (no ``log_time``, no recording start time).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import mujoco
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from cutting.flank import SIDES, base_tangent_deviation
+from cutting.gear import Gear
+from virtual_machine.physics import AXES
+from virtual_machine.simulate import SEGMENTS, MotionRecord, PassTrajectory
+
+if TYPE_CHECKING:
+    from cutting.skiving import SkivingSetup
+
+TIMELINE = "sim_time"
+MACHINE, GEAR, SIGNALS, MEASUREMENT = "/machine", "/gear", "/signals", "/measurement"
+BLANK_SITE = "blank_frame"
+REQUIRED_BODIES = ("work_spindle", "tool_spindle")
+LINEAR_AXES = ("P3", "X")  # recorded in mm, metres in the model
+AXIS_GROUPS = {"spindles": ("B1", "B2", "TV"), "slides": LINEAR_AXES}  # one entity per unit (rad, mm)
+M_TO_MM = 1e3
+GREY = (128, 128, 128, 255)
+PASS_COLOURS = ((230, 120, 20), (40, 120, 220), (40, 170, 80), (200, 40, 160), (120, 120, 120))
+
+Mesh = tuple[np.ndarray, np.ndarray]
+Snapshot = tuple[float, np.ndarray, np.ndarray]
+
+
+def write_recording(
+    path: str | Path,
+    *,
+    model_xml: str,
+    motion: MotionRecord,
+    setup: SkivingSetup | None,
+    snapshots: Sequence[Snapshot] = (),
+    gear_mesh: Mesh | None = None,
+    measurement: Mapping[str, Any] | None = None,
+    charts: Sequence[str | Path] = (),
+    series: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    rate_hz: float = 200.0,
+    recording_id: str = "skive",
+) -> Path:
+    """Write one .rrd file of the run with its default blueprint; returns the path.
+
+    Parameters
+    ----------
+    model_xml: the MJCF the run used (``motion.model_xml``), lengths in metres
+    motion: the simulation record (4 kHz ticks)
+    setup: the job's :class:`cutting.skiving.SkivingSetup` (its gear colours ``gear_mesh``), or None
+    snapshots: (time [s], vertices (n, 3) mm, triangles (m, 3)) of the blank in the blank frame
+    gear_mesh: (vertices mm, triangles) of the finished gear in the blank frame (z = 0 mid face)
+    measurement: the dict of :func:`metrology.measure.measure_gear` (or its JSON form)
+    charts: PNG files (e.g. from :func:`metrology.charts.write_charts`)
+    series: extra time series, name -> (t [s], values (n,) or (n, k))
+    rate_hz: rate of the body poses [Hz] (the record is decimated to it)
+    recording_id: the recording's id and name
+
+    Raises
+    ------
+    ValueError: the model lacks a body, joint or site named above, or any array has the wrong shape or length.
+    """
+    model = compile_model(model_xml)
+    series = dict(series or {})
+    _check_inputs(model, motion, snapshots, gear_mesh, series, charts, rate_hz)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rec = rr.RecordingStream("skive", recording_id=recording_id, send_properties=False)
+    blueprint = recording_blueprint(series, [Path(c).stem for c in charts])
+    rec.save(path, default_blueprint=blueprint)
+    rr.set_log_time_enabled(False, recording=rec)
+    rec.send_recording_name(recording_id)
+    try:
+        first_snapshot = min((float(s[0]) for s in snapshots), default=None)
+        log_machine(rec, model, motion, rate_hz, first_snapshot)
+        log_snapshots(rec, model, snapshots)
+        log_cutter_paths(rec, motion.passes)
+        log_signals(rec, motion, series)
+        log_measurement(rec, measurement, charts)
+        if gear_mesh is not None and setup is not None:
+            log_finished_gear(rec, setup.gear, gear_mesh)
+    finally:
+        rec.flush()
+        rec.disconnect()
+    return path
+
+
+# ---- input checks --------------------------------------------------------------------------------------
+def compile_model(model_xml: str) -> mujoco.MjModel:
+    """The MuJoCo model of ``model_xml``, checked for the bodies, joints and site the recording needs."""
+    try:
+        model = mujoco.MjModel.from_xml_string(model_xml)
+    except Exception as exc:  # mujoco raises ValueError or its own FatalError
+        raise ValueError(f"model_xml does not compile: {exc}") from exc
+    bodies = {model.body(b).name for b in range(model.nbody)}
+    joints = {model.joint(j).name for j in range(model.njnt)}
+    sites = {model.site(s).name for s in range(model.nsite)}
+    missing = [f"body {b!r}" for b in REQUIRED_BODIES if b not in bodies]
+    missing += [f"joint {j!r}" for j in AXES if j not in joints]
+    missing += [f"site {BLANK_SITE!r}"] if BLANK_SITE not in sites else []
+    if missing:
+        raise ValueError(f"model_xml is not a skiving machine: it has no {', '.join(missing)}")
+    return model
+
+
+def _check_inputs(
+    model: mujoco.MjModel,
+    motion: MotionRecord,
+    snapshots: Sequence[Snapshot],
+    gear_mesh: Mesh | None,
+    series: Mapping[str, tuple[np.ndarray, np.ndarray]],
+    charts: Sequence[str | Path],
+    rate_hz: float,
+) -> None:
+    """Raise ValueError naming the first input of the wrong shape, length or value."""
+    if not (rate_hz > 0 and math.isfinite(rate_hz)):
+        raise ValueError(f"rate_hz must be a positive number, got {rate_hz!r}")
+    n = len(motion.t)
+    if n == 0:
+        raise ValueError("motion is empty (no ticks recorded)")
+    if np.any(np.diff(motion.t) <= 0):
+        raise ValueError("motion.t must be strictly increasing")
+    shapes = {
+        "motion.q": (np.shape(motion.q), (n, len(AXES))),
+        "motion.torque": (np.shape(motion.torque), (n, len(motion.actuators))),
+        "motion.sync_um": (np.shape(motion.sync_um), (n,)),
+        "motion.segment": (np.shape(motion.segment), (n,)),
+        "motion.pass_index": (np.shape(motion.pass_index), (n,)),
+        "motion.cutting": (np.shape(motion.cutting), (n,)),
+    }
+    for name, (got, want) in shapes.items():
+        if tuple(got) != want:
+            raise ValueError(f"{name} has shape {tuple(got)}, expected {want} (len(motion.t) = {n})")
+    for k, (time, vertices, triangles) in enumerate(snapshots):
+        if not math.isfinite(float(time)):
+            raise ValueError(f"snapshots[{k}]: time {time!r} is not finite")
+        _check_mesh(f"snapshots[{k}]", vertices, triangles)
+    if gear_mesh is not None:
+        _check_mesh("gear_mesh", *gear_mesh)
+    for name, (t, values) in series.items():
+        if np.ndim(t) != 1 or np.ndim(values) not in (1, 2) or len(values) != len(t):
+            raise ValueError(
+                f"series[{name!r}]: t must be 1-D and values (n,) or (n, k) of the same length, "
+                f"got {np.shape(t)} and {np.shape(values)}"
+            )
+    for chart in charts:
+        if not Path(chart).is_file():
+            raise ValueError(f"chart {str(chart)!r} does not exist")
+
+
+def _check_mesh(name: str, vertices: np.ndarray, triangles: np.ndarray) -> None:
+    v, f = np.asarray(vertices), np.asarray(triangles)
+    if v.ndim != 2 or v.shape[1] != 3 or f.ndim != 2 or f.shape[1] != 3:
+        raise ValueError(f"{name}: vertices must be (n, 3) and triangles (m, 3), got {v.shape} and {f.shape}")
+    if f.size and (f.min() < 0 or f.max() >= len(v)):
+        raise ValueError(f"{name}: triangle indices outside 0..{len(v) - 1}")
+
+
+# ---- 1. the machine --------------------------------------------------------------------------------------
+def _part(name: str) -> str:
+    """An entity path part from a MuJoCo name."""
+    return re.sub(r"[^A-Za-z0-9_\-]", "_", name) or "_"
+
+
+def body_path(model: mujoco.MjModel, body: int) -> str:
+    """Entity path of a body: ``/machine/<name>`` (``body_<id>`` if unnamed)."""
+    return f"{MACHINE}/{_part(model.body(body).name or f'body_{body}')}"
+
+
+def _xyzw(wxyz: np.ndarray) -> np.ndarray:
+    """MuJoCo's (w, x, y, z) quaternions as Rerun's (x, y, z, w)."""
+    return np.asarray(wxyz)[..., [1, 2, 3, 0]]
+
+
+def _is_blank(model: mujoco.MjModel, geom: int) -> bool:
+    """The blank cylinder: a cylinder of the blank site's body centred on the site."""
+    site = model.site(BLANK_SITE).id
+    return (
+        model.geom_type[geom] == mujoco.mjtGeom.mjGEOM_CYLINDER
+        and model.geom_bodyid[geom] == model.site_bodyid[site]
+        and np.allclose(model.geom_pos[geom], model.site_pos[site], atol=1e-9)
+    )
+
+
+def geom_archetype(model: mujoco.MjModel, geom: int) -> Any | None:
+    """One visual geom as a Rerun primitive in its body's frame [mm]; None for types not drawn (plane, mesh...)."""
+    kind, size = model.geom_type[geom], model.geom_size[geom] * M_TO_MM
+    centre, quat = model.geom_pos[geom] * M_TO_MM, _xyzw(model.geom_quat[geom])
+    colour = np.round(np.clip(model.geom_rgba[geom], 0, 1) * 255).astype(np.uint8)
+    solid = rr.components.FillMode.Solid
+    g = mujoco.mjtGeom
+    if kind == g.mjGEOM_BOX:
+        return rr.Boxes3D(half_sizes=[size], centers=[centre], quaternions=[quat], colors=[colour], fill_mode=solid)
+    if kind == g.mjGEOM_CYLINDER:
+        return rr.Cylinders3D(
+            lengths=[2 * size[1]],
+            radii=[size[0]],
+            centers=[centre],
+            quaternions=[quat],
+            colors=[colour],
+            fill_mode=solid,
+        )
+    if kind == g.mjGEOM_CAPSULE:  # Rerun's capsule starts at its translation, MuJoCo's is centred
+        rot = np.array(model.geom_quat[geom], dtype=float)
+        mat = np.zeros(9)
+        mujoco.mju_quat2Mat(mat, rot)
+        start = centre - mat.reshape(3, 3) @ np.array([0.0, 0.0, size[1]])
+        return rr.Capsules3D(
+            lengths=[2 * size[1]], radii=[size[0]], translations=[start], quaternions=[quat], colors=[colour]
+        )
+    if kind in (g.mjGEOM_SPHERE, g.mjGEOM_ELLIPSOID):
+        half = [size[0]] * 3 if kind == g.mjGEOM_SPHERE else size
+        return rr.Ellipsoids3D(
+            half_sizes=[half], centers=[centre], quaternions=[quat], colors=[colour], fill_mode=solid
+        )
+    return None
+
+
+def machine_frames(model: mujoco.MjModel, motion: MotionRecord, rate_hz: float) -> tuple[np.ndarray, ...]:
+    """Record indices at ``rate_hz`` and the body poses there by MuJoCo forward kinematics.
+
+    The axes B1, B2, P3, X, TV come from ``motion.q`` (P3, X in mm -> m); every other joint (the motors) stays at
+    the ``home`` keyframe (``qpos0`` without one). Returns (indices, positions (k, nbody, 3) mm,
+    quaternions (k, nbody, 4) x y z w)."""
+    index = decimation(motion.t, rate_hz)
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.key_qpos[0] if model.nkey else model.qpos0
+    adr = [model.joint(a).qposadr[0] for a in AXES]
+    scale = np.array([1 / M_TO_MM if a in LINEAR_AXES else 1.0 for a in AXES])
+    pos = np.empty((len(index), model.nbody, 3))
+    quat = np.empty((len(index), model.nbody, 4))
+    for k, i in enumerate(index):
+        data.qpos[adr] = motion.q[i] * scale
+        mujoco.mj_kinematics(model, data)
+        pos[k], quat[k] = data.xpos * M_TO_MM, _xyzw(data.xquat)
+    return index, pos, quat
+
+
+def decimation(t: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Indices of every ``round(1 / (rate_hz dt))``-th sample (dt: the median step of ``t``), from the first."""
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0 / rate_hz
+    step = max(1, round(1.0 / (rate_hz * dt)))
+    return np.arange(0, len(t), step)
+
+
+def _log_blank_model(rec: rr.RecordingStream, entity: str, archetype: Any, hide_at: float | None) -> None:
+    """The model's blank cylinder: static without snapshots, else shown from t = 0 until ``hide_at``."""
+    if hide_at is None:
+        rec.log(entity, archetype, static=True)
+    elif hide_at > 0:
+        rec.set_time(TIMELINE, duration=0.0)
+        rec.log(entity, archetype)
+        rec.set_time(TIMELINE, duration=hide_at)
+        rec.log(entity, rr.Clear(recursive=False))
+        rec.reset_time()
+
+
+def log_machine(
+    rec: rr.RecordingStream, model: mujoco.MjModel, motion: MotionRecord, rate_hz: float, hide_blank_at: float | None
+) -> None:
+    """Part 1: the bodies' visual geoms (static, body frame) and their poses over time (Transform3D at rate_hz).
+
+    With snapshots of the cut blank the model's blank cylinder is shown from t = 0 until the first snapshot."""
+    rec.log(MACHINE, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    for geom in range(model.ngeom):
+        archetype = geom_archetype(model, geom)
+        if archetype is None:
+            continue
+        body = body_path(model, model.geom_bodyid[geom])
+        if _is_blank(model, geom):
+            _log_blank_model(rec, f"{body}/blank_model", archetype, hide_blank_at)
+        else:
+            rec.log(f"{body}/{_part(model.geom(geom).name or f'geom_{geom}')}", archetype, static=True)
+    index, pos, quat = machine_frames(model, motion, rate_hz)
+    times = [rr.TimeColumn(TIMELINE, duration=motion.t[index])]
+    for body in range(1, model.nbody):
+        rec.send_columns(
+            body_path(model, body),
+            indexes=times,
+            columns=rr.Transform3D.columns(translation=pos[:, body], quaternion=quat[:, body]),
+        )
+
+
+# ---- 2. the blank as it is cut ---------------------------------------------------------------------------
+def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals (zero for unused vertices)."""
+    v, f = np.asarray(vertices, dtype=float), np.asarray(triangles, dtype=np.int64)
+    face = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    n = np.stack([np.bincount(f.ravel(), np.repeat(face[:, c], 3), minlength=len(v)) for c in range(3)], -1)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def blank_frame_path(model: mujoco.MjModel) -> str:
+    """Entity path of the blank frame: a child of the body that carries site ``blank_frame``."""
+    return f"{body_path(model, model.site_bodyid[model.site(BLANK_SITE).id])}/{BLANK_SITE}"
+
+
+def log_snapshots(rec: rr.RecordingStream, model: mujoco.MjModel, snapshots: Sequence[Snapshot]) -> None:
+    """Part 2: the blank frame (static, relative to its body) and the blank meshes at their times."""
+    site = model.site(BLANK_SITE).id
+    frame = blank_frame_path(model)
+    rec.log(
+        frame,
+        rr.Transform3D(translation=model.site_pos[site] * M_TO_MM, quaternion=_xyzw(model.site_quat[site])),
+        static=True,
+    )
+    for time, vertices, triangles in sorted(snapshots, key=lambda s: float(s[0])):
+        rec.set_time(TIMELINE, duration=float(time))
+        rec.log(
+            f"{frame}/blank",
+            rr.Mesh3D(
+                vertex_positions=np.asarray(vertices, dtype=np.float32),
+                triangle_indices=np.asarray(triangles, dtype=np.uint32),
+                vertex_normals=vertex_normals(vertices, triangles).astype(np.float32),
+                albedo_factor=(190, 190, 200, 255),
+            ),
+        )
+    rec.reset_time()
+
+
+# ---- 3. the cutter path ----------------------------------------------------------------------------------
+def path_points(trans: np.ndarray, points_per_rev: int = 72) -> np.ndarray:
+    """The cutter centre path decimated to about ``points_per_rev`` points per turn about the blank axis
+    (the last point kept)."""
+    trans = np.asarray(trans, dtype=float)
+    if len(trans) < 3:
+        return trans
+    turn = np.abs(np.diff(np.unwrap(np.arctan2(trans[:, 1], trans[:, 0]))))
+    step = max(1, int(2 * np.pi / points_per_rev / max(float(np.median(turn)), 1e-12)))
+    keep = np.unique(np.append(np.arange(0, len(trans), step), len(trans) - 1))
+    return trans[keep]
+
+
+def log_cutter_paths(rec: rr.RecordingStream, passes: Sequence[PassTrajectory]) -> None:
+    """Part 3: per feed stroke the cutter centre in the blank frame, static, ``/gear/cutter_path/pass_<i>``."""
+    rec.log(GEAR, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+    for p in passes:
+        rec.log(
+            f"{GEAR}/cutter_path/pass_{p.index}",
+            rr.LineStrips3D(
+                [path_points(p.trans)],
+                colors=[PASS_COLOURS[p.index % len(PASS_COLOURS)]],
+                labels=[f"pass {p.index}"],
+                radii=[0.05],
+            ),
+            static=True,
+        )
+
+
+# ---- 4. time series --------------------------------------------------------------------------------------
+def _send_series(rec: rr.RecordingStream, entity: str, t: np.ndarray, values: np.ndarray, names: list[str]) -> None:
+    """A bulk scalar series with its line names (static SeriesLines)."""
+    rec.log(entity, rr.SeriesLines(names=names), static=True)
+    rec.send_columns(
+        entity,
+        indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))],
+        columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=float)),
+    )
+
+
+def segment_events(motion: MotionRecord) -> tuple[np.ndarray, list[str]]:
+    """Times [s] and texts of the program's segment changes (``feed, pass 0``...), the first tick included."""
+    key = np.stack([motion.segment, motion.pass_index], -1)
+    start = np.flatnonzero(np.r_[True, np.any(key[1:] != key[:-1], axis=1)])
+    texts = [
+        SEGMENTS[motion.segment[i]] + (f", pass {motion.pass_index[i]}" if motion.pass_index[i] >= 0 else "")
+        for i in start
+    ]
+    return motion.t[start], texts
+
+
+def log_signals(
+    rec: rr.RecordingStream, motion: MotionRecord, series: Mapping[str, tuple[np.ndarray, np.ndarray]]
+) -> None:
+    """Part 4: axes, synchronisation error, motor torques, the program's segment and the extra series, all at
+    the record's full rate."""
+    t = motion.t
+    for group, axes in AXIS_GROUPS.items():
+        unit = "mm" if group == "slides" else "rad"
+        columns = [AXES.index(a) for a in axes]
+        _send_series(rec, f"{SIGNALS}/axes/{group}", t, motion.q[:, columns], [f"{a} [{unit}]" for a in axes])
+    _send_series(rec, f"{SIGNALS}/sync_error", t, motion.sync_um, ["sync error [um]"])
+    _send_series(rec, f"{SIGNALS}/torque", t, motion.torque, [f"{a} [N m]" for a in motion.actuators])
+    legend = ", ".join(f"{k} {s}" for k, s in enumerate(SEGMENTS))
+    _send_series(rec, f"{SIGNALS}/program/segment", t, motion.segment, [f"segment ({legend})"])
+    _send_series(rec, f"{SIGNALS}/program/cutting", t, motion.cutting.astype(float), ["cutter can touch the blank"])
+    times, texts = segment_events(motion)
+    rec.send_columns(
+        f"{SIGNALS}/program/events",
+        indexes=[rr.TimeColumn(TIMELINE, duration=times)],
+        columns=rr.TextLog.columns(text=texts, level=["INFO"] * len(texts)),
+    )
+    for name, (ts, values) in series.items():
+        width = 1 if np.ndim(values) == 1 else np.shape(values)[1]
+        names = [name] if width == 1 else [f"{name}[{k}]" for k in range(width)]
+        _send_series(rec, f"{SIGNALS}/extra/{_part(name)}", ts, values, names)
+
+
+# ---- 5. measurement --------------------------------------------------------------------------------------
+def _fmt(value: Any, digits: int = 2) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return "-"
+    return f"{value:.{digits}f}" if isinstance(value, float | np.floating) else str(value)
+
+
+def measurement_markdown(measurement: Mapping[str, Any]) -> str:
+    """The ISO 1328-1 class table of a measurement (deviations in um) as markdown."""
+    iso = measurement.get("iso1328", {})
+    tol, cls = iso.get("tolerances") or {}, iso.get("class") or {}
+    rows = ["| parameter | left [um] | right [um] | tolerance [um] | class |", "|---|---:|---:|---:|---:|"]
+    blocks = {
+        "pitch": ("f_p", "F_p"),
+        "profile": ("F_alpha", "f_Halpha", "f_falpha"),
+        "helix": ("F_beta", "f_Hbeta", "f_fbeta"),
+    }
+    for block, keys in blocks.items():
+        for key in keys:
+            left, right = (measurement.get(block, {}).get(s, {}).get(key) for s in SIDES)
+            rows.append(f"| {key} | {_fmt(left)} | {_fmt(right)} | {_fmt(tol.get(key))} | {_fmt(cls.get(key))} |")
+    runout = measurement.get("runout", {}).get("F_r")
+    rows.append(f"| F_r | {_fmt(runout)} | | {_fmt(tol.get('F_r'))} | {_fmt(cls.get('F_r'))} |")
+    verdict = f"ISO 1328-1: {iso['error']}" if iso.get("error") else f"**ISO 1328-1:2013 class {cls.get('overall')}**"
+    lines = ["# Measurement", "", *rows, "", verdict]
+    thickness = measurement.get("thickness", {})
+    balls, span = thickness.get("over_balls"), thickness.get("span") or {}
+    if balls:
+        lines.append(
+            f"\nover balls (D = {_fmt(balls['ball_diameter_mm'], 3)} mm): M = {_fmt(balls['M_dK_mm'], 4)} mm "
+            f"(nominal {_fmt(balls['M_dK_nominal_mm'], 4)})"
+        )
+    if span.get("k"):
+        lines.append(f"\nspan W_{span['k']} = {_fmt(span['W_k_mm'], 4)} mm (nominal {_fmt(span['W_k_nominal_mm'], 4)})")
+    return "\n".join(lines)
+
+
+def log_measurement(
+    rec: rr.RecordingStream, measurement: Mapping[str, Any] | None, charts: Sequence[str | Path]
+) -> None:
+    """Part 5: the chart PNGs at ``/measurement/<stem>`` and the class table at ``/measurement/summary``."""
+    for chart in charts:
+        rec.log(f"{MEASUREMENT}/{_part(Path(chart).stem)}", rr.EncodedImage(path=chart), static=True)
+    if measurement is not None:
+        text = measurement_markdown(measurement)
+        rec.log(f"{MEASUREMENT}/summary", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+
+
+# ---- 6. the finished gear coloured by deviation ----------------------------------------------------------
+def flank_band(gear: Gear, margin: float) -> tuple[float, float]:
+    """Radii [mm] between which the surface is flank: from the start of the active profile on the root side
+    (:func:`metrology.measure.form_roll_length`) to the tip circle, ``margin`` inside the tip."""
+    from metrology.measure import form_roll_length
+
+    form = math.hypot(gear.base_radius, form_roll_length(gear))
+    if gear.internal:
+        return gear.tip_radius + margin, form
+    return max(form, gear.base_radius), gear.tip_radius - margin
+
+
+def flank_deviation(gear: Gear, vertices: np.ndarray, margin: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+    """Deviation of each vertex from the nominal flank along the base tangent [um], + = excess material.
+
+    Each vertex belongs to the flank nearest by polar angle (side and tooth, :func:`cutting.flank.
+    base_tangent_deviation` with the nearest tooth); vertices off the flanks (radius outside :func:`flank_band`,
+    or within ``margin`` [mm] of an end face) get NaN. Returns (deviation [um], side index into SIDES, -1 off)."""
+    v = np.asarray(vertices, dtype=float)
+    e = np.stack([base_tangent_deviation(gear, v, side) for side in SIDES], -1)
+    side = np.argmin(np.abs(e), axis=1)
+    dev = np.take_along_axis(e, side[:, None], 1)[:, 0] * 1e3
+    r_lo, r_hi = flank_band(gear, margin)
+    r = np.hypot(v[:, 0], v[:, 1])
+    on = (r >= r_lo) & (r <= r_hi) & (np.abs(v[:, 2]) <= gear.face_width / 2 - margin)
+    return np.where(on, dev, np.nan), np.where(on, side, -1)
+
+
+def deviation_colors(deviation_um: np.ndarray, limit_um: float = 5.0) -> np.ndarray:
+    """RGBA (uint8): blue at -limit, white at 0, red at +limit (clipped); grey where NaN."""
+    d = np.asarray(deviation_um, dtype=float)
+    f = np.clip(np.nan_to_num(d) / limit_um, -1.0, 1.0)
+    rgb = np.full((len(d), 3), 255.0)
+    rgb[:, 1] *= 1 - np.abs(f)
+    rgb[:, 0] *= np.where(f < 0, 1 + f, 1.0)
+    rgb[:, 2] *= np.where(f > 0, 1 - f, 1.0)
+    out = np.concatenate([np.round(rgb), np.full((len(d), 1), 255.0)], 1).astype(np.uint8)
+    out[np.isnan(d)] = GREY
+    return out
+
+
+def deviation_markdown(deviation_um: np.ndarray, side: np.ndarray, limit_um: float) -> str:
+    """Range of the flank deviation per side [um] and the colour scale, as markdown."""
+    rows = ["| flank | vertices | min [um] | max [um] | mean [um] |", "|---|---:|---:|---:|---:|"]
+    for k, name in enumerate(SIDES):
+        d = deviation_um[side == k]
+        if d.size:
+            rows.append(f"| {name} | {d.size} | {d.min():+.2f} | {d.max():+.2f} | {d.mean():+.2f} |")
+        else:
+            rows.append(f"| {name} | 0 | - | - | - |")
+    off = int(np.count_nonzero(side < 0))
+    return "\n".join(
+        [
+            "# Finished gear: deviation from the nominal flank",
+            "",
+            "Along the base tangent, + = excess material (ISO 1328-1 sign).",
+            f"Colours: blue {-limit_um:+g} um, white 0, red {limit_um:+g} um (clipped); grey: off the flanks "
+            f"(tip, root, end faces), {off} vertices.",
+            "",
+            *rows,
+        ]
+    )
+
+
+def log_finished_gear(rec: rr.RecordingStream, gear: Gear, gear_mesh: Mesh, limit_um: float = 5.0) -> None:
+    """Part 6: the finished gear coloured by flank deviation at ``/gear/finished`` and its range as text."""
+    vertices, triangles = gear_mesh
+    dev, side = flank_deviation(gear, vertices)
+    rec.log(
+        f"{GEAR}/finished",
+        rr.Mesh3D(
+            vertex_positions=np.asarray(vertices, dtype=np.float32),
+            triangle_indices=np.asarray(triangles, dtype=np.uint32),
+            vertex_normals=vertex_normals(vertices, triangles).astype(np.float32),
+            vertex_colors=deviation_colors(dev, limit_um),
+        ),
+        static=True,
+    )
+    text = deviation_markdown(dev, side, limit_um)
+    rec.log(f"{MEASUREMENT}/flank_deviation", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+
+
+# ---- 7. the blueprint ------------------------------------------------------------------------------------
+def recording_blueprint(series: Mapping[str, Any], chart_stems: Sequence[str]) -> rrb.Blueprint:
+    """Machine and gear in 3D on the left; signals (tabs) above measurement (tabs) on the right."""
+    signals = [
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/sync_error", name="Sync error [um]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/torque", name="Motor torques [N m]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/spindles", name="Spindles B1, B2, TV [rad]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/slides", name="Slides P3, X [mm]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/program", name="Program segment"),
+    ]
+    signals += [rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{_part(n)}", name=n) for n in series]
+    results = [rrb.Spatial2DView(origin=f"{MEASUREMENT}/{_part(s)}", name=s) for s in chart_stems]
+    results += [
+        rrb.TextDocumentView(origin=f"{MEASUREMENT}/summary", name="ISO 1328 classes"),
+        rrb.TextDocumentView(origin=f"{MEASUREMENT}/flank_deviation", name="Flank deviation"),
+        rrb.TextLogView(origin=f"{SIGNALS}/program/events", name="Program events"),
+    ]
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Vertical(
+                rrb.Spatial3DView(origin=MACHINE, name="Machine [mm]"),
+                rrb.Spatial3DView(origin=GEAR, name="Gear in the blank frame [mm]"),
+            ),
+            rrb.Vertical(rrb.Tabs(*signals, name="Signals"), rrb.Tabs(*results, name="Measurement")),
+            column_shares=[3, 2],
+        ),
+        collapse_panels=False,
+    )
