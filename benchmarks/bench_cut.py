@@ -56,12 +56,13 @@ def run(setup: SkivingSetup, kind: str, tol: float, passes: list[int], workers: 
     wall = time.perf_counter() - t0
     res = out.result
     mesh = to_trimesh(res.gear)
+    genus = res.gear.genus()
     machine = sum(setup.pass_times[i] for i in passes)
     print(
         f"{kind:9s} {tol * 1e3:4.1f} um (bound {res.sweep_error * 1e3:4.2f}) | wall {wall:6.1f} s, "
         f"machine {machine:5.2f} s, ratio {wall / machine:5.1f} | {len(res.chips)} passages, {res.sweeps} sweeps, "
         f"{res.subtractions} booleans, stock {out.stock_triangles:,} tris, gear {len(mesh.faces):,} tris, "
-        f"slab {slab} mm, {workers} workers, peak RSS {peak_rss_mib():.0f} MiB",
+        f"slab {slab} mm, {workers} workers, peak RSS {peak_rss_mib():.0f} MiB, genus {genus}",
         flush=True,
     )
     mesh.export("/tmp/bench_cut_gear.ply")  # kept, so a failed or changed measurement needs no new cut

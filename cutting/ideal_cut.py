@@ -14,7 +14,7 @@ import trimesh
 from cutting.edge import CuttingEdge, make_edge
 from cutting.engine import cut_passes
 from cutting.holder import check_holder_side
-from cutting.removal import DEFAULT_SLAB, CutResult
+from cutting.removal import DEFAULT_SLAB, CutResult, expected_genus
 from cutting.skiving import SkivingSetup
 from cutting.trajectory import ideal_passes
 
@@ -55,6 +55,11 @@ def cut_ideal(
     result = run.result
     if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
         raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
+    if result.gear.genus() != expected_genus(setup.gear):
+        raise RuntimeError(
+            f"the removal left a solid of genus {result.gear.genus()} (a gear has {expected_genus(setup.gear)}): "
+            "voids or tunnels where the stock's cells meet; report it with the job (the cells' union is at fault)"
+        )
     return CutReport(
         result, edge, time.perf_counter() - t_start, run.pass_seconds, run.stock_triangles, run.pass_triangles
     )

@@ -162,9 +162,15 @@ class Stock:
 
 
 def union_cells(cells: dict[tuple[int, int], mf.Manifold], z_edges: np.ndarray) -> mf.Manifold:
-    """The union of the cells. The slabs meet in exact planes z = const: vertices that the booleans left
-    within manifold's tolerance of a slab plane are put back on it first, so the union merges the faces
-    instead of leaving a sliver void (which a section exactly on the plane would see as walls)."""
+    """The union of the cells: per sector its slabs, then the sectors.
+
+    The slabs meet in exact planes z = const: vertices that the booleans left within manifold's tolerance of a
+    slab plane are put back on it first, so the union merges the faces instead of leaving a sliver void (which a
+    section exactly on the plane would see as walls). Two stages, each sector's column evaluated into a solid of
+    its own: one batch union of every cell (planes and sector overlaps at once) left two tunnels near the tip on a
+    slab plane of a small gear (genus 2, 2 um cut), and so do nested unions left lazy, which manifold flattens into
+    that same batch; the evaluated columns unite cleanly (genus 0).
+    """
     planes = np.asarray(z_edges)[1:-1]
     reach = 4 * max([1e-10, *(cell.get_tolerance() for cell in cells.values())])
 
@@ -175,8 +181,28 @@ def union_cells(cells: dict[tuple[int, int], mf.Manifold], z_edges: np.ndarray) 
         v[hit, 2] = planes[np.argmax(near[hit], axis=1)]
         return v
 
-    parts = [cell.warp_batch(snap) if planes.size else cell for cell in cells.values()]
-    return mf.Manifold.batch_boolean(parts, mf.OpType.Add)
+    sectors: dict[int, list[mf.Manifold]] = {}
+    for (k, _), cell in sorted(cells.items()):
+        sectors.setdefault(k, []).append(cell.warp_batch(snap) if planes.size else cell)
+    columns = []
+    for parts in sectors.values():
+        column = mf.Manifold.batch_boolean(parts, mf.OpType.Add)
+        mesh = column.to_mesh64()  # evaluate now: a lazy node would be flattened into one batch with the rest
+        columns.append(
+            mf.Manifold(
+                mf.Mesh64(
+                    vert_properties=np.array(mesh.vert_properties, dtype=float),
+                    tri_verts=np.array(mesh.tri_verts, dtype=np.uint64),
+                    tolerance=column.get_tolerance(),
+                )
+            )
+        )
+    return mf.Manifold.batch_boolean(columns, mf.OpType.Add)
+
+
+def expected_genus(gear: Gear) -> int:
+    """A cut gear is one solid without voids or tunnels: genus 0 (external), 1 (a ring gear)."""
+    return 1 if gear.internal else 0
 
 
 def engagement_half_angle(motion: PassMotion, edge: CuttingEdge) -> float:
