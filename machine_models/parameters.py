@@ -53,7 +53,7 @@ class SkivingMachineParams:
     """Masses, inertias, drives and friction of the skiving machine (see the module docstring for units)."""
 
     # ---- work spindle (B2/B4): table, fixture and blank on a gear stage from servo motor M2 -------------
-    work_inertia: float = 0.15  # kg m^2: table 300 mm x 60 mm steel (0.12) + fixture; the blank is added
+    work_inertia: float = 0.15  # kg m^2: table 300 mm x 60 mm steel (0.12) + fixture (blank: from its geometry)
     work_friction: float = 1.5  # N m: two preloaded angular-contact bearings at speed
     work_motor_inertia: float = 4.0e-3  # kg m^2: 10 N m class AC servo motor rotor
     work_motor_torque: float = 60.0  # N m: peak torque of M2 (current limit of power amplifier 11)
@@ -62,7 +62,7 @@ class SkivingMachineParams:
     work_drive: DriveStage = field(default_factory=lambda: DriveStage(0.5, 1.0e6, 20 * ARCSEC, 60.0))
 
     # ---- tool spindle (B1): cutter and arbor, belt from servo motor M1 ----------------------------------
-    tool_inertia: float = 0.012  # kg m^2: spindle shaft 0.006 + arbor + a 50-70 mm cutter
+    tool_inertia: float = 0.012  # kg m^2: spindle shaft and arbor; the cutter is added from its geometry
     tool_friction: float = 0.5  # N m: spindle bearings
     tool_motor_inertia: float = 3.0e-3  # kg m^2
     tool_motor_torque: float = 40.0  # N m: M1 peak (amplifier 3)

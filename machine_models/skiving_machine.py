@@ -126,10 +126,11 @@ def build_spec(
     head = radial.add_body(name="swivel_head", quat=quat_x(lay.tilt))
     visual(head, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.08), BLUE, pos=(0, 0, 0.1))  # spindle housing
     tool = head.add_body(name="tool_spindle")
-    inertial(tool, 12.0, params.tool_inertia)
-    tool.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.tool_friction)
     r_cut = setup.cutter_tip_diameter / 2 * MM
     width = c.face_width * MM
+    cutter_mass = STEEL * math.pi * r_cut**2 * width  # the cutter as a disc at its tip diameter (HSS/carbide ~ steel)
+    inertial(tool, 12.0 + cutter_mass, params.tool_inertia + cutter_mass * r_cut**2 / 2)
+    tool.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.tool_friction)
     visual(tool, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_cut, width / 2), ORANGE, pos=(0, 0, -width / 2))  # cutter
     visual(tool, mujoco.mjtGeom.mjGEOM_BOX, (r_cut * 0.9, 0.002, width / 2 + 0.001), DARK, pos=(0, 0, -width / 2))
     visual(
