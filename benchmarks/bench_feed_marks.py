@@ -30,12 +30,12 @@ from virtual_machine.job import load_job
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("job", nargs="?", default="spur_external")
+    ap.add_argument("job", nargs="?", default="spur_external", help="a job of assets/jobs, or a path to a .toml")
     ap.add_argument("--edge", default="conjugate", choices=["conjugate", "involute"])
     ap.add_argument("--feeds", type=float, nargs="+", default=[0.2, 0.1, 0.05])
     ap.add_argument("--points", type=int, default=61)
     a = ap.parse_args()
-    job = load_job(f"assets/jobs/{a.job}.toml")
+    job = load_job(a.job if a.job.endswith(".toml") else f"assets/jobs/{a.job}.toml")
     g = job.gear
     l0, l1 = profile_range(g, MeasureOptions())
     roll = np.linspace(l0, l1, a.points)
