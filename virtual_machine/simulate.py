@@ -226,14 +226,19 @@ def simulate(
     segment_index = {name: k for k, name in enumerate(SEGMENTS)}
     clock = time.perf_counter
     t_phys = t_ctrl = 0.0
+    data = phys.data
+    radial = phys.act["X"]
+    last_cnc = None
     for tick in program(setup, dt, ppm, machine, settings or ProgramSettings()):
-        if phys.time >= t_end:
+        if data.time >= t_end:
             break
-        phys.set_radial(tick.radial)
-        for tendon, on in machine.clutches(tick.cnc).items():
-            if clutch_state.get(tendon) != on:
-                phys.engage(tendon, on)
-                clutch_state[tendon] = on
+        ctrl[radial] = tick.radial  # the radial slide's position servo target [m]
+        if tick.cnc is not last_cnc:  # the CNC's state objects are shared while a segment holds them constant
+            last_cnc = tick.cnc
+            for tendon, on in machine.clutches(tick.cnc).items():
+                if clutch_state.get(tendon) != on:
+                    phys.engage(tendon, on)
+                    clutch_state[tendon] = on
         c0 = clock()
         torques = machine.tick(dt, tick.cnc, qpos.take(sensors).tolist(), qvel.take(speeds).tolist())
         c1 = clock()
@@ -244,9 +249,9 @@ def simulate(
         c2 = clock()
         t_ctrl += c1 - c0
         t_phys += c2 - c1
-        rows.append((phys.data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
+        rows.append((data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
         if progress is not None:
-            progress(phys.time)
+            progress(data.time)
     if timing is not None:
         timing.update(physics=t_phys, control=t_ctrl)
     a = np.array(rows)
