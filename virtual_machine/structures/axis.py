@@ -100,3 +100,18 @@ class ServoAxis:
         self.motor.current_command = amp.out
         self.motor.update(dt)
         return self.motor.torque
+
+
+class StrokeCounter:
+    """The CNC's encoder on the lead screw (S1-S3 have no feed servo): the carriage's travel in command pulses,
+    ``p`` per screw turn, which ends a feed stroke and places the return."""
+
+    def __init__(self, encoder_lines: int, pulses_per_rev: int, tv0: float):
+        self.encoder = Encoder(encoder_lines, 4, tv0)
+        self.p = pulses_per_rev
+
+    def pulses(self, tv: float, dt: float) -> int:
+        enc = self.encoder
+        enc.angle = tv
+        enc.update(dt)
+        return enc.position * self.p // enc.counts_per_rev

@@ -12,12 +12,12 @@ from __future__ import annotations
 from fractions import Fraction
 
 from virtual_machine.controllers import (
-    Encoder,
     HydraulicPulseGenerator,
     HydraulicSteppingMotor,
     InductionMotor,
     RateMultiplier,
 )
+from virtual_machine.structures.axis import StrokeCounter
 from virtual_machine.structures.mechatronic import CncState
 
 
@@ -62,7 +62,7 @@ class HydraulicS2:
         self.ggi3 = HydraulicPulseGenerator(windows[2], home["B2"])
         self.gshd1, self.gshd2, self.gshd3 = (HydraulicSteppingMotor(**stepping) for _ in range(3))
         self.home = (home["GShD1"], home["GShD2"], home["GShD3"])
-        self.encoder = Encoder(encoder_lines, 4, home["TV"])  # the CNC's stroke counter
+        self.stroke = StrokeCounter(encoder_lines, p, home["TV"])
         self.feeds = (StepFeed(), StepFeed(), StepFeed())
         q = stepping["steps_per_rev"]
         f = Fraction(q / (p * abs(feed_ratio))).limit_denominator(2**20)  # GShD3 steps per screw pulse
@@ -81,10 +81,7 @@ class HydraulicS2:
         b1, tv, b2, h1, h2, h3 = angles
         self.m.scale, self.m.omega = cnc.scale, speeds[0]
         self.m.update(dt)
-        enc = self.encoder
-        enc.angle = tv
-        enc.update(dt)
-        self.screw_pulses = enc.position * self.p // enc.counts_per_rev
+        self.screw_pulses = self.stroke.pulses(tv, dt)
         # GGI1 (tool) -> GShD1 ; GGI2 (screw) -> GShD2 ; GGI3 (work) -> GShD3 while feeding, else the CNC's pulses
         self.ggi1.angle = b1
         self.ggi1.update(dt)
@@ -146,7 +143,7 @@ class HydraulicS3:
         self.gshd = HydraulicSteppingMotor(**stepping)
         self.feed_down, self.feed_up = StepFeed(), StepFeed()
         self.home = home["GShD"]
-        self.encoder = Encoder(encoder_lines, 4, home["TV"])
+        self.stroke = StrokeCounter(encoder_lines, p, home["TV"])
         self.screw_pulses = 0
         self.b4_pulses = 0
 
@@ -160,10 +157,7 @@ class HydraulicS3:
         b2, tv, h = angles
         self.m.scale, self.m.omega = cnc.scale, speeds[0]
         self.m.update(dt)
-        enc = self.encoder
-        enc.angle = tv
-        enc.update(dt)
-        self.screw_pulses = enc.position * self.p // enc.counts_per_rev
+        self.screw_pulses = self.stroke.pulses(tv, dt)
         for disc in (self.disc_down, self.disc_up):  # both discs turn with the work; one is read
             disc.angle = b2
             disc.update(dt)

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import math
 
-from virtual_machine.controllers import Encoder, InductionMotor
-from virtual_machine.structures.axis import AxisTuning, ServoAxis
+from virtual_machine.controllers import InductionMotor
+from virtual_machine.structures.axis import AxisTuning, ServoAxis, StrokeCounter
 from virtual_machine.structures.mechatronic import CncState
 
 
@@ -33,7 +33,7 @@ class MechanicalS1:
     ):
         self.p = p
         self.m1 = motor
-        self.encoder = Encoder(encoder_lines, 4, tv0)  # the CNC's stroke counter on the lead screw
+        self.stroke = StrokeCounter(encoder_lines, p, tv0)
         self.traverse = ServoAxis(
             traverse or AxisTuning(40.0, 60.0, peak_torque=15.0), p, encoder_lines, 1.0, traverse_inertia, True, tv0
         )
@@ -52,10 +52,7 @@ class MechanicalS1:
 
     def tick(self, dt: float, cnc: CncState, angles: tuple[float, ...], speeds: tuple[float, ...]):
         tv = angles[0]
-        enc = self.encoder
-        enc.angle = tv
-        enc.update(dt)
-        self.screw_pulses = enc.position * self.p // enc.counts_per_rev
+        self.screw_pulses = self.stroke.pulses(tv, dt)
         self.m1.scale, self.m1.omega = cnc.scale, speeds[0]
         self.m1.update(dt)
         if cnc.feed:
