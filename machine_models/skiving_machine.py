@@ -43,7 +43,7 @@ from machine_models.parts import (
     tendon_coefs,
     visual,
 )
-from machine_models.structure_drives import ChainRatios, ideal_chains
+from machine_models.structure_drives import ChainRatios
 
 
 @dataclass(frozen=True)
@@ -161,7 +161,11 @@ def build_spec(
 
     if structure not in DRIVES:
         raise ValueError(f"unknown structure {structure!r}: use one of {', '.join(DRIVES)}")
-    drives = DRIVES[structure](spec, {"world": world, "head": head}, setup, params, chains or ideal_chains(setup))
+    if chains is None and structure != "mechatronic":
+        raise ValueError(
+            f"structure {structure!r} needs the realised ratios of its chains (virtual_machine.chains.chain_ratios)"
+        )
+    drives = DRIVES[structure](spec, {"world": world, "head": head}, setup, params, chains or ChainRatios())
     spec.add_key(name="home", qpos=_home_qpos(spec, lay, drives))
     return spec
 

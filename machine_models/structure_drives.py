@@ -44,11 +44,6 @@ class ChainRatios:
     feed: float = 0.0  # S1, S3: TV per B2 rad (c4 is / t_TV); S2: TV per GShD3 rad (c4 / t_TV)
 
 
-def ideal_chains(setup: SkivingSetup) -> ChainRatios:
-    """Placeholder ratios for structures without chains (S4)."""
-    return ChainRatios()
-
-
 @dataclass
 class Drives:
     actuators: tuple[str, ...]
