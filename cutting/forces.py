@@ -1,0 +1,109 @@
+"""Cutting forces of one tooth engagement from the chip the removal really took (Kienzle's law).
+
+The edge is the outline polygon without its hub chord. During the engagement [t0, t1] the part of the edge
+inside the blank's envelope cuts: in skiving every pass takes a U-shaped layer along the whole engaged
+profile (both flanks and the bottom), so that part is the chip's width b(t). Each edge element dl moving at
+the relative speed v sweeps dl * v of chip area per second, so the chip volume is
+
+    V = h * integral( integral(|v| dl) dt )
+
+which gives the mean uncut chip thickness h of this engagement from the removed volume V. The force on the
+workpiece at each instant is Kienzle's  Fc = kc(h) * b * h  distributed along the engaged edge, each element
+pushing the material along its own velocity (the tool drags the chip with it); the cutter feels the opposite.
+Its work over the engagement is exactly kc(h) * V: the chip's specific energy times its volume.
+
+Only the main cutting force is modelled (no feed or passive components: their ratios to Fc are not in the
+material table).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from cutting.materials import Material, rake_factor
+from cutting.sweep import PoseFunction, place
+
+
+@dataclass
+class EngagementLoad:
+    """The force on the workpiece over one engagement, in the blank frame: ``force`` (n, 3) [N] acting at
+    ``point`` (n, 3) [mm] at times ``t`` (n,) [s] (zero outside the cut). The cutter takes ``-force``."""
+
+    t: np.ndarray
+    force: np.ndarray
+    point: np.ndarray
+    volume: float  # chip volume [mm^3]
+    thickness: float  # mean uncut chip thickness h [mm]
+    kc: float  # specific cutting force used [N/mm^2]
+
+    @property
+    def energy(self) -> float:
+        """Cutting work of the engagement [J]: kc [N/mm^2] * V [mm^3] = N mm."""
+        return self.kc * self.volume * 1e-3
+
+    def peak(self) -> float:
+        return float(np.linalg.norm(self.force, axis=1).max()) if len(self.t) else 0.0
+
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Force and point at time ``t`` (linear between samples), or None outside the engagement."""
+        if not len(self.t) or t < self.t[0] or t > self.t[-1]:
+            return None
+        i = int(np.clip(np.searchsorted(self.t, t) - 1, 0, len(self.t) - 2))
+        s = (t - self.t[i]) / (self.t[i + 1] - self.t[i])
+        return (1 - s) * self.force[i] + s * self.force[i + 1], (1 - s) * self.point[i] + s * self.point[i + 1]
+
+    def shifted(self, dt: float) -> EngagementLoad:
+        """The same load ``dt`` seconds later (the prediction for the next tooth: one cutter pitch on)."""
+        return EngagementLoad(self.t + dt, self.force, self.point, self.volume, self.thickness, self.kc)
+
+
+def engaged_speed(
+    pose: PoseFunction, edge: np.ndarray, times: np.ndarray, inside: Callable[[np.ndarray], np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per time and edge element: the element's length inside the blank [mm], its midpoint [mm] and its velocity
+    relative to the workpiece [mm/s] (central difference over 1e-3 of the sampling interval)."""
+    step = 1e-3 * (times[-1] - times[0]) / max(len(times) - 1, 1)
+    w, w_before, w_after = (place(edge, *pose(times + d)) for d in (0.0, -step, step))
+    a, b = w[:, :-1], w[:, 1:]
+    mid = (a + b) / 2
+    ins = inside(w).astype(float)
+    share = (ins[:, :-1] + ins[:, 1:]) / 2  # an element half in the blank counts half
+    length = np.linalg.norm(b - a, axis=2) * share
+    vel = ((w_after[:, :-1] + w_after[:, 1:]) - (w_before[:, :-1] + w_before[:, 1:])) / (4 * step)
+    return length, mid, vel
+
+
+def engagement_load(
+    pose: PoseFunction,
+    edge: np.ndarray,
+    t0: float,
+    t1: float,
+    volume: float,
+    material: Material,
+    inside: Callable[[np.ndarray], np.ndarray],
+    rake_deg: float = 0.0,
+    samples: int = 41,
+) -> EngagementLoad:
+    """The load of one engagement: ``pose`` of the cutting tooth over [t0, t1], ``edge`` its points (n, 3) in the
+    cutter frame (the cutting edge, an open polyline), ``volume`` [mm^3] the chip the removal took, ``inside``
+    the blank's envelope (points -> bool). ``rake_deg``: the cutter's rake angle (0: rake face on the end plane).
+    """
+    times = np.linspace(t0, t1, samples)
+    length, mid, vel = engaged_speed(pose, edge, times, inside)
+    speed = np.linalg.norm(vel, axis=2)
+    swept_rate = (length * speed).sum(axis=1)  # chip area swept per second [mm^2/s]
+    swept = float(((swept_rate[1:] + swept_rate[:-1]) / 2 * np.diff(times)).sum())  # trapezoid rule [mm^2]
+    if volume <= 0 or swept <= 0:
+        zero = np.zeros((0, 3))
+        return EngagementLoad(np.zeros(0), zero, zero, max(volume, 0.0), 0.0, 0.0)
+    h = volume / swept
+    kc = material.kc(h) * rake_factor(rake_deg)
+    unit = vel / np.maximum(speed, 1e-12)[..., None]
+    per_element = kc * h * length[..., None] * unit  # [N] on the workpiece, along each element's velocity
+    force = per_element.sum(axis=1)
+    weight = length.sum(axis=1)
+    point = (length[..., None] * mid).sum(axis=1) / np.maximum(weight, 1e-12)[:, None]
+    return EngagementLoad(times, force, point, volume, h, kc)
