@@ -164,3 +164,36 @@ def test_every_structure_compiles_and_steps_without_warnings(job: str, structure
     d.ctrl[m.actuator("X").id] = d.qpos[m.joint("X").qposadr[0]]
     mujoco.mj_step(m, d, nstep=800)
     assert all(int(w.number) == 0 for w in d.warning), [w.number for w in d.warning]
+
+
+def test_cutting_load_does_the_work_of_the_force_on_the_relative_motion() -> None:
+    """The generalized forces of a cutting force F at a point (on the blank, -F on the cutter) do, for any joint
+    velocity, the work F . (v_blank - v_cutter) of that point: checked against finite-difference point velocities."""
+    from virtual_machine.physics import MachinePhysics
+
+    m = _model()
+    phys = MachinePhysics(m, SkivingMachineParams())
+    d = phys.data
+    mujoco.mj_forward(m, d)
+    force, point = np.array([120.0, -800.0, 250.0]), np.array([78.0, 6.0, -3.0])  # N, mm in the blank frame
+    d.qfrc_applied[:] = 0.0
+    phys.apply_cutting_load(force, point)
+    qfrc = d.qfrc_applied.copy()
+    rb = d.site_xmat[phys.site_blank].reshape(3, 3).copy()
+    p_world = d.site_xpos[phys.site_blank] + rb @ point * 1e-3
+    local = {}
+    for body in (phys.blank_body, phys.cutter_body):
+        rot = d.xmat[body].reshape(3, 3).copy()
+        local[body] = rot.T @ (p_world - d.xpos[body])
+    rng = np.random.default_rng(3)
+    qvel = rng.normal(size=m.nv)
+    eps = 1e-7
+    q0 = d.qpos.copy()
+    mujoco.mj_integratePos(m, d.qpos, qvel, eps)
+    mujoco.mj_kinematics(m, d)
+    moved = {b: d.xpos[b] + d.xmat[b].reshape(3, 3) @ local[b] for b in local}
+    v_rel = (moved[phys.blank_body] - moved[phys.cutter_body]) / eps  # the blank point minus the cutter point
+    assert qfrc @ qvel == pytest.approx((rb @ force) @ v_rel, rel=1e-5)
+    d.qpos[:] = q0
+    # on the work spindle alone: the moment of the force about the work axis (blank frame z on the axis)
+    assert qfrc[m.joint("B2").dofadr[0]] == pytest.approx(np.cross(point * 1e-3, force)[2], rel=1e-9)

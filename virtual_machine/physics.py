@@ -42,6 +42,8 @@ class MachinePhysics:
         mujoco.mj_forward(model, self.data)
         self._badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]  # a live view: cheap to poll
         self._b2 = self.qadr["B2"]
+        self.blank_body = int(model.site_bodyid[self.site_blank])
+        self.cutter_body = int(model.site_bodyid[self.site_cutter])
 
     @property
     def time(self) -> float:
@@ -75,6 +77,18 @@ class MachinePhysics:
         k, c, gap = self._spring[t]
         m.tendon_stiffness[t], m.tendon_damping[t] = (k, c) if on else (0.0, 0.0)
         m.tendon_lengthspring[t] = [length - gap / 2, length + gap / 2]
+
+    def apply_cutting_load(self, force: np.ndarray, point: np.ndarray) -> None:
+        """Add the cutting force to ``qfrc_applied``: ``force`` [N] on the workpiece at ``point`` [mm], both in the
+        blank frame, and the opposite force on the cutter at the same point (action and reaction through the
+        chip). The frames are those of the last step (the servo tick holds the force over its sub-steps)."""
+        d = self.data
+        rb = d.site_xmat[self.site_blank].reshape(3, 3)
+        f_world = rb @ force
+        p_world = d.site_xpos[self.site_blank] + rb @ point * 1e-3
+        zero = np.zeros(3)
+        mujoco.mj_applyFT(self.model, d, f_world, zero, p_world, self.blank_body, d.qfrc_applied)
+        mujoco.mj_applyFT(self.model, d, -f_world, zero, p_world, self.cutter_body, d.qfrc_applied)
 
     def step(self, n: int) -> None:
         mujoco.mj_step(self.model, self.data, nstep=n)

@@ -185,6 +185,138 @@ def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: Machine
     )
 
 
+class MachineRun:
+    """The simulation loop as a stepper: :meth:`advance` runs the machine up to a time, so another stage (the
+    cutting co-simulation) can act between calls; :meth:`record` assembles the :class:`MotionRecord`.
+
+    ``load``, if set, gives the cutting force at a time: (force [N] on the workpiece, point [mm]), both in the
+    blank frame, or None; it is applied to the blank and (opposite) to the cutter every servo tick.
+    """
+
+    def __init__(
+        self,
+        job: Job,
+        params: SkivingMachineParams | None = None,
+        servo_substeps: int = 2,
+        settings: ProgramSettings | None = None,
+        disturbance: Callable[[float], float] | None = None,
+        disturbance_axis: str = "B2",
+    ):
+        self.job = job
+        self.params = params or machine_params(job)
+        self.setup = setup = job.skiving
+        structure = job.machine["structure"]
+        chains = chain_ratios(job) if structure != "mechatronic" else None
+        self.spec = build_spec(setup, self.params, job.machine["lead_screw_pitch"], structure, chains)
+        self.phys = phys = MachinePhysics(self.spec.compile(), self.params)
+        self.machine = machine = build_structure(job, self.params, phys)
+        self.servo_substeps = servo_substeps
+        self.dt = phys.model.opt.timestep * servo_substeps
+        p = job.machine["command_pulses_per_rev"]
+        ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
+        self._ticks = program(setup, self.dt, ppm, machine, settings or ProgramSettings())
+        self._pending = None  # a tick fetched from the program but not yet run
+        self.finished = False  # the program has ended
+        self.disturbance, self.load = disturbance, None
+        self._dof_dist = phys.vadr[disturbance_axis]
+        self.rows: list[tuple] = []
+        self.home = (phys.q("B1"), phys.q("B2"), phys.q("P3") / MM)
+        self.timing = {"physics": 0.0, "control": 0.0}
+        self._clutch_state: dict[str, bool] = {}
+        self._last_cnc = None
+
+    @property
+    def time(self) -> float:
+        return self.phys.time
+
+    def advance(self, until: float = math.inf, progress: Callable[[float], None] | None = None) -> bool:
+        """Run servo ticks while the machine time is below ``until`` [s]; False once the program has ended."""
+        phys, machine, dt, subs = self.phys, self.machine, self.dt, self.servo_substeps
+        data = phys.data
+        qpos, qvel, ctrl, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
+        qa = [phys.qadr[a] for a in AXES]
+        sensors = [phys.qadr[j] for j in machine.sensors]
+        speeds = [phys.vadr[j] for j in machine.speeds]
+        acts = [phys.act[a] for a in machine.actuators]
+        radial = phys.act["X"]
+        segment_index = {name: k for k, name in enumerate(SEGMENTS)}
+        rows, clock, disturbance, load = self.rows, time.perf_counter, self.disturbance, self.load
+        t_phys = t_ctrl = 0.0
+        while data.time < until:
+            tick = self._pending or next(self._ticks, None)
+            self._pending = None
+            if tick is None:
+                self.finished = True
+                break
+            ctrl[radial] = tick.radial  # the radial slide's position servo target [m]
+            if tick.cnc is not self._last_cnc:  # the CNC's state objects are shared while a segment holds them
+                self._last_cnc = tick.cnc
+                for tendon, on in machine.clutches(tick.cnc).items():
+                    if self._clutch_state.get(tendon) != on:
+                        phys.engage(tendon, on)
+                        self._clutch_state[tendon] = on
+            c0 = clock()
+            torques = machine.tick(dt, tick.cnc, qpos.take(sensors).tolist(), qvel.take(speeds).tolist())
+            c1 = clock()
+            ctrl[acts] = torques
+            if disturbance is not None or load is not None:
+                qfrc[:] = 0.0
+                if disturbance is not None:
+                    qfrc[self._dof_dist] = disturbance(data.time)
+                if load is not None and (fp := load(data.time)) is not None:
+                    phys.apply_cutting_load(*fp)
+            phys.step(subs)
+            c2 = clock()
+            t_ctrl += c1 - c0
+            t_phys += c2 - c1
+            rows.append((data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
+            if progress is not None:
+                progress(data.time)
+        self.timing["physics"] += t_phys
+        self.timing["control"] += t_ctrl
+        return not self.finished
+
+    def record(self) -> MotionRecord:
+        """The motion record of everything run so far."""
+        setup = self.setup
+        b1_0, b2_0, p3_0 = self.home
+        ratio, diff = setup.speed_ratio, setup.differential_rotation_per_mm
+        r2 = setup.gear.reference_radius
+        feed = SEGMENTS.index("feed")
+        a = np.array(self.rows)
+        n_ax = len(AXES)
+        q = a[:, 1 : 1 + n_ax].copy()
+        b1, b2, p3 = q[:, 0], q[:, 1], q[:, 2] / MM
+        delta = (b2 - b2_0) - ratio * (b1 - b1_0) - diff * (p3 - p3_0)
+        q[:, 2:4] /= MM  # P3, X in mm
+        segment, pass_index = a[:, 1 + n_ax].astype(int), a[:, 2 + n_ax].astype(int)
+        reach = np.array(
+            [setup.gear.face_width / 2 + setup.engagement_half_length(c) for c in setup.pass_centre_distances]
+        )
+        cutting = (segment == feed) & (np.abs(q[:, 2]) <= reach[np.clip(pass_index, 0, len(reach) - 1)])
+        rec = MotionRecord(
+            t=a[:, 0],
+            q=q,
+            torque=a[:, 3 + n_ax :],
+            actuators=tuple(self.machine.actuators),
+            model_xml=self.spec.to_xml(),
+            sync_um=r2 * delta * 1e3,
+            segment=segment,
+            pass_index=pass_index,
+            cutting=cutting,
+        )
+        for index in sorted(set(rec.pass_index[rec.segment == feed].tolist())):
+            sel = (rec.segment == feed) & (rec.pass_index == index)
+            rec.passes.append(pass_trajectory(setup, index, rec.t[sel], rec.q[sel]))
+        return rec
+
+
+def pass_trajectory(setup, index: int, t: np.ndarray, q: np.ndarray) -> PassTrajectory:
+    """The pose trajectory of one feed stroke from its recorded axis positions (t from the stroke's start)."""
+    rot, trans = relative_pose(setup, q)
+    return PassTrajectory(index, t - t[0], rot, trans, q[:, 0], q[:, 2], q[:, 3])
+
+
 def simulate(
     job: Job,
     params: SkivingMachineParams | None = None,
@@ -199,87 +331,11 @@ def simulate(
     """Run the machine through the job's passes (no cutting). ``duration`` [s] stops early; ``disturbance(t)``
     is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes).
     ``timing``, if given, receives the seconds spent in the physics and in the controllers (benchmarks)."""
-    params = params or machine_params(job)
-    setup = job.skiving
-    structure = job.machine["structure"]
-    chains = chain_ratios(job) if structure != "mechatronic" else None
-    spec = build_spec(setup, params, job.machine["lead_screw_pitch"], structure, chains)
-    phys = MachinePhysics(spec.compile(), params)
-    machine = build_structure(job, params, phys)
-    dt = phys.model.opt.timestep * servo_substeps
-    p = job.machine["command_pulses_per_rev"]
-    ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
-    r2 = setup.gear.reference_radius
-    ratio, diff = setup.speed_ratio, setup.differential_rotation_per_mm
-    b1_0, b2_0, p3_0 = phys.q("B1"), phys.q("B2"), phys.q("P3") / MM
-    rows: list[tuple] = []
-    qpos, qvel, ctrl = phys.data.qpos, phys.data.qvel, phys.data.ctrl
-    qa = [phys.qadr[a] for a in AXES]
-    sensors = [phys.qadr[j] for j in machine.sensors]
-    speeds = [phys.vadr[j] for j in machine.speeds]
-    acts = [phys.act[a] for a in machine.actuators]
-    qfrc = phys.data.qfrc_applied
-    dof_dist = phys.vadr[disturbance_axis]
-    feed = SEGMENTS.index("feed")
-    clutch_state: dict[str, bool] = {}
-    t_end = math.inf if duration is None else duration
-    segment_index = {name: k for k, name in enumerate(SEGMENTS)}
-    clock = time.perf_counter
-    t_phys = t_ctrl = 0.0
-    data = phys.data
-    radial = phys.act["X"]
-    last_cnc = None
-    for tick in program(setup, dt, ppm, machine, settings or ProgramSettings()):
-        if data.time >= t_end:
-            break
-        ctrl[radial] = tick.radial  # the radial slide's position servo target [m]
-        if tick.cnc is not last_cnc:  # the CNC's state objects are shared while a segment holds them constant
-            last_cnc = tick.cnc
-            for tendon, on in machine.clutches(tick.cnc).items():
-                if clutch_state.get(tendon) != on:
-                    phys.engage(tendon, on)
-                    clutch_state[tendon] = on
-        c0 = clock()
-        torques = machine.tick(dt, tick.cnc, qpos.take(sensors).tolist(), qvel.take(speeds).tolist())
-        c1 = clock()
-        ctrl[acts] = torques
-        if disturbance is not None:
-            qfrc[dof_dist] = disturbance(phys.time)
-        phys.step(servo_substeps)
-        c2 = clock()
-        t_ctrl += c1 - c0
-        t_phys += c2 - c1
-        rows.append((data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
-        if progress is not None:
-            progress(data.time)
+    run = MachineRun(job, params, servo_substeps, settings, disturbance, disturbance_axis)
+    run.advance(math.inf if duration is None else duration, progress)
     if timing is not None:
-        timing.update(physics=t_phys, control=t_ctrl)
-    a = np.array(rows)
-    n_ax = len(AXES)
-    q = a[:, 1 : 1 + n_ax].copy()
-    b1, b2, p3 = q[:, 0], q[:, 1], q[:, 2] / MM
-    delta = (b2 - b2_0) - ratio * (b1 - b1_0) - diff * (p3 - p3_0)
-    q[:, 2:4] /= MM  # P3, X in mm
-    segment, pass_index = a[:, 1 + n_ax].astype(int), a[:, 2 + n_ax].astype(int)
-    reach = np.array([setup.gear.face_width / 2 + setup.engagement_half_length(c) for c in setup.pass_centre_distances])
-    cutting = (segment == feed) & (np.abs(q[:, 2]) <= reach[np.clip(pass_index, 0, len(reach) - 1)])
-    rec = MotionRecord(
-        t=a[:, 0],
-        q=q,
-        torque=a[:, 3 + n_ax :],
-        actuators=tuple(machine.actuators),
-        model_xml=spec.to_xml(),
-        sync_um=r2 * delta * 1e3,
-        segment=segment,
-        pass_index=pass_index,
-        cutting=cutting,
-    )
-    for index in sorted(set(rec.pass_index[rec.segment == feed].tolist())):
-        sel = (rec.segment == feed) & (rec.pass_index == index)
-        rot, trans = relative_pose(setup, rec.q[sel])
-        t = rec.t[sel]
-        rec.passes.append(PassTrajectory(index, t - t[0], rot, trans, rec.q[sel, 0], rec.q[sel, 2], rec.q[sel, 3]))
-    return rec
+        timing.update(run.timing)
+    return run.record()
 
 
 def relative_pose(setup, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
