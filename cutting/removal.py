@@ -27,13 +27,16 @@ from cutting.trajectory import PassMotion
 
 @dataclass
 class Chip:
-    """One tooth engagement: pass, cutter tooth, time at the mesh [s], removed volume [mm^3]."""
+    """One tooth engagement: pass, cutter tooth, time at the mesh [s], removed volume [mm^3], and the window
+    [start, end] [s] in which the tooth was in the blank's envelope (times of the pass's motion)."""
 
     pass_index: int
     cutter_tooth: int
     time: float
     volume: float
     sweeps: int
+    start: float = 0.0
+    end: float = 0.0
 
 
 @dataclass
@@ -248,6 +251,83 @@ def tooth_pose(motion: PassMotion, m: int):
     return pose
 
 
+class PassCutter:
+    """Cuts one pass passage by passage, so the cutting can follow a machine that is still moving (co-simulation).
+
+    ``plan`` is a motion of the pass used only to plan: the engagement half angle and the outline's split (the
+    ideal motion will do). Each :meth:`cut_passage` takes the motion to cut along: it must cover the passage's
+    window. ``tol`` bounds the whole sweep error: the simplified outline's deviation from the edge plus the chord
+    error of the point paths between poses.
+    """
+
+    def __init__(self, stock: Stock, edge: CuttingEdge, plan: PassMotion, tol: float, result: CutResult):
+        self.stock, self.result = stock, result
+        self.index = plan.index
+        g = self.gear = plan.setup.gear
+        self.z0 = plan.setup.cutter.teeth
+        self.pitch = 2 * math.pi / self.z0  # one tooth pitch of the cutter [rad]
+        self.half = engagement_half_angle(plan, edge)
+        _, m_first, m_last = passage_range(plan, edge)
+        # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist)
+        outline, self.outline_err = simplify_outline(edge.outline, tol / 2)
+        self.sweep_tol = tol - self.outline_err
+        self.b2 = g.face_width / 2
+        self.outline = _balanced_outline(
+            plan, outline, self.sweep_tol, self.near_blank, (m_first + m_last) // 2, self.half
+        )
+        self.points = outline_points(self.outline)
+
+    def near_blank(self, w: np.ndarray, margin: float = 0.1) -> np.ndarray:
+        """Points within ``margin`` [mm] of the blank (a facet wholly farther away cannot reach it)."""
+        g = self.gear
+        r = np.hypot(w[..., 0], w[..., 1])
+        radial = (r > g.tip_radius - margin) if g.internal else (r < g.tip_radius + margin)
+        return radial & (np.abs(w[..., 2]) <= self.b2 + margin)
+
+    def in_blank(self, w: np.ndarray) -> np.ndarray:
+        """Points inside the blank's envelope (tip cylinder or bore, over the face width)."""
+        g = self.gear
+        r = np.hypot(w[..., 0], w[..., 1])
+        return ((r > g.tip_radius) if g.internal else (r < g.tip_radius)) & (np.abs(w[..., 2]) <= self.b2)
+
+    def window(self, m: int, motion) -> tuple[float, float]:
+        """Times [s] of the passage's engagement window: the cutter within the half angle of pitch ``m``."""
+        t0 = max(motion.time_at_angle(m * self.pitch - self.half), 0.0)
+        t1 = min(motion.time_at_angle(m * self.pitch + self.half), motion.duration)
+        return float(t0), float(t1)
+
+    def cut_passage(self, m: int, motion) -> Chip | None:
+        """Sweep and subtract the passage of cutter pitch ``m`` along ``motion``; its chip, or None if the tooth
+        stays clear of the blank."""
+        result, stock, pts = self.result, self.stock, self.points
+        tm = motion.time_at_angle(m * self.pitch)
+        j = (-m) % self.z0  # the cutter tooth at the mesh at tm
+        pose = tooth_pose(motion, m)
+        t0, t1 = self.window(m, motion)
+        if t1 <= t0:
+            return None
+        # keep the part of the window in which the tooth can meet the blank (radius and face), one sample wider
+        probe = np.linspace(t0, t1, 65)
+        meets = self.in_blank(place(pts, *pose(probe)))
+        hit = np.nonzero(meets.any(axis=1))[0]
+        if hit.size == 0:
+            return None
+        t0, t1 = probe[max(hit[0] - 1, 0)], probe[min(hit[-1] + 1, len(probe) - 1)]
+        times, err = sample_window(pose, pts, t0, t1, self.sweep_tol, self.near_blank)
+        rot, trans = pose(times)
+        vol = 0.0
+        for key, (i0, i1) in stock.reached(place(pts, rot, trans)).items():
+            vol += stock.subtract(tube(self.outline, rot[i0 : i1 + 1], trans[i0 : i1 + 1]), key)
+            result.subtractions += 1
+        result.sweeps += len(times) - 1
+        bound = err + self.outline_err
+        result.sweep_error = max(result.sweep_error, bound)
+        result.pass_sweep_error[self.index] = max(result.pass_sweep_error.get(self.index, 0.0), bound)
+        chip = Chip(self.index, j, float(tm), vol, len(times) - 1, float(t0), float(t1))
+        result.chips.append(chip)
+        return chip
+
+
 def cut(
     stock: Stock,
     edge: CuttingEdge,
@@ -256,60 +336,14 @@ def cut(
     result: CutResult,
     progress: Callable[[int, int], None] | None = None,
 ) -> None:
-    """Run one pass of ``motion`` on ``stock``: every tooth passage swept to ``tol`` [mm] and subtracted.
-
-    ``tol`` bounds the whole sweep error: the simplified outline's deviation from the edge plus the chord
-    error of the point paths between poses.
-    """
-    setup = motion.setup
-    z0 = setup.cutter.teeth
-    g = setup.gear
-    half, m_first, m_last = passage_range(motion, edge)
-    pitch = 2 * math.pi / z0  # one tooth pitch of the cutter [rad]
-    # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist)
-    outline, outline_err = simplify_outline(edge.outline, tol / 2)
-    sweep_tol = tol - outline_err
-    b2 = g.face_width / 2
+    """Run one pass of ``motion`` on ``stock``: every tooth passage swept to ``tol`` [mm] and subtracted."""
+    cutter = PassCutter(stock, edge, motion, tol, result)
+    _, m_first, m_last = passage_range(motion, edge)
     total = m_last - m_first + 1
-
-    def near_blank(w: np.ndarray, margin: float = 0.1) -> np.ndarray:
-        """Points within ``margin`` [mm] of the blank (a facet wholly farther away cannot reach it)."""
-        r = np.hypot(w[..., 0], w[..., 1])
-        radial = (r > g.tip_radius - margin) if g.internal else (r < g.tip_radius + margin)
-        return radial & (np.abs(w[..., 2]) <= b2 + margin)
-
-    outline = _balanced_outline(motion, outline, sweep_tol, near_blank, (m_first + m_last) // 2, half)
-    pts = outline_points(outline)
-
     for count, m in enumerate(range(m_first, m_last + 1)):
         if progress is not None and count:
             progress(count, total)  # the passage before this one is done (cut, or found clear of the blank)
-        tm = motion.time_at_angle(m * pitch)
-        j = (-m) % z0  # the cutter tooth at the mesh at tm
-        pose = tooth_pose(motion, m)
-        t0 = max(motion.time_at_angle(m * pitch - half), 0.0)
-        t1 = min(motion.time_at_angle(m * pitch + half), motion.duration)
-        if t1 <= t0:
-            continue
-        # keep the part of the window in which the tooth can meet the blank (radius and face), one sample wider
-        probe = np.linspace(t0, t1, 65)
-        w = place(pts, *pose(probe))
-        r = np.hypot(w[..., 0], w[..., 1])
-        meets = ((r > g.tip_radius) if g.internal else (r < g.tip_radius)) & (np.abs(w[..., 2]) <= b2)
-        hit = np.nonzero(meets.any(axis=1))[0]
-        if hit.size == 0:
-            continue
-        t0, t1 = probe[max(hit[0] - 1, 0)], probe[min(hit[-1] + 1, len(probe) - 1)]
-        times, err = sample_window(pose, pts, t0, t1, sweep_tol, near_blank)
-        rot, trans = pose(times)
-        vol = 0.0
-        for key, (i0, i1) in stock.reached(place(pts, rot, trans)).items():
-            vol += stock.subtract(tube(outline, rot[i0 : i1 + 1], trans[i0 : i1 + 1]), key)
-            result.subtractions += 1
-        result.sweeps += len(times) - 1
-        result.sweep_error = max(result.sweep_error, err + outline_err)
-        result.pass_sweep_error[motion.index] = max(result.pass_sweep_error.get(motion.index, 0.0), err + outline_err)
-        result.chips.append(Chip(motion.index, j, tm, vol, len(times) - 1))
+        cutter.cut_passage(m, motion)
     if progress is not None:
         progress(total, total)
 

@@ -189,8 +189,9 @@ class MachineRun:
     """The simulation loop as a stepper: :meth:`advance` runs the machine up to a time, so another stage (the
     cutting co-simulation) can act between calls; :meth:`record` assembles the :class:`MotionRecord`.
 
-    ``load``, if set, gives the cutting force at a time: (force [N] on the workpiece, point [mm]), both in the
-    blank frame, or None; it is applied to the blank and (opposite) to the cutter every servo tick.
+    ``load``, if set, gives the cutting forces at a time: pairs (force [N] on the workpiece, point [mm]), both in
+    the blank frame, one per engaged tooth; each is applied to the blank and (opposite) to the cutter every servo
+    tick.
     """
 
     def __init__(
@@ -222,6 +223,8 @@ class MachineRun:
         self.rows: list[tuple] = []
         self.home = (phys.q("B1"), phys.q("B2"), phys.q("P3") / MM)
         self.timing = {"physics": 0.0, "control": 0.0}
+        # with a cutting load: the work the load does on the machine and the work of the actuators [J] (per tick)
+        self.load_work = self.actuator_work = 0.0
         self._clutch_state: dict[str, bool] = {}
         self._last_cnc = None
 
@@ -263,9 +266,13 @@ class MachineRun:
                 qfrc[:] = 0.0
                 if disturbance is not None:
                     qfrc[self._dof_dist] = disturbance(data.time)
-                if load is not None and (fp := load(data.time)) is not None:
-                    phys.apply_cutting_load(*fp)
+                if load is not None:
+                    for force, point in load(data.time):
+                        phys.apply_cutting_load(force, point)
             phys.step(subs)
+            if load is not None:
+                self.load_work += float(qfrc @ qvel) * dt
+                self.actuator_work += float(data.actuator_force @ data.actuator_velocity) * dt
             c2 = clock()
             t_ctrl += c1 - c0
             t_phys += c2 - c1

@@ -1,0 +1,84 @@
+"""Machine and cut together: the chips' forces act on the machine and the motors pay for them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cutting.forces import EngagementLoad
+from virtual_machine.cosim import ForcePredictor, cosimulate
+from virtual_machine.job import load_job
+
+SMALL_JOB = """
+[gear]
+teeth = 18
+normal_module = 1.0
+face_width = 2.0
+
+[cutter]
+teeth = 17
+helix_angle = 20.0
+edge = "involute"
+
+[process]
+tool_speed = 2000.0
+axial_feed = 0.2
+passes = [2.25]
+sweep_error = 0.02
+"""
+
+
+def test_predictor_repeats_the_latest_load_every_pitch_turned_with_the_work() -> None:
+    t = np.array([0.0, 1e-3])
+    load = EngagementLoad(t, np.array([[0.0, 100.0, 0.0]] * 2), np.array([[50.0, 0.0, 1.0]] * 2), 1.0, 0.05, 3000.0)
+    pred = ForcePredictor()
+    assert pred(0.5e-3) == []
+    pred.update(load, 0.4e-3, turn_rate=-100.0, feed_rate=-2.0)
+    # at 1.3 ms the windows of the engagements 1, 2 and 3 pitches on contain t: three teeth in the cut
+    acting = pred(1.3e-3)
+    assert len(acting) == 3
+    for j, (force, point) in zip((1, 2, 3), acting, strict=True):
+        turn = -100.0 * j * 0.4e-3
+        assert point == pytest.approx([50 * math.cos(turn), 50 * math.sin(turn), 1.0 - 2.0 * j * 0.4e-3])
+        assert np.linalg.norm(force) == pytest.approx(100.0)
+    assert pred(0.9e-3) != [] and pred(5e-3) == []
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cosim") / "small.toml"
+    path.write_text(SMALL_JOB)
+    job = load_job(path)
+    return cosimulate(job, forces=True), cosimulate(job, forces=False)
+
+
+def test_the_motors_pay_for_the_chips(runs) -> None:
+    loaded, free = runs
+    chip_energy = sum(a.load.energy for a in loaded.loads)
+    volume = sum(c.volume for c in loaded.cut.chips)
+    assert len(loaded.loads) > 300 and volume > 100.0  # a full-depth pass of an 18-tooth m1 gear
+    # the chips absorb their specific energy kc(h) V: the loads acting (each the previous chip's) do that work
+    assert -loaded.load_work == pytest.approx(chip_energy, rel=0.10)
+    # and the actuators deliver exactly the extra work (the run without forces is otherwise the same)
+    assert loaded.actuator_work - free.actuator_work == pytest.approx(-loaded.load_work, rel=0.01)
+    # Kienzle on this chip: h of tens of um, ~5 J/mm^3 for 16MnCr5
+    h = np.median([a.load.thickness for a in loaded.loads])
+    assert 0.01 < h < 0.1
+    assert chip_energy / volume == pytest.approx(2100 * h**-0.26 * 1.09 * 1e-3, rel=0.2)
+
+
+def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
+    loaded, free = runs
+    v1, v0 = (sum(c.volume for c in r.cut.chips) for r in runs)
+    assert v1 == pytest.approx(v0, rel=0.01)
+    assert loaded.cut.gear.genus() == 0 and free.cut.gear.genus() == 0
+    # the tool motor carries the cutting torque while the cutter is in the blank
+    rec = loaded.record
+    feed = rec.segment == 3
+    base, cutting = rec.torque[feed & ~rec.cutting, 0].mean(), rec.torque[rec.cutting, 0].mean()
+    rec0 = free.record
+    assert rec0.torque[rec0.cutting, 0].mean() == pytest.approx(base, abs=0.3)
+    assert cutting - base > 1.0  # N m
+    assert loaded.chip_change() < 0.1  # consecutive chips: the prediction's error
