@@ -29,12 +29,15 @@ from cutting.sweep import PoseFunction, place
 
 @dataclass
 class EngagementLoad:
-    """The force on the workpiece over one engagement, in the blank frame: ``force`` (n, 3) [N] acting at
-    ``point`` (n, 3) [mm] at times ``t`` (n,) [s] (zero outside the cut). The cutter takes ``-force``."""
+    """The load on the workpiece over one engagement, in the blank frame: the resultant ``force`` (n, 3) [N] at
+    ``point`` (n, 3) [mm] (the engaged edge's centroid) and the ``moment`` (n, 3) [N m] of the distributed
+    forces about that point, at times ``t`` (n,) [s]. For rigid bodies the wrench does the same work as the
+    forces along the edge. The cutter takes the opposite wrench."""
 
     t: np.ndarray
     force: np.ndarray
     point: np.ndarray
+    moment: np.ndarray
     volume: float  # chip volume [mm^3]
     thickness: float  # mean uncut chip thickness h [mm]
     kc: float  # specific cutting force used [N/mm^2]
@@ -47,17 +50,17 @@ class EngagementLoad:
     def peak(self) -> float:
         return float(np.linalg.norm(self.force, axis=1).max()) if len(self.t) else 0.0
 
-    def at(self, t: float) -> tuple[np.ndarray, np.ndarray] | None:
-        """Force and point at time ``t`` (linear between samples), or None outside the engagement."""
+    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Force, point and moment at time ``t`` (linear between samples), or None outside the engagement."""
         if not len(self.t) or t < self.t[0] or t > self.t[-1]:
             return None
         i = int(np.clip(np.searchsorted(self.t, t) - 1, 0, len(self.t) - 2))
         s = (t - self.t[i]) / (self.t[i + 1] - self.t[i])
-        return (1 - s) * self.force[i] + s * self.force[i + 1], (1 - s) * self.point[i] + s * self.point[i + 1]
+        return tuple((1 - s) * a[i] + s * a[i + 1] for a in (self.force, self.point, self.moment))
 
     def shifted(self, dt: float) -> EngagementLoad:
         """The same load ``dt`` seconds later (the prediction for the next tooth: one cutter pitch on)."""
-        return EngagementLoad(self.t + dt, self.force, self.point, self.volume, self.thickness, self.kc)
+        return EngagementLoad(self.t + dt, self.force, self.point, self.moment, self.volume, self.thickness, self.kc)
 
 
 def engaged_speed(
@@ -98,7 +101,7 @@ def engagement_load(
     swept = float(((swept_rate[1:] + swept_rate[:-1]) / 2 * np.diff(times)).sum())  # trapezoid rule [mm^2]
     if volume <= 0 or swept <= 0:
         zero = np.zeros((0, 3))
-        return EngagementLoad(np.zeros(0), zero, zero, max(volume, 0.0), 0.0, 0.0)
+        return EngagementLoad(np.zeros(0), zero, zero, zero, max(volume, 0.0), 0.0, 0.0)
     h = volume / swept
     kc = material.kc(h) * rake_factor(rake_deg)
     unit = vel / np.maximum(speed, 1e-12)[..., None]
@@ -106,4 +109,5 @@ def engagement_load(
     force = per_element.sum(axis=1)
     weight = length.sum(axis=1)
     point = (length[..., None] * mid).sum(axis=1) / np.maximum(weight, 1e-12)[:, None]
-    return EngagementLoad(times, force, point, volume, h, kc)
+    moment = np.cross(mid - point[:, None, :], per_element).sum(axis=1) * 1e-3  # N mm -> N m
+    return EngagementLoad(times, force, point, moment, volume, h, kc)

@@ -32,17 +32,18 @@ sweep_error = 0.02
 
 def test_predictor_repeats_the_latest_load_every_pitch_turned_with_the_work() -> None:
     t = np.array([0.0, 1e-3])
-    load = EngagementLoad(t, np.array([[0.0, 100.0, 0.0]] * 2), np.array([[50.0, 0.0, 1.0]] * 2), 1.0, 0.05, 3000.0)
+    f, p, m = np.array([[0.0, 100.0, 0.0]] * 2), np.array([[50.0, 0.0, 1.0]] * 2), np.array([[0.0, 0.0, 2.0]] * 2)
+    load = EngagementLoad(t, f, p, m, 1.0, 0.05, 3000.0)
     pred = ForcePredictor()
     assert pred(0.5e-3) == []
     pred.update(load, 0.4e-3, turn_rate=-100.0, feed_rate=-2.0)
     # at 1.3 ms the windows of the engagements 1, 2 and 3 pitches on contain t: three teeth in the cut
     acting = pred(1.3e-3)
     assert len(acting) == 3
-    for j, (force, point) in zip((1, 2, 3), acting, strict=True):
+    for j, (force, point, moment) in zip((1, 2, 3), acting, strict=True):
         turn = -100.0 * j * 0.4e-3
         assert point == pytest.approx([50 * math.cos(turn), 50 * math.sin(turn), 1.0 - 2.0 * j * 0.4e-3])
-        assert np.linalg.norm(force) == pytest.approx(100.0)
+        assert np.linalg.norm(force) == pytest.approx(100.0) and moment == pytest.approx([0.0, 0.0, 2.0])
     assert pred(0.9e-3) != [] and pred(5e-3) == []
 
 
@@ -60,7 +61,7 @@ def test_the_motors_pay_for_the_chips(runs) -> None:
     volume = sum(c.volume for c in loaded.cut.chips)
     assert len(loaded.loads) > 300 and volume > 100.0  # a full-depth pass of an 18-tooth m1 gear
     # the chips absorb their specific energy kc(h) V: the loads acting (each the previous chip's) do that work
-    assert -loaded.load_work == pytest.approx(chip_energy, rel=0.10)
+    assert -loaded.load_work == pytest.approx(chip_energy, rel=0.08)  # measured -5 %: the first teeth, unpredicted
     # and the actuators deliver exactly the extra work (the run without forces is otherwise the same)
     assert loaded.actuator_work - free.actuator_work == pytest.approx(-loaded.load_work, rel=0.01)
     # Kienzle on this chip: h of tens of um, ~5 J/mm^3 for 16MnCr5

@@ -105,3 +105,31 @@ def test_rotating_edge_force_follows_each_elements_velocity() -> None:
 def test_no_chip_no_load() -> None:
     load = engagement_load(translating(1000.0), EDGE, 0.0, 2e-3, 0.0, STEEL, lambda w: np.ones(w.shape[:-1], bool))
     assert load.peak() == 0.0 and load.at(1e-3) is None
+
+
+def test_wrench_does_the_work_of_the_forces_along_the_edge() -> None:
+    """Force at the centroid plus moment about it: on a rigid body the same power as the distributed forces, for
+    an edge that turns about a tilted axis while it translates (v = u + w x (p - u t))."""
+    from cutting.forces import engaged_speed
+
+    u, w = np.array([300.0, -50.0, 20.0]), np.array([10.0, 40.0, 120.0])  # mm/s, rad/s
+
+    def pose(t: np.ndarray):
+        t = np.atleast_1d(t)
+        rot = np.zeros((len(t), 3, 3))
+        for k, tk in enumerate(t):
+            v = w * tk
+            a = np.linalg.norm(v)
+            kx = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]]) / a
+            rot[k] = np.eye(3) + np.sin(a) * kx + (1 - np.cos(a)) * kx @ kx
+        return rot, u * t[:, None]
+
+    edge = np.array([[8.0, 1.0, 0.0], [9.0, 0.5, 0.3], [10.0, 0.0, 0.2], [11.0, -0.8, -0.1], [12.0, -1.0, 0.0]])
+    inside = lambda p: np.ones(p.shape[:-1], bool)  # noqa: E731
+    load = engagement_load(pose, edge, 1e-4, 2e-3, 0.05, STEEL, inside, samples=9)
+    length, _, vel = engaged_speed(pose, edge, load.t, inside)
+    distributed = load.kc * load.thickness * (length * np.linalg.norm(vel, axis=2)).sum(axis=1)  # N mm/s
+    v_centroid = u + np.cross(w, load.point - u * load.t[:, None])
+    wrench = (load.force * v_centroid).sum(axis=1) + (load.moment * 1e3 * w).sum(axis=1)
+    np.testing.assert_allclose(wrench, distributed, rtol=1e-5)
+    assert np.abs(load.moment).max() > 0  # the moment matters here

@@ -55,20 +55,24 @@ class ForcePredictor:
     def clear(self) -> None:
         self.latest = None
 
-    def __call__(self, t: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    def __call__(self, t: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         ld = self.latest
         if ld is None or not len(ld.t) or self.period <= 0:
             return []
         out = []
         first = max(1, math.ceil((t - ld.t[-1]) / self.period))
-        last = math.floor((t - ld.t[0]) / self.period)
+        # the engagements up to one window plus two pitches on: later ones get the load of a newer chip, and a
+        # prediction that old is stale (the cutter may have left the blank)
+        horizon = math.ceil((ld.t[-1] - ld.t[0]) / self.period) + 2
+        last = min(math.floor((t - ld.t[0]) / self.period), horizon)
         for j in range(first, last + 1):
             delay = j * self.period
             fp = ld.at(t - delay)
             if fp is None:
                 continue
             turn = _rot_z(self.turn_rate * delay)
-            out.append((turn @ fp[0], turn @ fp[1] + np.array([0.0, 0.0, self.feed_rate * delay])))
+            force, point, moment = fp
+            out.append((turn @ force, turn @ point + np.array([0.0, 0.0, self.feed_rate * delay]), turn @ moment))
         return out
 
 
@@ -238,6 +242,7 @@ def _cut_ready(
         stroke.next_m += 1
         count += 1
         if chip is None or chip.volume <= 0:
+            predictor.clear()  # the tooth took nothing: none of the next engagements is predicted to cut
             continue
         load = engagement_load(
             tooth_pose(motion, m), edge_pts, chip.start, chip.end, chip.volume, mat, cutter.in_blank

@@ -78,17 +78,18 @@ class MachinePhysics:
         m.tendon_stiffness[t], m.tendon_damping[t] = (k, c) if on else (0.0, 0.0)
         m.tendon_lengthspring[t] = [length - gap / 2, length + gap / 2]
 
-    def apply_cutting_load(self, force: np.ndarray, point: np.ndarray) -> None:
-        """Add the cutting force to ``qfrc_applied``: ``force`` [N] on the workpiece at ``point`` [mm], both in the
-        blank frame, and the opposite force on the cutter at the same point (action and reaction through the
-        chip). The frames are those of the last step (the servo tick holds the force over its sub-steps)."""
+    def apply_cutting_load(self, force: np.ndarray, point: np.ndarray, moment: np.ndarray | None = None) -> None:
+        """Add a cutting load to ``qfrc_applied``: ``force`` [N] and ``moment`` [N m] on the workpiece at ``point``
+        [mm], all in the blank frame, and the opposite wrench on the cutter at the same point (action and reaction
+        through the chip). The frames are those of the last step (the servo tick holds the load over its
+        sub-steps)."""
         d = self.data
         rb = d.site_xmat[self.site_blank].reshape(3, 3)
         f_world = rb @ force
+        m_world = np.zeros(3) if moment is None else rb @ moment
         p_world = d.site_xpos[self.site_blank] + rb @ point * 1e-3
-        zero = np.zeros(3)
-        mujoco.mj_applyFT(self.model, d, f_world, zero, p_world, self.blank_body, d.qfrc_applied)
-        mujoco.mj_applyFT(self.model, d, -f_world, zero, p_world, self.cutter_body, d.qfrc_applied)
+        mujoco.mj_applyFT(self.model, d, f_world, m_world, p_world, self.blank_body, d.qfrc_applied)
+        mujoco.mj_applyFT(self.model, d, -f_world, -m_world, p_world, self.cutter_body, d.qfrc_applied)
 
     def step(self, n: int) -> None:
         mujoco.mj_step(self.model, self.data, nstep=n)

@@ -189,9 +189,9 @@ class MachineRun:
     """The simulation loop as a stepper: :meth:`advance` runs the machine up to a time, so another stage (the
     cutting co-simulation) can act between calls; :meth:`record` assembles the :class:`MotionRecord`.
 
-    ``load``, if set, gives the cutting forces at a time: pairs (force [N] on the workpiece, point [mm]), both in
-    the blank frame, one per engaged tooth; each is applied to the blank and (opposite) to the cutter every servo
-    tick.
+    ``load``, if set, gives the cutting loads at a time: (force [N] on the workpiece, point [mm], moment [N m]),
+    in the blank frame, one per engaged tooth; each is applied to the blank and (opposite) to the cutter every
+    servo tick.
     """
 
     def __init__(
@@ -267,8 +267,8 @@ class MachineRun:
                 if disturbance is not None:
                     qfrc[self._dof_dist] = disturbance(data.time)
                 if load is not None:
-                    for force, point in load(data.time):
-                        phys.apply_cutting_load(force, point)
+                    for wrench in load(data.time):
+                        phys.apply_cutting_load(*wrench)
             phys.step(subs)
             if load is not None:
                 self.load_work += float(qfrc @ qvel) * dt
