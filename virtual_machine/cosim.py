@@ -24,7 +24,7 @@ from cutting.edge import make_edge
 from cutting.forces import EngagementLoad, engagement_load
 from cutting.holder import check_holder_side
 from cutting.materials import Material, material
-from cutting.removal import CutResult, PassCutter, Stock, expected_genus, tooth_pose
+from cutting.removal import CutResult, PassCutter, Stock, expected_genus, passage_count, tooth_pose
 from cutting.sampled_motion import SampledMotion
 from cutting.sweep import outline_points
 from cutting.trajectory import ideal_passes
@@ -94,6 +94,8 @@ class CoSimulation:
     material: Material | None = None
     load_work: float = 0.0  # work of the cutting loads on the machine [J] (negative: the chips absorb it)
     actuator_work: float = 0.0  # work of all actuators over the run [J]
+    load_rows: np.ndarray | None = None  # per servo tick: t [s], resultant on the workpiece [N] (3), torque [N m]
+    snapshots: list[tuple[float, np.ndarray, np.ndarray]] = field(default_factory=list)  # t, vertices, triangles
 
     def chip_change(self) -> float:
         """Median relative change of the chip volume between consecutive engagements of a pass: the size of the
@@ -113,6 +115,8 @@ class _Stroke:
         self.t: list[float] = []
         self.q: list[list[float]] = []
         self.next_m: int | None = None
+        self.first_m = 0
+        self.snapshots = 0  # taken so far
         self.ended = False
 
 
@@ -123,10 +127,12 @@ def cosimulate(
     forces: bool = True,
     servo_substeps: int = 2,
     progress: Callable[[float, int], None] | None = None,
+    snapshots_per_pass: int = 0,
 ) -> CoSimulation:
     """Run the job's machine and cut its gear from the motion it really makes, with the chips' forces acting on
     the machine (``forces=False``: the cut follows the machine, no force acts back). ``progress(machine_time,
-    passages)`` is called after every cut passage."""
+    passages)`` is called after every cut passage. ``snapshots_per_pass``: meshes of the stock taken evenly
+    through each pass (the last at its end), for the recording."""
     setup = job.skiving
     kind = edge_kind or job.cutter_options["edge"]
     edge = make_edge(setup, kind)
@@ -174,6 +180,8 @@ def cosimulate(
             passages += n
             if n and progress is not None:
                 progress(run.time, passages)
+            if snapshots_per_pass:
+                _snapshot(sim, stock, current, run.time, snapshots_per_pass, plans, edge)
             if current.ended:
                 predictor.clear()  # no chip in the return stroke
                 current = None
@@ -181,6 +189,7 @@ def cosimulate(
             break
     sim.record = run.record()
     sim.load_work, sim.actuator_work = run.load_work, run.actuator_work
+    sim.load_rows = np.array(run.load_rows).reshape(-1, 5)
     c0 = time.perf_counter()
     result.gear = stock.solid()
     if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
@@ -202,6 +211,17 @@ def cosimulate(
     return sim
 
 
+def _snapshot(sim: CoSimulation, stock: Stock, stroke: _Stroke, t: float, per_pass: int, plans, edge) -> None:
+    """A mesh of the stock whenever the stroke has cut the next k / per_pass of its passages, and at its end."""
+    total = passage_count(plans[stroke.index], edge)
+    done = stroke.next_m - stroke.first_m if stroke.next_m is not None else 0
+    due = min(per_pass, done * per_pass // max(total, 1)) if not stroke.ended else per_pass
+    if due > stroke.snapshots:
+        stroke.snapshots = due
+        mesh = stock.solid().to_mesh()
+        sim.snapshots.append((t, np.asarray(mesh.vert_properties)[:, :3].copy(), np.asarray(mesh.tri_verts).copy()))
+
+
 def _cut_ready(
     stroke: _Stroke,
     setup,
@@ -221,7 +241,7 @@ def _cut_ready(
     cutter = stroke.cutter
     half = cutter.half
     if stroke.next_m is None:
-        stroke.next_m = math.ceil((phi[0] - half) / pitch)
+        stroke.next_m = stroke.first_m = math.ceil((phi[0] - half) / pitch)
     step = float(np.median(np.diff(phi)))  # cutter angle per sample
     # a window is covered once the samples reach past its end (four samples more for the interpolation)
     last_m = math.floor((phi[-1] + half) / pitch) if final else math.floor((phi[-1] - half - 4 * step) / pitch)

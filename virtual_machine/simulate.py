@@ -223,8 +223,10 @@ class MachineRun:
         self.rows: list[tuple] = []
         self.home = (phys.q("B1"), phys.q("B2"), phys.q("P3") / MM)
         self.timing = {"physics": 0.0, "control": 0.0}
-        # with a cutting load: the work the load does on the machine and the work of the actuators [J] (per tick)
+        # with a cutting load: the work the load does on the machine and the work of the actuators [J] (per tick),
+        # and per tick the load's resultant on the workpiece (blank frame) [N] and its torque about the work axis
         self.load_work = self.actuator_work = 0.0
+        self.load_rows: list[tuple[float, float, float, float, float]] = []
         self._clutch_state: dict[str, bool] = {}
         self._last_cnc = None
 
@@ -267,8 +269,12 @@ class MachineRun:
                 if disturbance is not None:
                     qfrc[self._dof_dist] = disturbance(data.time)
                 if load is not None:
-                    for wrench in load(data.time):
-                        phys.apply_cutting_load(*wrench)
+                    fx = fy = fz = tz = 0.0
+                    for force, point, moment in load(data.time):
+                        phys.apply_cutting_load(force, point, moment)
+                        fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
+                        tz += (point[0] * force[1] - point[1] * force[0]) * 1e-3 + moment[2]
+                    self.load_rows.append((data.time, fx, fy, fz, tz))
             phys.step(subs)
             if load is not None:
                 self.load_work += float(qfrc @ qvel) * dt
