@@ -58,6 +58,31 @@ class EngagementLoad:
         s = (t - self.t[i]) / (self.t[i + 1] - self.t[i])
         return tuple((1 - s) * a[i] + s * a[i + 1] for a in (self.force, self.point, self.moment))
 
+    def mean(self, a: float, b: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The load averaged over [a, b] [s] (a servo tick): the mean force, the force-weighted mean point and the
+        mean moment about that point, so that the tick gets the engagement's impulse and angular impulse even when
+        the engagement is shorter than the tick. None if they do not overlap."""
+        if not len(self.t) or b <= self.t[0] or a >= self.t[-1] or b <= a:
+            return None
+        lo, hi = max(a, self.t[0]), min(b, self.t[-1])
+        inner = self.t[(self.t > lo) & (self.t < hi)]
+        ts = np.concatenate([[lo], inner, [hi]])
+        f = np.column_stack([np.interp(ts, self.t, self.force[:, k]) for k in range(3)])
+        p = np.column_stack([np.interp(ts, self.t, self.point[:, k]) for k in range(3)])
+        m = np.column_stack([np.interp(ts, self.t, self.moment[:, k]) for k in range(3)])
+        w = np.diff(ts)
+
+        def integral(y: np.ndarray) -> np.ndarray:  # trapezoid rule over ts
+            return ((y[1:] + y[:-1]) / 2 * w[:, None]).sum(axis=0)
+
+        mag = np.linalg.norm(f, axis=1)[:, None]
+        weight = float(integral(mag)[0])
+        if weight <= 0:
+            return None
+        point = integral(mag * p) / weight
+        moment = integral(m + np.cross(p - point, f) * 1e-3)
+        return integral(f) / (b - a), point, moment / (b - a)
+
     def shifted(self, dt: float) -> EngagementLoad:
         """The same load ``dt`` seconds later (the prediction for the next tooth: one cutter pitch on)."""
         return EngagementLoad(self.t + dt, self.force, self.point, self.moment, self.volume, self.thickness, self.kc)

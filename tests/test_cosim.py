@@ -35,16 +35,16 @@ def test_predictor_repeats_the_latest_load_every_pitch_turned_with_the_work() ->
     f, p, m = np.array([[0.0, 100.0, 0.0]] * 2), np.array([[50.0, 0.0, 1.0]] * 2), np.array([[0.0, 0.0, 2.0]] * 2)
     load = EngagementLoad(t, f, p, m, 1.0, 0.05, 3000.0)
     pred = ForcePredictor()
-    assert pred(0.5e-3) == []
+    assert pred(0.5e-3, 1e-6) == []
     pred.update(load, 0.4e-3, turn_rate=-100.0, feed_rate=-2.0)
     # at 1.3 ms the windows of the engagements 1, 2 and 3 pitches on contain t: three teeth in the cut
-    acting = pred(1.3e-3)
+    acting = pred(1.3e-3, 1e-6)
     assert len(acting) == 3
     for j, (force, point, moment) in zip((1, 2, 3), acting, strict=True):
         turn = -100.0 * j * 0.4e-3
         assert point == pytest.approx([50 * math.cos(turn), 50 * math.sin(turn), 1.0 - 2.0 * j * 0.4e-3])
         assert np.linalg.norm(force) == pytest.approx(100.0) and moment == pytest.approx([0.0, 0.0, 2.0])
-    assert pred(0.9e-3) != [] and pred(5e-3) == []
+    assert pred(0.9e-3, 1e-6) != [] and pred(5e-3, 1e-6) == []
 
 
 @pytest.fixture(scope="module")

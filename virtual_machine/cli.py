@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from cutting.errors import InputError
+from cutting.errors import InputError, Problem
 from virtual_machine.formatting import format_measurement, format_sheet
 from virtual_machine.job import STRUCTURES, default_job_path, load_job
 from virtual_machine.setup_sheet import setup_sheet
@@ -173,6 +173,64 @@ def _finite(obj: object) -> object:
 
 if __name__ == "__main__":
     main()
+
+
+@main.command(help="Run JOB on the simulated machine: cut the gear under its cutting forces, measure it, report.")
+@click.argument("job", required=False, type=click.Path(path_type=Path))
+@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
+@click.option("--rrd", type=click.Path(dir_okay=False, path_type=Path), help="Also write the Rerun recording here.")
+def run(job: Path | None, out: Path, rrd: Path | None) -> None:
+    from tqdm import tqdm
+
+    from virtual_machine.run import run_job
+
+    path = job or default_job_path()
+    try:
+        j = load_job(path)
+        if j.kind != "gear":
+            raise InputError(Problem("job", j.kind, "skive run cuts gears", "use `skive simulate` for a thread job"))
+        total = setup_sheet(j).sanity["total_time_s"]
+    except (InputError, ValueError) as exc:
+        _fail(exc)
+    bar = tqdm(total=round(total, 2), desc="machine and cut", unit="s machine", leave=True)
+
+    def progress(t: float, passages: int) -> None:
+        bar.total = max(bar.total, round(t, 2))
+        bar.n = round(t, 2)
+        bar.set_postfix(engagements=passages, refresh=False)
+        bar.refresh()
+
+    def stage(name: str) -> None:
+        if name != "machine and cut":
+            bar.close()
+            click.echo(f"{name} ...")
+
+    try:
+        doc = run_job(path, out, rrd, progress, stage)
+    except InputError as exc:
+        bar.close()
+        _fail(exc)
+    click.echo(format_measurement(doc, str(out / "gear.stl")))
+    click.echo(format_run(doc["run"], out, rrd))
+
+
+def format_run(run: dict, out: Path, rrd: Path | None) -> str:
+    """The end-of-run table: stages and their wall time, what the machine and the chips did, the files."""
+    d = run["durations_s"]
+    wall = sum(v for k, v in d.items() if k != "machine")
+    lines = ["", f"RUN  {run['job']['path']}  ({run['machine']['structure']} / {run['machine']['synchronization']})"]
+    lines += [f"  {k:18s} {v:8.1f} s" for k, v in d.items() if k != "machine"]
+    lines.append(f"  {'total':18s} {wall:8.1f} s for {d['machine']:.2f} s of machine time")
+    sync, f = run["synchronisation"]["sync_error_in_cut"], run["forces"]
+    if sync:
+        lines.append(f"  sync error while cutting: RMS {sync['rms_um']:.3f} um, p-p {sync['peak_to_peak_um']:.3f} um")
+    lines.append(
+        f"  {run['cut']['passages']} engagements, {run['cut']['chip_volume_mm3']:.1f} mm^3 of chips, peak force "
+        f"{f['peak_force_N']:.0f} N, cutting energy {f['chip_energy_J']:.0f} J ({f['material']})"
+    )
+    files = ["gear.stl", "measurement.json", "report.html", "charts/"]
+    lines.append(f"  files: {', '.join(str(out / x) for x in files)}" + (f", {rrd}" if rrd else ""))
+    return "\n".join(lines)
 
 
 @main.command(help="Run the machine through JOB's passes (no cutting); write the pose trajectory and motion record.")

@@ -55,7 +55,8 @@ class ForcePredictor:
     def clear(self) -> None:
         self.latest = None
 
-    def __call__(self, t: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    def __call__(self, t: float, dt: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """The loads over the servo tick [t, t + dt], each averaged over it (see EngagementLoad.mean)."""
         ld = self.latest
         if ld is None or not len(ld.t) or self.period <= 0:
             return []
@@ -64,10 +65,10 @@ class ForcePredictor:
         # the engagements up to one window plus two pitches on: later ones get the load of a newer chip, and a
         # prediction that old is stale (the cutter may have left the blank)
         horizon = math.ceil((ld.t[-1] - ld.t[0]) / self.period) + 2
-        last = min(math.floor((t - ld.t[0]) / self.period), horizon)
+        last = min(math.floor((t + dt - ld.t[0]) / self.period), horizon)
         for j in range(first, last + 1):
             delay = j * self.period
-            fp = ld.at(t - delay)
+            fp = ld.mean(t - delay, t + dt - delay)
             if fp is None:
                 continue
             turn = _rot_z(self.turn_rate * delay)
@@ -117,6 +118,7 @@ class _Stroke:
         self.next_m: int | None = None
         self.first_m = 0
         self.snapshots = 0  # taken so far
+        self.total: int | None = None  # passages the ideal pass has
         self.ended = False
 
 
@@ -145,7 +147,7 @@ def cosimulate(
     mat = material(job.process["material"])
     run = MachineRun(job, params, servo_substeps)
     predictor = ForcePredictor()
-    run.load = predictor if forces else (lambda t: ())  # no force, but the work accounting runs alike
+    run.load = predictor if forces else (lambda t, dt: ())  # no force, but the work accounting runs alike
     stock = Stock(setup.gear)
     result = CutResult(None)
     edge_pts = outline_points(edge.outline)
@@ -213,7 +215,9 @@ def cosimulate(
 
 def _snapshot(sim: CoSimulation, stock: Stock, stroke: _Stroke, t: float, per_pass: int, plans, edge) -> None:
     """A mesh of the stock whenever the stroke has cut the next k / per_pass of its passages, and at its end."""
-    total = passage_count(plans[stroke.index], edge)
+    if stroke.total is None:
+        stroke.total = passage_count(plans[stroke.index], edge)
+    total = stroke.total
     done = stroke.next_m - stroke.first_m if stroke.next_m is not None else 0
     due = min(per_pass, done * per_pass // max(total, 1)) if not stroke.ended else per_pass
     if due > stroke.snapshots:

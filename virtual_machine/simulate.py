@@ -189,9 +189,9 @@ class MachineRun:
     """The simulation loop as a stepper: :meth:`advance` runs the machine up to a time, so another stage (the
     cutting co-simulation) can act between calls; :meth:`record` assembles the :class:`MotionRecord`.
 
-    ``load``, if set, gives the cutting loads at a time: (force [N] on the workpiece, point [mm], moment [N m]),
-    in the blank frame, one per engaged tooth; each is applied to the blank and (opposite) to the cutter every
-    servo tick.
+    ``load``, if set, gives the cutting loads of a servo tick, ``load(t, dt)``: (force [N] on the workpiece,
+    point [mm], moment [N m]) in the blank frame, one per engaged tooth, each the mean over [t, t + dt]; each is
+    applied to the blank and (opposite) to the cutter for the tick.
     """
 
     def __init__(
@@ -270,7 +270,7 @@ class MachineRun:
                     qfrc[self._dof_dist] = disturbance(data.time)
                 if load is not None:
                     fx = fy = fz = tz = 0.0
-                    for force, point, moment in load(data.time):
+                    for force, point, moment in load(data.time, dt):
                         phys.apply_cutting_load(force, point, moment)
                         fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
                         tz += (point[0] * force[1] - point[1] * force[0]) * 1e-3 + moment[2]

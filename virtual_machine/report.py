@@ -1,0 +1,161 @@
+"""report.html: the one page a gear engineer reads after a run, and the run's time chart.
+
+Self-contained (the charts are embedded as PNG data), no script, no external style: it opens anywhere and can
+be archived with the gear.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from virtual_machine.formatting import class_table
+
+STYLE = """
+body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }
+h1 { font-size: 1.5em; } h2 { font-size: 1.15em; border-bottom: 1px solid #ccc; padding-bottom: 0.2em; }
+table { border-collapse: collapse; margin: 0.5em 0 1em; } td, th { padding: 0.2em 0.8em; text-align: right; }
+th { background: #eee; } td:first-child, th:first-child { text-align: left; }
+tr.fail td { background: #fde2e2; } .verdict { font-size: 1.2em; font-weight: bold; }
+pre { background: #f6f6f6; padding: 0.8em; font-size: 0.8em; overflow-x: auto; }
+img { max-width: 100%; border: 1px solid #ddd; margin: 0.3em 0; }
+"""
+
+
+def run_chart(path: Path, record, load_rows: np.ndarray, chips: list[tuple[float, float]]) -> Path:
+    """Synchronisation error, cutting force and torque about the work axis, and chip volume over machine time."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from virtual_machine.simulate import SEGMENTS
+
+    fig, ax = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+    feed = record.segment == SEGMENTS.index("feed")  # the run-up's transient would hide the micrometres
+    ax[0].plot(record.t, np.where(feed, record.sync_um, np.nan), lw=0.5, color="tab:blue", label="feed stroke")
+    ax[0].plot(record.t, np.where(record.cutting, record.sync_um, np.nan), lw=0.7, color="tab:red", label="cutting")
+    ax[0].set_ylabel("sync error [um]\n(arc on d)")
+    ax[0].legend(loc="upper right")
+    if len(load_rows):
+        t, f = load_rows[:, 0], np.linalg.norm(load_rows[:, 1:4], axis=1)
+        ax[1].plot(t, f, lw=0.5, color="tab:orange", label="|F| on the workpiece [N]")
+        twin = ax[1].twinx()
+        twin.plot(t, load_rows[:, 4], lw=0.5, color="tab:green", label="torque about the work axis [N m]")
+        twin.set_ylabel("torque [N m]")
+        twin.legend(loc="upper left")
+    ax[1].set_ylabel("cutting force [N]")
+    ax[1].legend(loc="upper right")
+    if chips:
+        tc, vc = np.array(chips).T
+        ax[2].plot(tc, vc, ".", ms=2, color="tab:purple")
+    ax[2].set_ylabel("chip volume [mm^3]\nper engagement")
+    ax[2].set_xlabel("machine time [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def _table(head: list[str], rows: list[list[Any]], fails: set[int] | None = None) -> str:
+    out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
+    for k, row in enumerate(rows):
+        cls = ' class="fail"' if fails and k in fails else ""
+        out.append(f"<tr{cls}>" + "".join(f"<td>{html.escape(_fmt(v))}</td>" for v in row) + "</tr>")
+    return "\n".join(out) + "</table>"
+
+
+def _fmt(v: Any) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.2f}" if abs(v) < 1e4 else f"{v:.4g}"
+    return str(v)
+
+
+def _image(path: Path) -> str:
+    data = base64.b64encode(Path(path).read_bytes()).decode()
+    return f'<img alt="{html.escape(Path(path).stem)}" src="data:image/png;base64,{data}">'
+
+
+def write_report(
+    path: Path, title: str, doc: dict[str, Any], job_text: str, sheet_text: str, charts: list[Path], run_png: Path
+) -> Path:
+    """Write the page: verdict, job, class table, charts, run facts, setting sheet."""
+    run = doc["run"]
+    iso = doc["iso1328"]
+    cls = (iso.get("class") or {}).get("overall")
+    tol_class = iso.get("tolerances_class")
+    rows, fails = [], set()
+    for k, (key, left, right, tol, c) in enumerate(class_table(doc)):
+        rows.append([key, left, right, tol, c])
+        worst = max(abs(left), abs(right or 0.0))
+        if tol is not None and worst > tol:
+            fails.add(k)
+    verdict = (
+        f"ISO 1328-1:2013 class of the gear: {cls}" if cls is not None else f"ISO 1328-1: {iso.get('error', 'n/a')}"
+    )
+    th = doc["thickness"]
+    span = th["span"]
+    thickness = [
+        ["over balls M_dK [mm]", th["over_balls"]["M_dK_mm"], th["over_balls"]["M_dK_nominal_mm"]],
+    ]
+    if span.get("k"):
+        thickness.append([f"span W_{span['k']} [mm]", span["W_k_mm"], span["W_k_nominal_mm"]])
+    thickness += [
+        ["tip diameter [mm]", th["tip_diameter_mm"], th["tip_diameter_nominal_mm"]],
+        ["root diameter [mm]", th["root_diameter_mm"], th["root_diameter_nominal_mm"]],
+    ]
+    sync = run["synchronisation"]["sync_error_in_cut"]
+    forces = run["forces"]
+    facts = [
+        ["machine", f"{run['machine']['structure']} / {run['machine']['synchronization']}"],
+        ["machine time [s]", run["durations_s"]["machine"]],
+        [
+            "sync error while cutting, RMS / p-p [um]",
+            f"{sync.get('rms_um', 0):.3f} / {sync.get('peak_to_peak_um', 0):.3f}",
+        ],
+        ["tooth engagements cut", run["cut"]["passages"]],
+        ["chip volume [mm^3]", run["cut"]["chip_volume_mm3"]],
+        ["peak cutting force [N]", forces["peak_force_N"]],
+        ["peak torque about the work axis [N m]", forces["peak_work_torque_Nm"]],
+        ["cutting energy [J]", forces["chip_energy_J"]],
+        ["mean chip thickness [mm]", forces["median_chip_thickness_mm"]],
+        ["material", f"{forces['material']} (kc1.1 {forces['kc11']:g} N/mm^2, mc {forces['mc']:g})"],
+        ["force granularity", forces["granularity"]],
+        ["sweep error, finishing pass [um]", run["cut"]["pass_sweep_error_um"][-1]],
+    ]
+    stages = [[k, v] for k, v in run["durations_s"].items() if k != "machine"]
+    tol_note = f"tolerances of class {tol_class}" if tol_class else "no ISO tolerances"
+    body = [
+        f"<h1>{html.escape(title)}</h1>",
+        f'<p class="verdict">{html.escape(verdict)}</p>',
+        f"<p>Job <code>{html.escape(run['job']['path'])}</code>; skive {html.escape(run['versions']['skive'])}; "
+        "the gear is what the swept-volume removal left along the motion the simulated machine made under the "
+        "chips' cutting forces; it is measured from its mesh alone.</p>",
+        f"<h2>ISO 1328-1 deviations [um] ({html.escape(tol_note)}; rows over tolerance shaded)</h2>",
+        _table(["parameter", "left", "right", "tolerance", "class"], rows, fails),
+        "<h2>Size</h2>",
+        _table(["", "measured", "nominal"], thickness),
+        "<h2>Profile, helix and pitch</h2>",
+        *[_image(c) for c in charts],
+        "<h2>Synchronisation error, cutting force and chips over time</h2>",
+        _image(run_png),
+        "<h2>Run</h2>",
+        _table(["", ""], facts),
+        _table(["stage", "wall time [s]"], stages),
+        "<h2>Setting sheet</h2>",
+        f"<pre>{html.escape(sheet_text)}</pre>",
+        "<h2>Job file</h2>",
+        f"<pre>{html.escape(job_text)}</pre>",
+    ]
+    page = (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>'
+        f"<style>{STYLE}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
+    )
+    Path(path).write_text(page)
+    return Path(path)

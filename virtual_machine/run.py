@@ -1,0 +1,153 @@
+"""skive run: the simulated machine cuts the gear under its own cutting forces, the gear is measured, and the
+run writes gear.stl, measurement.json, report.html, the charts and (optionally) the Rerun recording.
+
+A run is reproducible: nothing in it is random (no seed to set), the physics is single-threaded and the removal
+order fixed, so the same job gives the same gear.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import platform
+import time
+from collections.abc import Callable
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cutting.ideal_cut import to_trimesh
+from metrology.charts import finite, write_charts
+from metrology.datum import check_mesh
+from metrology.measure import MeasureOptions, measure_gear
+from virtual_machine.cosim import CoSimulation, cosimulate
+from virtual_machine.formatting import format_sheet
+from virtual_machine.job import Job, load_job
+from virtual_machine.motion_io import summary
+from virtual_machine.report import run_chart, write_report
+from virtual_machine.setup_sheet import setup_sheet
+
+#: blank snapshots per pass in the recording
+SNAPSHOTS_PER_PASS = 3
+
+
+def versions() -> dict[str, str]:
+    out = {"python": platform.python_version()}
+    for dist in ("skive", "mujoco", "manifold3d", "numpy", "trimesh", "rerun-sdk"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def run_job(
+    path: Path,
+    out: Path,
+    rrd: Path | None = None,
+    progress: Callable[[float, int], None] | None = None,
+    stage: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Run the job at ``path``; write its files into ``out``; return the measurement document with ``run``.
+    ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage."""
+    announce = stage or (lambda name: None)
+    durations: dict[str, float] = {}
+    job = load_job(path)
+    out.mkdir(parents=True, exist_ok=True)
+    announce("machine and cut")
+    t0 = time.perf_counter()
+    sim = cosimulate(job, progress=progress, snapshots_per_pass=SNAPSHOTS_PER_PASS if rrd else 0)
+    durations["machine and cut"] = time.perf_counter() - t0
+    announce("measurement")
+    t0 = time.perf_counter()
+    mesh = to_trimesh(sim.cut.gear)
+    mesh.export(out / "gear.stl")
+    opts = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None})
+    measurement = measure_gear(check_mesh(mesh), job.gear, opts, str(out / "gear.stl"))
+    durations["measurement"] = time.perf_counter() - t0
+    announce("report")
+    t0 = time.perf_counter()
+    charts = write_charts(out / "charts", measurement)
+    chips = [(a.load.t[len(a.load.t) // 2], a.load.volume) for a in sim.loads]
+    run_png = run_chart(out / "charts" / "run.png", sim.record, sim.load_rows, chips)
+    durations["report"] = time.perf_counter() - t0
+    if rrd is not None:
+        announce("recording")
+        t0 = time.perf_counter()
+        _record(rrd, job, sim, mesh, measurement, [*charts, run_png])
+        durations["recording"] = time.perf_counter() - t0
+    doc = finite(measurement)
+    doc["run"] = run_metadata(job, Path(path), sim, durations, len(mesh.faces))
+    (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
+    sheet = format_sheet(setup_sheet(job), str(path))
+    title = f"skive run: {Path(path).name}"
+    write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
+    return doc
+
+
+def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, float], triangles: int) -> dict:
+    """What the run was and what it saw, beside the metrology schema."""
+    rec, cut, mat = sim.record, sim.cut, sim.material
+    loads = sim.loads
+    rows = sim.load_rows if sim.load_rows is not None else np.zeros((0, 5))
+    force = np.linalg.norm(rows[:, 1:4], axis=1) if len(rows) else np.zeros(1)
+    text = path.read_text()
+    return {
+        "job": {"path": str(path), "sha256": hashlib.sha256(text.encode()).hexdigest(), "kind": job.kind},
+        "versions": versions(),
+        "seed": None,  # nothing random: the same job gives the same gear
+        "machine": {k: job.machine[k] for k in ("structure", "synchronization", "adaptive_correction")},
+        "durations_s": {**{k: round(v, 3) for k, v in durations.items()}, "machine": float(rec.t[-1])},
+        "wall_split_s": {k: round(v, 3) for k, v in sim.seconds.items()},
+        "synchronisation": summary(rec, job.gear.teeth),
+        "forces": {
+            "material": mat.key,
+            "kc11": mat.kc11,
+            "mc": mat.mc,
+            "source": mat.source,
+            "granularity": "one tooth engagement: each engagement feels the load of the latest chip already cut",
+            "peak_force_N": float(force.max()),
+            "peak_work_torque_Nm": float(np.abs(rows[:, 4]).max()) if len(rows) else 0.0,
+            "chip_energy_J": float(sum(a.load.energy for a in loads)),
+            "load_work_J": sim.load_work,
+            "median_chip_thickness_mm": float(np.median([a.load.thickness for a in loads])) if loads else 0.0,
+            "chip_change_between_engagements": sim.chip_change(),
+        },
+        "cut": {
+            "edge": job.cutter_options["edge"],
+            "passages": len(cut.chips),
+            "chip_volume_mm3": float(sum(c.volume for c in cut.chips)),
+            "sweeps": cut.sweeps,
+            "subtractions": cut.subtractions,
+            "pass_sweep_error_um": [cut.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(job.skiving.passes))],
+            "triangles": triangles,
+        },
+    }
+
+
+def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, charts: list[Path]) -> None:
+    from virtual_machine.recording import write_recording
+
+    rows = sim.load_rows
+    series = {}
+    if rows is not None and len(rows):
+        series["cutting_force_N"] = (rows[:, 0], np.linalg.norm(rows[:, 1:4], axis=1))
+        series["cutting_torque_work_axis_Nm"] = (rows[:, 0], rows[:, 4])
+    if sim.loads:
+        series["chip_volume_mm3"] = (
+            np.array([a.load.t[len(a.load.t) // 2] for a in sim.loads]),
+            np.array([a.load.volume for a in sim.loads]),
+        )
+    write_recording(
+        rrd,
+        model_xml=sim.record.model_xml,
+        motion=sim.record,
+        setup=job.skiving,
+        snapshots=sim.snapshots,
+        gear_mesh=(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+        measurement=measurement,
+        charts=charts,
+        series=series,
+    )
