@@ -146,6 +146,7 @@ def test_tick_mean_keeps_the_impulse_of_an_engagement_shorter_than_the_tick() ->
     assert impulse > 0
     force, point, _ = load.mean(0.0, 2.5e-4)
     assert force[1] * 2.5e-4 == pytest.approx(impulse, rel=1e-12)
+    assert 0.0 < point[0] < 1.0  # on the edge
     for phase in (0.0, 0.37e-4, 1.3e-4):
         ticks = np.arange(-2.5e-4 + phase, 5e-4, 2.5e-4)
         total = sum((m[0][1] * 2.5e-4 if (m := load.mean(a, a + 2.5e-4)) else 0.0) for a in ticks)
