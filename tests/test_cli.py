@@ -13,8 +13,9 @@ JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 def test_setup_default_job_prints_the_sheet():
     res = CliRunner().invoke(main, ["setup"])
     assert res.exit_code == 0, res.output
-    assert "structure: mechatronic" in res.output and "kx  = 4160" in res.output
-    assert "cutting speed 131.5 m/min" in res.output
+    assert "default.toml" in res.output and "z2 = 20 external" in res.output
+    assert "structure: mechatronic" in res.output and "kx  = 2360" in res.output
+    assert "cutting speed 58.3 m/min" in res.output
 
 
 def test_setup_json_for_every_structure():

@@ -182,6 +182,7 @@ if __name__ == "__main__":
 def run(job: Path | None, out: Path, rrd: Path | None) -> None:
     from tqdm import tqdm
 
+    from virtual_machine.program import program_duration
     from virtual_machine.run import run_job
 
     path = job or default_job_path()
@@ -189,25 +190,28 @@ def run(job: Path | None, out: Path, rrd: Path | None) -> None:
         j = load_job(path)
         if j.kind != "gear":
             raise InputError(Problem("job", j.kind, "skive run cuts gears", "use `skive simulate` for a thread job"))
-        total = setup_sheet(j).sanity["total_time_s"]
+        total = program_duration(j.skiving)
     except (InputError, ValueError) as exc:
         _fail(exc)
-    bar = tqdm(total=round(total, 2), desc="machine and cut", unit="s machine", leave=True)
+    fmt = "{l_bar}{bar}| {n:.2f}/{total:.2f} s of machine time [{elapsed}<{remaining}{postfix}]"
+    bar = tqdm(total=total, desc="machine and cut", bar_format=fmt, mininterval=0.5, leave=True)
 
     def progress(t: float, passages: int) -> None:
-        bar.total = max(bar.total, round(t, 2))
-        bar.n = round(t, 2)
+        bar.total = max(bar.total, t)
         bar.set_postfix(engagements=passages, refresh=False)
-        bar.refresh()
+        bar.update(t - bar.n)  # redraws at most every 0.5 s (quiet logs)
 
     def stage(name: str) -> None:
         if name != "machine and cut":
             bar.close()
             click.echo(f"{name} ...")
 
+    from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.simulate import LostSynchronismError
+
     try:
         doc = run_job(path, out, rrd, progress, stage)
-    except InputError as exc:
+    except (InputError, SimulationDivergedError, LostSynchronismError) as exc:
         bar.close()
         _fail(exc)
     click.echo(format_measurement(doc, str(out / "gear.stl")))
@@ -262,6 +266,7 @@ def simulate(
 
     from virtual_machine import motion_io
     from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.simulate import LostSynchronismError
     from virtual_machine.simulate import simulate as run
 
     path = job or default_job_path()
@@ -297,7 +302,7 @@ def simulate(
     t0 = time.perf_counter()
     try:
         rec = run(j, duration=duration, progress=progress)
-    except (SimulationDivergedError, NotImplementedError) as exc:
+    except (SimulationDivergedError, LostSynchronismError, NotImplementedError) as exc:
         bar.close()
         _fail(exc)
     bar.n = bar.total  # the estimate of the total is approximate: end the bar where the run ended
@@ -353,12 +358,13 @@ def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: 
     from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
     from virtual_machine import motion_io
     from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.simulate import LostSynchronismError
     from virtual_machine.simulate_thread import simulate_thread
 
     t0 = time.perf_counter()
     try:
         rec = simulate_thread(j, duration=duration)
-    except (SimulationDivergedError, ValueError) as exc:
+    except (SimulationDivergedError, LostSynchronismError, ValueError) as exc:
         _fail(exc)
     wall = time.perf_counter() - t0
     out.mkdir(parents=True, exist_ok=True)

@@ -175,9 +175,11 @@ def cosimulate(
             elif current is not None:
                 current.ended = True
         seen = len(rows)
+        if current is not None and not alive:
+            current.ended = True  # the program ends in the last feed stroke
         if current is not None and len(current.t) >= 8:
             c0 = time.perf_counter()
-            n = _cut_ready(current, setup, edge_pts, mat, pitch, predictor, sim, final=current.ended or not alive)
+            n = _cut_ready(current, setup, edge_pts, mat, pitch, predictor, sim, final=current.ended)
             t_cut += time.perf_counter() - c0
             passages += n
             if n and progress is not None:

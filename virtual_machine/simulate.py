@@ -30,6 +30,10 @@ from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4M
 SEGMENTS = ("runup", "settle", "infeed", "feed", "retract", "return")
 
 
+class LostSynchronismError(RuntimeError):
+    """The simulated machine stopped the job (the CNC's alarm), with what happened and what to change."""
+
+
 def error_stats(e: np.ndarray) -> dict[str, float]:
     """Mean, RMS, RMS about the mean, peak-to-peak and largest magnitude of an error series [um] ({} if empty)."""
     if e.size == 0:
@@ -215,7 +219,10 @@ class MachineRun:
         self.dt = phys.model.opt.timestep * servo_substeps
         p = job.machine["command_pulses_per_rev"]
         ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
-        self._ticks = program(setup, self.dt, ppm, machine, settings or ProgramSettings())
+        settings = settings or ProgramSettings()
+        self._ticks = program(setup, self.dt, ppm, machine, settings)
+        # the CNC of the servo structures watches the synchronisation (following error); a chain has no CNC loop
+        self.following_limit = settings.following_error_limit if structure == "mechatronic" else math.inf
         self._pending = None  # a tick fetched from the program but not yet run
         self.finished = False  # the program has ended
         self.disturbance, self.load = disturbance, None
@@ -247,6 +254,10 @@ class MachineRun:
         segment_index = {name: k for k, name in enumerate(SEGMENTS)}
         rows, clock, disturbance, load = self.rows, time.perf_counter, self.disturbance, self.load
         t_phys = t_ctrl = 0.0
+        b1, b2, p3 = phys.qadr["B1"], phys.qadr["B2"], phys.qadr["P3"]
+        b1_0, b2_0, p3_0 = self.home
+        ratio, diff = self.setup.speed_ratio, self.setup.differential_rotation_per_mm
+        limit = self.following_limit / (self.setup.gear.reference_radius * 1e3)  # rad of work spindle
         while data.time < until:
             tick = self._pending or next(self._ticks, None)
             self._pending = None
@@ -283,11 +294,31 @@ class MachineRun:
             t_ctrl += c1 - c0
             t_phys += c2 - c1
             rows.append((data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
+            delta = (qpos[b2] - b2_0) - ratio * (qpos[b1] - b1_0) - diff * (qpos[p3] / MM - p3_0)
+            if abs(delta) > limit:
+                raise LostSynchronismError(self._lost_synchronism(delta))
             if progress is not None:
                 progress(data.time)
         self.timing["physics"] += t_phys
         self.timing["control"] += t_ctrl
         return not self.finished
+
+    def _lost_synchronism(self, delta: float) -> str:
+        """What the CNC's following-error alarm says: where, how far, which motors were at their limit."""
+        rows = self.rows[-round(0.2 / self.dt) :]
+        n_ax = len(AXES)
+        torques = np.abs(np.array([r[3 + n_ax :] for r in rows])).max(axis=0)
+        last = rows[-1]
+        seg = SEGMENTS[int(last[1 + n_ax])]
+        peaks = ", ".join(f"{a} {v:.1f} N m" for a, v in zip(self.machine.actuators, torques, strict=True))
+        um = delta * self.setup.gear.reference_radius * 1e3
+        return (
+            f"the machine lost synchronism at t = {last[0]:.3f} s ({seg}): the work spindle is {um:+.0f} um of arc "
+            f"on the reference circle off the position the tool spindle and carriage imply (the CNC's following-error "
+            f"limit is {self.following_limit:.0f} um). Peak motor torques over the last 0.2 s: {peaks}; a motor at its "
+            f"peak torque cannot follow. Lower process.tool_speed (work spindle {abs(self.setup.work_speed):.0f} rpm), "
+            "or give the work drive more torque or less inertia ([machine.model])"
+        )
 
     def record(self) -> MotionRecord:
         """The motion record of everything run so far."""

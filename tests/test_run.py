@@ -1,0 +1,107 @@
+"""skive run: the simulated machine cuts and measures a small gear; every file of the run, read back."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from rerun.chunk import RrdReader
+
+from virtual_machine.cli import main
+from virtual_machine.job import load_job
+from virtual_machine.program import ProgramSettings, program_duration
+from virtual_machine.simulate import LostSynchronismError, simulate
+
+SMALL_JOB = """
+[gear]
+teeth = 18
+normal_module = 1.0
+face_width = 2.0
+
+[cutter]
+teeth = 17
+helix_angle = 20.0
+edge = "involute"
+
+[process]
+tool_speed = 2000.0
+axial_feed = 0.2
+passes = [2.25]
+sweep_error = 0.02
+"""
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """The same job run twice (reproducibility), the first with a recording."""
+    tmp = tmp_path_factory.mktemp("run")
+    job = tmp / "small.toml"
+    job.write_text(SMALL_JOB)
+    out = []
+    for k in range(2):
+        args = ["run", str(job), "--out", str(tmp / f"out{k}")] + (["--rrd", str(tmp / "run.rrd")] if k == 0 else [])
+        res = CliRunner().invoke(main, args)
+        assert res.exit_code == 0, res.output
+        out.append((tmp / f"out{k}", res.output))
+    return tmp, out
+
+
+def test_run_writes_every_file(runs) -> None:
+    _, ((out, text), _) = runs
+    for name in ("gear.stl", "measurement.json", "report.html", "charts/profile.png", "charts/run.png"):
+        assert (out / name).stat().st_size > 1000, name
+    assert "RUN" in text and "machine and cut" in text and "engagements" in text
+    doc = json.loads((out / "measurement.json").read_text())
+    assert {"profile", "helix", "pitch", "runout", "thickness", "iso1328", "run"} <= set(doc)
+    run = doc["run"]
+    assert len(run["job"]["sha256"]) == 64 and run["seed"] is None and run["versions"]["mujoco"]
+    assert set(run["durations_s"]) >= {"machine and cut", "measurement", "report", "recording", "machine"}
+    assert run["cut"]["passages"] > 300 and run["cut"]["chip_volume_mm3"] > 100.0
+    f = run["forces"]
+    assert f["material"] == "16MnCr5" and "Koenig" in f["source"]
+    assert 300.0 < f["peak_force_N"] < 5000.0  # m 1, full depth: chips of tens of um over a few mm of edge
+    assert -f["load_work_J"] == pytest.approx(f["chip_energy_J"], rel=0.08)
+    assert run["synchronisation"]["sync_error_in_cut"]["rms_um"] < 20.0
+    page = (out / "report.html").read_text()
+    assert page.count("data:image/png;base64,") == 4  # profile, helix, pitch, run
+    for text_part in ("ISO 1328-1", "Setting sheet", "kx", "teeth = 18", "peak cutting force"):
+        assert text_part in page
+
+
+def test_recording_has_the_cut_and_the_forces(runs) -> None:
+    tmp, _ = runs
+    chunks = RrdReader(tmp / "run.rrd").stream().to_chunks()
+    entities = {c.entity_path for c in chunks}
+    assert {
+        "/gear/finished",
+        "/signals/extra/cutting_force_N",
+        "/signals/extra/chip_volume_mm3",
+        "/signals/extra/cutting_torque_work_axis_Nm",
+        "/machine/work_spindle/blank_frame/blank",
+        "/measurement/profile",
+    } <= entities
+    blank = [c for c in chunks if c.entity_path == "/machine/work_spindle/blank_frame/blank" and not c.is_static]
+    assert sum(c.num_rows for c in blank) >= 3  # the stock as it is cut, snapshots through the pass
+
+
+def test_the_same_job_gives_the_same_gear(runs) -> None:
+    _, ((a, _), (b, _)) = runs
+    da, db = (json.loads((x / "measurement.json").read_text()) for x in (a, b))
+    for block in ("profile", "helix", "pitch"):
+        assert da[block] == db[block]
+    assert da["thickness"] == db["thickness"]
+    assert da["run"]["forces"]["chip_energy_J"] == db["run"]["forces"]["chip_energy_J"]
+
+
+def test_a_drive_that_cannot_follow_stops_the_job_with_its_reason() -> None:
+    job = load_job("assets/jobs/default.toml")
+    with pytest.raises(LostSynchronismError, match=r"M2 60\.0 N m.*process\.tool_speed"):
+        simulate(job, settings=ProgramSettings(runup=0.2, runup_acceleration=1e5), duration=1.0)
+
+
+def test_the_program_duration_estimate_matches_the_run() -> None:
+    job = load_job("assets/jobs/default.toml")
+    rec = simulate(job, duration=np.inf)
+    assert program_duration(job.skiving) == pytest.approx(rec.t[-1], rel=0.01)
