@@ -83,3 +83,15 @@ def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
     assert rec0.torque[rec0.cutting, 0].mean() == pytest.approx(base, abs=0.3)
     assert cutting - base > 1.0  # N m
     assert loaded.chip_change() < 0.1  # consecutive chips: the prediction's error
+
+
+def test_parallel_removal_cuts_the_same_gear(runs, tmp_path) -> None:
+    """Two worker processes, each owning half the tooth spaces, take the same chips as the inline removal (without
+    forces the machine's motion does not depend on when the chips finish)."""
+    _, free = runs
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL_JOB)
+    par = cosimulate(load_job(path), forces=False, workers=2)
+    assert [c.volume for c in par.cut.chips] == pytest.approx([c.volume for c in free.cut.chips], rel=1e-9, abs=1e-12)
+    assert par.cut.gear.volume() == pytest.approx(free.cut.gear.volume(), rel=1e-12)
+    assert par.cut.gear.genus() == 0 and par.cut.subtractions == free.cut.subtractions

@@ -105,3 +105,66 @@ def test_the_program_duration_estimate_matches_the_run() -> None:
     job = load_job("assets/jobs/default.toml")
     rec = simulate(job, duration=np.inf)
     assert program_duration(job.skiving) == pytest.approx(rec.t[-1], rel=0.01)
+
+
+GRADABLE_JOB = SMALL_JOB.replace("face_width = 2.0", "face_width = 4.0")  # ISO 1328-1 grades b >= 4 mm
+
+
+def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_path) -> None:
+    """The project's own CI runs `skive check` on a small job: class 1 is out of reach for it (exit 1, every
+    parameter over class 1 named); the verdict at the gear's own class passes."""
+    from virtual_machine.check import class_verdict
+
+    job = tmp_path / "small_b4.toml"
+    job.write_text(GRADABLE_JOB)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["check", str(job), "--max-class", "1", "--json", "--out", str(out)])
+    assert res.exit_code == 1, res.output
+    verdict = json.loads(res.output[res.output.index("{") :])
+    doc = json.loads((out / "measurement.json").read_text())
+    classes = doc["iso1328"]["class"]
+    over = {k for k, c in classes.items() if k != "overall" and (c is None or c > 1)}
+    assert not verdict["pass"] and {f["parameter"] for f in verdict["failures"]} == over and over
+    for f in verdict["failures"]:
+        assert f["measured_um"] == pytest.approx(doc["iso1328"]["measured"][f["parameter"]])
+    gear = load_job(job).gear
+    assert class_verdict(doc, gear, classes["overall"])["pass"]
+    if classes["overall"] > 1:
+        assert not class_verdict(doc, gear, classes["overall"] - 1)["pass"]
+
+
+def test_check_verdicts_on_known_documents() -> None:
+    from virtual_machine.check import class_verdict, format_verdict
+
+    gear = load_job("assets/jobs/default.toml").gear
+    measured = {
+        "f_p": 1.0,
+        "F_p": 3.0,
+        "F_alpha": 15.0,
+        "f_Halpha": 5.0,
+        "f_falpha": 8.0,
+        "F_beta": 6.0,
+        "f_Hbeta": 3.0,
+        "f_fbeta": 4.0,
+        "F_r": 5.0,
+    }
+    classes = {
+        "f_p": 1,
+        "F_p": 1,
+        "F_alpha": 8,
+        "f_Halpha": 6,
+        "f_falpha": 7,
+        "F_beta": 5,
+        "f_Hbeta": 4,
+        "f_fbeta": 5,
+        "F_r": None,
+        "overall": None,
+    }
+    doc = {"iso1328": {"class": classes, "measured": measured}}
+    v = class_verdict(doc, gear, 7)
+    assert not v["pass"] and [f["parameter"] for f in v["failures"]] == ["F_alpha", "F_r"]
+    assert v["failures"][0]["allowed_um"] == 14.0  # F_alpha, class 7, z 20, mn 1 (ISO 1328-1 rounding)
+    assert "worse than class 11" in format_verdict(v, "job")
+    assert class_verdict({"iso1328": {"error": "b = 2.0 is outside"}}, gear, 11)["failures"][0]["reason"]
+    with pytest.raises(ValueError):
+        class_verdict(doc, gear, 12)

@@ -179,7 +179,8 @@ if __name__ == "__main__":
 @click.argument("job", required=False, type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 @click.option("--rrd", type=click.Path(dir_okay=False, path_type=Path), help="Also write the Rerun recording here.")
-def run(job: Path | None, out: Path, rrd: Path | None) -> None:
+@click.option("--workers", type=click.IntRange(1, 64), help="Removal processes (default: one per core, at most 8).")
+def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None) -> None:
     from tqdm import tqdm
 
     from virtual_machine.program import program_duration
@@ -210,12 +211,37 @@ def run(job: Path | None, out: Path, rrd: Path | None) -> None:
     from virtual_machine.simulate import LostSynchronismError
 
     try:
-        doc = run_job(path, out, rrd, progress, stage)
+        doc = run_job(path, out, rrd, progress, stage, workers)
     except (InputError, SimulationDivergedError, LostSynchronismError) as exc:
         bar.close()
         _fail(exc)
     click.echo(format_measurement(doc, str(out / "gear.stl")))
     click.echo(format_run(doc["run"], out, rrd))
+
+
+@main.command(help="Run JOB and fail (exit 1) when its gear is worse than ISO 1328-1 class N, naming the parameters.")
+@click.argument("job", type=click.Path(path_type=Path))
+@click.option("--max-class", "max_class", type=click.IntRange(1, 11), required=True, help="Worst class accepted.")
+@click.option("--json", "as_json", is_flag=True, help="Print the verdict as JSON.")
+@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
+def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
+    from virtual_machine.check import class_verdict, format_verdict
+    from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.run import run_job
+    from virtual_machine.simulate import LostSynchronismError
+
+    try:
+        j = load_job(job)
+        doc = run_job(job, out)
+    except (InputError, ValueError, SimulationDivergedError, LostSynchronismError) as exc:
+        _fail(exc)
+    verdict = class_verdict(doc, j.gear, max_class)
+    if as_json:
+        click.echo(json.dumps({"job": str(job), **verdict}, indent=2))
+    else:
+        click.echo(format_verdict(verdict, str(job)))
+    if not verdict["pass"]:
+        sys.exit(1)
 
 
 def format_run(run: dict, out: Path, rrd: Path | None) -> str:

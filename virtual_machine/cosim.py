@@ -4,10 +4,12 @@ machine has moved through it, and the chip's cutting force acts back on the mach
 Granularity: one tooth engagement. A passage is cut (cutting.removal.PassCutter) once the recorded motion covers
 its engagement window; its chip gives the engagement's Kienzle load (cutting.forces). A passage's own force is
 needed while it is being cut, before its chip exists, so the force acting during an engagement is the load of
-the latest chip already cut, carried forward by whole cutter pitches (rotated with the work and moved with the
-feed in the blank frame). Consecutive engagements take almost the same chip (the chip changes over L / f ~ tens
-of engagements at the face's ends, and with the machine's own deviations), so the prediction is off by the
-change of the chip over the 1-3 engagements of lag; the run reports that change.
+the newest chip already cut, carried forward by whole cutter pitches (rotated with the work and moved with the
+feed in the blank frame). Cutting in this process, that chip is the one of the engagement just before (its
+window overlaps); with worker processes the machine runs at most :func:`max_lag` passages ahead of the newest
+finished chip. Consecutive engagements take almost the same chip (the chip changes over L / f ~ tens of
+engagements at the face's ends, and with the machine's own deviations), so the prediction is off by the change
+of the chip over the engagements of lag; the run reports that change per engagement.
 """
 
 from __future__ import annotations
@@ -24,11 +26,12 @@ from cutting.edge import make_edge
 from cutting.forces import EngagementLoad, engagement_load
 from cutting.holder import check_holder_side
 from cutting.materials import Material, material
-from cutting.removal import CutResult, PassCutter, Stock, expected_genus, passage_count, tooth_pose
+from cutting.removal import Chip, CutResult, engagement_half_angle, expected_genus, passage_count, tooth_pose
 from cutting.sampled_motion import SampledMotion
-from cutting.sweep import outline_points
+from cutting.sweep import outline_points, simplify_outline, split_sides
 from cutting.trajectory import ideal_passes
 from machine_models.parameters import SkivingMachineParams
+from virtual_machine.cosim_removal import InlineRemoval, ParallelRemoval, Samples
 from virtual_machine.job import Job
 from virtual_machine.simulate import SEGMENTS, MachineRun, MotionRecord, relative_pose
 
@@ -45,9 +48,10 @@ class ForcePredictor:
     cutter pitch ``period`` [s]; each repetition is turned by the work's rotation and moved by the feed over its
     delay (``turn_rate`` [rad/s] and ``feed_rate`` [mm/s] of the mesh zone in the blank frame)."""
 
-    def __init__(self) -> None:
+    def __init__(self, lag: int = 0) -> None:
         self.latest: EngagementLoad | None = None
         self.period = self.turn_rate = self.feed_rate = 0.0
+        self.lag = lag  # passages the machine may run ahead of the newest chip
 
     def update(self, load: EngagementLoad, period: float, turn_rate: float, feed_rate: float) -> None:
         self.latest, self.period, self.turn_rate, self.feed_rate = load, period, turn_rate, feed_rate
@@ -62,9 +66,9 @@ class ForcePredictor:
             return []
         out = []
         first = max(1, math.ceil((t - ld.t[-1]) / self.period))
-        # the engagements up to one window plus two pitches on: later ones get the load of a newer chip, and a
-        # prediction that old is stale (the cutter may have left the blank)
-        horizon = math.ceil((ld.t[-1] - ld.t[0]) / self.period) + 2
+        # the engagements up to one window plus two pitches on (plus the lag): later ones get the load of a newer
+        # chip, and a prediction that old is stale (the cutter may have left the blank)
+        horizon = math.ceil((ld.t[-1] - ld.t[0]) / self.period) + 2 + self.lag
         last = min(math.floor((t + dt - ld.t[0]) / self.period), horizon)
         for j in range(first, last + 1):
             delay = j * self.period
@@ -109,10 +113,10 @@ class CoSimulation:
 
 
 class _Stroke:
-    """The recorded samples of one feed stroke and its passage cutter."""
+    """The recorded samples of one feed stroke and the passages submitted from it."""
 
-    def __init__(self, index: int, cutter: PassCutter):
-        self.index, self.cutter = index, cutter
+    def __init__(self, index: int, half: float):
+        self.index, self.half = index, half
         self.t: list[float] = []
         self.q: list[list[float]] = []
         self.next_m: int | None = None
@@ -130,11 +134,13 @@ def cosimulate(
     servo_substeps: int = 2,
     progress: Callable[[float, int], None] | None = None,
     snapshots_per_pass: int = 0,
+    workers: int = 1,
 ) -> CoSimulation:
     """Run the job's machine and cut its gear from the motion it really makes, with the chips' forces acting on
     the machine (``forces=False``: the cut follows the machine, no force acts back). ``progress(machine_time,
-    passages)`` is called after every cut passage. ``snapshots_per_pass``: meshes of the stock taken evenly
-    through each pass (the last at its end), for the recording."""
+    passages)`` is called as passages finish. ``snapshots_per_pass``: meshes of the stock taken evenly through
+    each pass (the last at its end), for the recording. ``workers`` > 1 cuts in that many processes; the machine
+    then runs at most :func:`max_lag` passages ahead of the finished chips."""
     setup = job.skiving
     kind = edge_kind or job.cutter_options["edge"]
     edge = make_edge(setup, kind)
@@ -146,56 +152,109 @@ def cosimulate(
     ]
     mat = material(job.process["material"])
     run = MachineRun(job, params, servo_substeps)
-    predictor = ForcePredictor()
+    lag = max_lag(workers)
+    predictor = ForcePredictor(lag)
     run.load = predictor if forces else (lambda t, dt: ())  # no force, but the work accounting runs alike
-    stock = Stock(setup.gear)
-    result = CutResult(None)
-    edge_pts = outline_points(edge.outline)
+    removal = (
+        InlineRemoval(setup.gear, edge, plans, tols)
+        if workers <= 1
+        else ParallelRemoval(setup.gear, edge, plans, tols, workers)
+    )
+    # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
+    # finest facets of the sweep
+    edge_pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
     pitch = 2 * math.pi / setup.cutter.teeth
+    half = engagement_half_angle(plans[0], edge)
     chunk = pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
-    sim = CoSimulation(None, result, material=mat)  # the record is assembled at the end
-    t_cut = 0.0
-    strokes: dict[int, _Stroke] = {}
+    g, b2 = setup.gear, setup.gear.face_width / 2
+
+    def in_blank(w: np.ndarray) -> np.ndarray:
+        r = np.hypot(w[..., 0], w[..., 1])
+        return ((r > g.tip_radius) if g.internal else (r < g.tip_radius)) & (np.abs(w[..., 2]) <= b2)
+
+    sim = CoSimulation(None, removal.result, material=mat)  # the record is assembled at the end
+    pending: dict[tuple[int, int], tuple[Samples, float]] = {}
+    count = [0]
+
+    arrived: dict[tuple[int, int], Chip | None] = {}
+    submitted: list[tuple[int, int]] = []
+
+    def apply(key: tuple[int, int]) -> None:
+        """The chip of passage ``key`` (waiting for it) becomes the prediction for the engagements after it.
+        Chips are applied in submission order at a fixed point of the simulation (``lag`` submissions later),
+        never when a worker happens to finish: the run does not depend on the workers' timing."""
+        while key not in arrived:
+            arrived.update({(i, m): chip for i, m, chip in removal.finished(block=True)})
+        chip = arrived.pop(key)
+        index, m = key
+        samples, t0_stroke = pending.pop(key)
+        count[0] += 1
+        if chip is None or chip.volume <= 0:
+            predictor.clear()  # the tooth took nothing: none of the next engagements is predicted to cut
+            return
+        motion = SampledMotion(setup, index, *samples)
+        load = engagement_load(
+            tooth_pose(motion, m), edge_pts, chip.start, chip.end, chip.volume, mat, in_blank
+        ).shifted(t0_stroke)
+        sim.loads.append(AppliedLoad(index, m, load))
+        # the mesh zone's motion in the blank frame: the cutter centre's turn about and travel along the axis
+        trans = samples[2]
+        ang = np.unwrap(np.arctan2(trans[:, 1], trans[:, 0]))
+        dt = motion.t[-1] - motion.t[0]
+        predictor.update(load, pitch / motion.omega0, (ang[-1] - ang[0]) / dt, (trans[-1, 2] - trans[0, 2]) / dt)
+
+    t_wait = 0.0
     seen = 0
     current: _Stroke | None = None
-    passages = 0
     t_start = time.perf_counter()
-    while True:
-        alive = run.advance(run.time + chunk)
-        rows = run.rows
-        for row in rows[seen:]:
-            segment, index = int(row[6]), int(row[7])
-            if segment == FEED:
-                if current is None or current.index != index:
-                    current = strokes[index] = _Stroke(
-                        index, PassCutter(stock, edge, plans[index], tols[index], result)
-                    )
-                current.t.append(row[0])
-                current.q.append(list(row[1:6]))
-            elif current is not None:
-                current.ended = True
-        seen = len(rows)
-        if current is not None and not alive:
-            current.ended = True  # the program ends in the last feed stroke
-        if current is not None and len(current.t) >= 8:
-            c0 = time.perf_counter()
-            n = _cut_ready(current, setup, edge_pts, mat, pitch, predictor, sim, final=current.ended)
-            t_cut += time.perf_counter() - c0
-            passages += n
-            if n and progress is not None:
-                progress(run.time, passages)
-            if snapshots_per_pass:
-                _snapshot(sim, stock, current, run.time, snapshots_per_pass, plans, edge)
-            if current.ended:
-                predictor.clear()  # no chip in the return stroke
-                current = None
-        if not alive:
-            break
-    sim.record = run.record()
-    sim.load_work, sim.actuator_work = run.load_work, run.actuator_work
-    sim.load_rows = np.array(run.load_rows).reshape(-1, 5)
-    c0 = time.perf_counter()
-    result.gear = stock.solid()
+    try:
+        while True:
+            alive = run.advance(run.time + chunk)
+            rows = run.rows
+            for row in rows[seen:]:
+                segment, index = int(row[6]), int(row[7])
+                if segment == FEED:
+                    if current is None or current.index != index:
+                        current = _Stroke(index, half)
+                    current.t.append(row[0])
+                    current.q.append(list(row[1:6]))
+                elif current is not None:
+                    current.ended = True
+            seen = len(rows)
+            if current is not None and not alive:
+                current.ended = True  # the program ends in the last feed stroke
+            if current is not None and len(current.t) >= 8:
+                c0 = time.perf_counter()
+                applied = count[0]
+                for m, samples, t0_stroke in _ready_passages(current, setup, pitch):
+                    pending[current.index, m] = (samples, t0_stroke)
+                    removal.submit(current.index, m, samples)
+                    submitted.append((current.index, m))
+                    while len(submitted) > lag:
+                        apply(submitted.pop(0))
+                while current.ended and submitted:  # the stroke's last chips before the return
+                    apply(submitted.pop(0))
+                if progress is not None and count[0] > applied:
+                    progress(run.time, count[0])
+                if snapshots_per_pass:
+                    _snapshot(sim, removal, current, run.time, snapshots_per_pass, plans, edge)
+                t_wait += time.perf_counter() - c0
+                if current.ended:
+                    predictor.clear()  # no chip in the return stroke
+                    current = None
+            if not alive:
+                break
+        sim.record = run.record()
+        sim.load_work, sim.actuator_work = run.load_work, run.actuator_work
+        sim.load_rows = np.array(run.load_rows).reshape(-1, 5)
+        c0 = time.perf_counter()
+        result = removal.close()
+    except BaseException:
+        if isinstance(removal, ParallelRemoval):
+            removal._stop()
+        raise
+    result.chips.sort(key=lambda c: (c.pass_index, c.time))
+    sim.cut = result
     if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
         raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
     if result.gear.genus() != expected_genus(setup.gear):
@@ -203,57 +262,50 @@ def cosimulate(
             f"the removal left a solid of genus {result.gear.genus()} (a gear has "
             f"{expected_genus(setup.gear)}): report it with the job"
         )
-    t_cut += time.perf_counter() - c0
-    total = time.perf_counter() - t_start
+    t_wait += time.perf_counter() - c0
     sim.seconds = {
-        "total": total,
-        "cut": t_cut,
+        "total": time.perf_counter() - t_start,
+        "cut": t_wait,  # the removal in this process, or the wait for the workers
         "physics": run.timing["physics"],
         "control": run.timing["control"],
         "machine": run.time,
+        "workers": workers,
     }
     return sim
 
 
-def _snapshot(sim: CoSimulation, stock: Stock, stroke: _Stroke, t: float, per_pass: int, plans, edge) -> None:
+def max_lag(workers: int) -> int:
+    """Passages the machine may run ahead of the finished chips: none inline; with workers, two per worker
+    (enough to keep them busy, as a passage's booleans fall mostly to the worker owning its tooth space)."""
+    return 0 if workers <= 1 else 2 * workers
+
+
+def _snapshot(sim: CoSimulation, removal, stroke: _Stroke, t: float, per_pass: int, plans, edge) -> None:
     """A mesh of the stock whenever the stroke has cut the next k / per_pass of its passages, and at its end."""
     if stroke.total is None:
         stroke.total = passage_count(plans[stroke.index], edge)
-    total = stroke.total
     done = stroke.next_m - stroke.first_m if stroke.next_m is not None else 0
-    due = min(per_pass, done * per_pass // max(total, 1)) if not stroke.ended else per_pass
+    due = min(per_pass, done * per_pass // max(stroke.total, 1)) if not stroke.ended else per_pass
     if due > stroke.snapshots:
         stroke.snapshots = due
-        mesh = stock.solid().to_mesh()
+        mesh = removal.solid().to_mesh()
         sim.snapshots.append((t, np.asarray(mesh.vert_properties)[:, :3].copy(), np.asarray(mesh.tri_verts).copy()))
 
 
-def _cut_ready(
-    stroke: _Stroke,
-    setup,
-    edge_pts,
-    mat: Material,
-    pitch: float,
-    predictor: ForcePredictor,
-    sim: CoSimulation,
-    final: bool,
-) -> int:
-    """Cut every passage of ``stroke`` whose window the samples cover (all that remain when ``final``); returns how
-    many were cut. Each chip's load becomes the prediction for the engagements after it."""
+def _ready_passages(stroke: _Stroke, setup, pitch: float):
+    """The passages of ``stroke`` whose window the samples now cover (all that remain once it has ended), each
+    with its samples (a slice around the window, time from the stroke's start) and the stroke's start time."""
     t = np.asarray(stroke.t)
     q = np.asarray(stroke.q)
     q = np.column_stack([q[:, 0], q[:, 1], q[:, 2] / 1e-3, q[:, 3] / 1e-3, q[:, 4]])  # P3, X in mm
     phi = q[:, 0]
-    cutter = stroke.cutter
-    half = cutter.half
+    half = stroke.half
     if stroke.next_m is None:
         stroke.next_m = stroke.first_m = math.ceil((phi[0] - half) / pitch)
     step = float(np.median(np.diff(phi)))  # cutter angle per sample
     # a window is covered once the samples reach past its end (four samples more for the interpolation)
-    last_m = math.floor((phi[-1] + half) / pitch) if final else math.floor((phi[-1] - half - 4 * step) / pitch)
-    t0_stroke = t[0]
-    count = 0
-    while stroke.next_m <= last_m:
+    last = math.floor((phi[-1] + half) / pitch) if stroke.ended else math.floor((phi[-1] - half - 4 * step) / pitch)
+    while stroke.next_m <= last:
         m = stroke.next_m
         lo = np.searchsorted(phi, m * pitch - half - 4 * step)
         hi = np.searchsorted(phi, m * pitch + half + 4 * step) + 1
@@ -261,21 +313,5 @@ def _cut_ready(
         if hi - lo < 4:
             lo, hi = max(0, hi - 4), max(hi, min(len(t), 4))
         rot, trans = relative_pose(setup, q[lo:hi])
-        motion = SampledMotion(
-            setup, stroke.index, t[lo:hi] - t0_stroke, rot, trans, phi[lo:hi], q[lo:hi, 2], q[lo:hi, 3]
-        )
-        chip = cutter.cut_passage(m, motion)
         stroke.next_m += 1
-        count += 1
-        if chip is None or chip.volume <= 0:
-            predictor.clear()  # the tooth took nothing: none of the next engagements is predicted to cut
-            continue
-        load = engagement_load(
-            tooth_pose(motion, m), edge_pts, chip.start, chip.end, chip.volume, mat, cutter.in_blank
-        ).shifted(t0_stroke)
-        sim.loads.append(AppliedLoad(stroke.index, m, load))
-        # the mesh zone's motion in the blank frame: the cutter centre's turn about and travel along the work axis
-        ang = np.unwrap(np.arctan2(trans[:, 1], trans[:, 0]))
-        dt = motion.t[-1] - motion.t[0]
-        predictor.update(load, pitch / motion.omega0, (ang[-1] - ang[0]) / dt, (trans[-1, 2] - trans[0, 2]) / dt)
-    return count
+        yield m, (t[lo:hi] - t[0], rot, trans, phi[lo:hi], q[lo:hi, 2], q[lo:hi, 3]), float(t[0])

@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
-from cutting.ideal_cut import to_trimesh
+from cutting.ideal_cut import default_workers, to_trimesh
 from metrology.charts import finite, write_charts
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions, measure_gear
-from virtual_machine.cosim import CoSimulation, cosimulate
+from virtual_machine.cosim import CoSimulation, cosimulate, max_lag
 from virtual_machine.formatting import format_sheet
 from virtual_machine.job import Job, load_job
 from virtual_machine.motion_io import summary
@@ -49,16 +49,19 @@ def run_job(
     rrd: Path | None = None,
     progress: Callable[[float, int], None] | None = None,
     stage: Callable[[str], None] | None = None,
+    workers: int | None = None,
 ) -> dict[str, Any]:
     """Run the job at ``path``; write its files into ``out``; return the measurement document with ``run``.
-    ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage."""
+    ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage;
+    ``workers``: removal processes (default one per core)."""
     announce = stage or (lambda name: None)
     durations: dict[str, float] = {}
     job = load_job(path)
     out.mkdir(parents=True, exist_ok=True)
     announce("machine and cut")
     t0 = time.perf_counter()
-    sim = cosimulate(job, progress=progress, snapshots_per_pass=SNAPSHOTS_PER_PASS if rrd else 0)
+    workers = workers or default_workers()
+    sim = cosimulate(job, progress=progress, snapshots_per_pass=SNAPSHOTS_PER_PASS if rrd else 0, workers=workers)
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
@@ -107,7 +110,8 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             "kc11": mat.kc11,
             "mc": mat.mc,
             "source": mat.source,
-            "granularity": "one tooth engagement: each engagement feels the load of the latest chip already cut",
+            "granularity": "one tooth engagement: each engagement feels the load of the newest chip already cut, "
+            f"at most {max_lag(sim.seconds['workers']) + 1} engagements earlier plus the engagements in the cut",
             "peak_force_N": float(force.max()),
             "peak_work_torque_Nm": float(np.abs(rows[:, 4]).max()) if len(rows) else 0.0,
             "chip_energy_J": float(sum(a.load.energy for a in loads)),

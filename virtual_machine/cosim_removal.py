@@ -1,0 +1,219 @@
+"""The removal side of the co-simulation: tooth passages submitted as the machine makes them, chips returned.
+
+Two backends with one interface. :class:`InlineRemoval` cuts each passage at once in this process.
+:class:`ParallelRemoval` gives each worker process a share of the tooth spaces (as cutting.engine does): every
+worker receives every passage and cuts the cells it owns, so a passage's chip is the sum of the workers' parts and
+is finished when the slowest worker has done it. Workers take the passages in order (one queue each), so chips
+finish in order. The result does not depend on the number of workers: each cell sees the same subtractions in
+the same order.
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import queue
+import traceback
+from collections.abc import Sequence
+
+import manifold3d as mf
+import numpy as np
+
+from cutting.edge import CuttingEdge
+from cutting.gear import Gear
+from cutting.removal import Chip, CutResult, PassCutter, Stock, union_cells
+from cutting.sampled_motion import SampledMotion
+from cutting.trajectory import PassMotion
+
+#: the samples of one passage: t [s from the stroke's start], rot, trans [mm], cutter angle, carriage, centre distance
+Samples = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+Finished = tuple[int, int, Chip | None]  # pass index, passage, chip (None: the tooth stayed clear of the blank)
+
+
+class InlineRemoval:
+    """Cuts in this process, at once."""
+
+    def __init__(self, gear: Gear, edge: CuttingEdge, plans: Sequence[PassMotion], tols: Sequence[float]):
+        self.stock = Stock(gear)
+        self.result = CutResult(None)
+        self._plans, self._edge, self._tols = plans, edge, tols
+        self._cutters: dict[int, PassCutter] = {}
+        self._done: list[Finished] = []
+
+    def submit(self, index: int, m: int, samples: Samples) -> None:
+        cutter = self._cutters.get(index)
+        if cutter is None:
+            cutter = self._cutters[index] = PassCutter(
+                self.stock, self._edge, self._plans[index], self._tols[index], self.result
+            )
+        motion = SampledMotion(self._plans[index].setup, index, *samples)
+        self._done.append((index, m, cutter.cut_passage(m, motion)))
+
+    def in_flight(self) -> int:
+        return 0
+
+    def finished(self, block: bool = False) -> list[Finished]:
+        done, self._done = self._done, []
+        return done
+
+    def solid(self) -> mf.Manifold:
+        return self.stock.solid()
+
+    def close(self) -> CutResult:
+        self.result.gear = self.stock.solid()
+        return self.result
+
+
+def _cell_meshes(stock: Stock) -> dict:
+    out = {}
+    for key, cell in stock.cells.items():
+        m = cell.to_mesh64()
+        out[key] = (
+            np.array(m.vert_properties, dtype=float),
+            np.array(m.tri_verts, dtype=np.uint64),
+            cell.get_tolerance(),
+        )
+    return out
+
+
+def _union(parts: list[dict], z_edges: np.ndarray) -> mf.Manifold:
+    cells = {}
+    for meshes in parts:
+        for key, (verts, tris, tolerance) in meshes.items():
+            cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
+    return union_cells(cells, z_edges)
+
+
+def _worker(gear, edge, plans, tols, sectors, tasks, results) -> None:
+    """One worker: its share of the stock; cuts, meshes or finishes as the main process asks."""
+    try:
+        stock = Stock(gear, sectors=sectors)
+        result = CutResult(None)
+        cutters: dict[int, PassCutter] = {}
+        while True:
+            msg = tasks.get()
+            if msg[0] == "cut":
+                _, index, m, samples = msg
+                if index not in cutters:
+                    cutters[index] = PassCutter(stock, edge, plans[index], tols[index], result)
+                before = result.subtractions
+                chip = cutters[index].cut_passage(m, SampledMotion(plans[index].setup, index, *samples))
+                results.put(("cut", index, m, chip, result.subtractions - before))
+            elif msg[0] == "mesh":
+                results.put(("mesh", _cell_meshes(stock), stock.z_edges))
+            else:  # "finish"
+                stats = (result.sweep_error, dict(result.pass_sweep_error), result.sweeps)
+                results.put(("finish", _cell_meshes(stock), stock.z_edges, stats))
+                return
+    except Exception:
+        results.put(("error", traceback.format_exc()))
+
+
+class ParallelRemoval:
+    """Cuts in ``workers`` processes, each owning every ``workers``-th tooth space."""
+
+    def __init__(self, gear: Gear, edge: CuttingEdge, plans: Sequence[PassMotion], tols: Sequence[float], workers: int):
+        ctx = mp.get_context("spawn")  # a fork would copy manifold's thread pool state
+        self.workers = workers
+        self._tasks = [ctx.Queue() for _ in range(workers)]
+        self._results = ctx.Queue()
+        self._procs = [
+            ctx.Process(
+                target=_worker,
+                args=(
+                    gear,
+                    edge,
+                    list(plans),
+                    list(tols),
+                    list(range(w, gear.teeth, workers)),
+                    self._tasks[w],
+                    self._results,
+                ),
+                daemon=True,  # never outlive the run
+            )
+            for w in range(workers)
+        ]
+        for p in self._procs:
+            p.start()
+        self.result = CutResult(None)
+        self._parts: dict[tuple[int, int], list] = {}  # passage -> [replies, volume, subtractions, chip]
+        self._order: list[tuple[int, int]] = []
+        self._replies: list[tuple] = []  # mesh / finish replies
+
+    def submit(self, index: int, m: int, samples: Samples) -> None:
+        self._parts[index, m] = [0, 0.0, 0, None]
+        self._order.append((index, m))
+        for q in self._tasks:
+            q.put(("cut", index, m, samples))
+
+    def in_flight(self) -> int:
+        return len(self._parts)
+
+    def _receive(self, block: bool) -> bool:
+        try:
+            msg = self._results.get(block=block, timeout=600 if block else None)
+        except queue.Empty:
+            if block:
+                raise RuntimeError("a removal worker sent nothing for 10 minutes") from None
+            return False
+        if msg[0] == "error":
+            self._stop()
+            raise RuntimeError(f"a removal worker failed:\n{msg[1]}")
+        if msg[0] != "cut":
+            self._replies.append(msg)
+            return True
+        _, index, m, chip, subtractions = msg
+        part = self._parts[index, m]
+        part[0] += 1
+        part[2] += subtractions
+        if chip is not None:
+            part[1] += chip.volume
+            part[3] = chip
+        return True
+
+    def finished(self, block: bool = False) -> list[Finished]:
+        """The passages every worker has done, in submission order; with ``block`` at least the oldest one."""
+        out: list[Finished] = []
+        while True:
+            while self._order and self._parts[self._order[0]][0] == self.workers:
+                key = self._order.pop(0)
+                _, volume, subtractions, chip = self._parts.pop(key)
+                self.result.subtractions += subtractions
+                if chip is not None:
+                    chip.volume = volume
+                    self.result.chips.append(chip)
+                out.append((key[0], key[1], chip))
+            if out or not self._order or not self._receive(block):
+                return out
+
+    def _collect(self, kind: str) -> list[tuple]:
+        """Every worker's reply of ``kind`` (the passages before it are finished first: the queues are FIFO)."""
+        while len([r for r in self._replies if r[0] == kind]) < self.workers:
+            self._receive(True)
+        replies = [r for r in self._replies if r[0] == kind]
+        self._replies = [r for r in self._replies if r[0] != kind]
+        return replies
+
+    def solid(self) -> mf.Manifold:
+        for q in self._tasks:
+            q.put(("mesh",))
+        replies = self._collect("mesh")
+        return _union([r[1] for r in replies], replies[0][2])
+
+    def close(self) -> CutResult:
+        for q in self._tasks:
+            q.put(("finish",))
+        replies = self._collect("finish")
+        for p in self._procs:
+            p.join(timeout=60)
+        for _, _, _, (err, pass_err, sweeps) in replies:
+            self.result.sweep_error = max(self.result.sweep_error, err)
+            for k, v in pass_err.items():
+                self.result.pass_sweep_error[k] = max(self.result.pass_sweep_error.get(k, 0.0), v)
+            self.result.sweeps = sweeps  # every worker samples every passage alike
+        self.result.gear = _union([r[1] for r in replies], replies[0][2])
+        return self.result
+
+    def _stop(self) -> None:
+        for p in self._procs:
+            if p.is_alive():
+                p.terminate()
