@@ -83,6 +83,9 @@ class SkivingMachineParams:
     nut_stiffness: float | None = 4.0e8  # N/m; None = rigid
     nut_backlash: float = 3.0e-6  # m
     nut_damping: float = 2.0e4  # N s/m
+    #: relative lead error of the screw: its real lead is the job's lead_screw_pitch x (1 + this), which the CNC
+    #: does not know (ISO 3408-3 class 5 allows about 23 um per 300 mm, 8e-5); signed
+    lead_screw_pitch_error: float = 0.0
 
     # ---- radial slide (pass depth): position-controlled, held stiffly during a pass ---------------------
     radial_mass: float = 180.0  # kg
@@ -122,7 +125,10 @@ class SkivingMachineParams:
     integrator: str = "implicitfast"  # damping implicit; the stages' springs stay well below 1/(2 pi h)
 
     def problems(self) -> list[str]:
-        out = common_problems(self, ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"))
+        error, self_ = self.lead_screw_pitch_error, replace(self, lead_screw_pitch_error=0.0)  # signed: own check
+        out = common_problems(self_, ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"))
+        if not (math.isfinite(error) and abs(error) < 0.05):
+            out.append(f"lead_screw_pitch_error = {error}: must be a relative error within +-0.05 (e.g. 8e-5)")
         if not 0 <= self.counterbalance <= 1:
             out.append(f"counterbalance = {self.counterbalance}: must be between 0 and 1")
         return out

@@ -84,7 +84,8 @@ def build_spec(
     problems = params.problems()
     if problems:
         raise ValueError("invalid machine parameters: " + "; ".join(problems))
-    lay = layout_of(setup, lead_screw_pitch_mm)
+    # the model's screw has its real lead; the CNC counts pulses for the job's nominal one
+    lay = layout_of(setup, lead_screw_pitch_mm * (1 + params.lead_screw_pitch_error))
     g, c = setup.gear, setup.cutter
     spec = mujoco.MjSpec()
     spec.modelname = "skiving_machine"

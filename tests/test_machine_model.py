@@ -197,3 +197,20 @@ def test_cutting_load_does_the_work_of_the_force_on_the_relative_motion() -> Non
     d.qpos[:] = q0
     # on the work spindle alone: the moment of the force about the work axis (blank frame z on the axis)
     assert qfrc[m.joint("B2").dofadr[0]] == pytest.approx(np.cross(point * 1e-3, force)[2], rel=1e-9)
+
+
+def test_lead_screw_pitch_error_is_the_screws_real_lead() -> None:
+    """A screw 0.4 % long: the nut couples P3 to TV with the real lead, and the home pose puts no preload on it."""
+    from machine_models.parts import tendon_coefs
+
+    job = load_job("assets/jobs/spur_external.toml")
+    nominal = job.machine["lead_screw_pitch"] * 1e-3  # m
+    params = replace(SkivingMachineParams(), lead_screw_pitch_error=4e-3)
+    m = build_spec(job.skiving, params, job.machine["lead_screw_pitch"]).compile()
+    assert tendon_coefs(m, "nut")["TV"] == pytest.approx(-nominal * 1.004 / (2 * math.pi), rel=1e-12)
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    mujoco.mj_forward(m, d)
+    assert abs(d.ten_length[m.tendon("nut").id]) < 1e-9  # within the nut's play: no force at home
+    assert "lead_screw_pitch_error" in " ".join(replace(params, lead_screw_pitch_error=0.2).problems())
+    assert not replace(params, lead_screw_pitch_error=-8e-5).problems()  # a short screw is fine
