@@ -175,11 +175,14 @@ def rigid(params, **also: Any):
 
 def override(params, values: dict[str, Any]):
     """``params`` (a frozen dataclass of machine parameters) changed by a flat dict; a drive stage's fields as
-    ``"work_drive.backlash"``. Unknown names raise KeyError naming them."""
+    ``"work_drive.backlash"``; a stiffness ``"rigid"`` makes the stage (or the nut) rigid (job files have no
+    null). Unknown names raise KeyError naming them."""
     top: dict[str, Any] = {}
     stages: dict[str, dict[str, Any]] = {}
     names = {f.name for f in fields(params)}
     for key, value in values.items():
+        if value == "rigid" and (key.endswith(".stiffness") or key == "nut_stiffness"):
+            value = None
         head, _, tail = key.partition(".")
         if head not in names:
             raise KeyError(f"unknown machine parameter {key!r}")

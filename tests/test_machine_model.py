@@ -214,3 +214,13 @@ def test_lead_screw_pitch_error_is_the_screws_real_lead() -> None:
     assert abs(d.ten_length[m.tendon("nut").id]) < 1e-9  # within the nut's play: no force at home
     assert "lead_screw_pitch_error" in " ".join(replace(params, lead_screw_pitch_error=0.2).problems())
     assert not replace(params, lead_screw_pitch_error=-8e-5).problems()  # a short screw is fine
+
+
+def test_a_job_can_make_a_stage_rigid() -> None:
+    from machine_models.parameters import override
+
+    p = override(
+        SkivingMachineParams(),
+        {"work_drive.stiffness": "rigid", "work_drive.backlash": 0.0, "nut_stiffness": "rigid", "nut_backlash": 0.0},
+    )
+    assert p.work_drive.stiffness is None and p.nut_stiffness is None and not p.problems()
