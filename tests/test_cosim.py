@@ -6,28 +6,13 @@ import math
 
 import numpy as np
 import pytest
+from small_jobs import small_job
 
 from cutting.forces import EngagementLoad
 from virtual_machine.cosim import ForcePredictor, cosimulate
 from virtual_machine.job import load_job
 
-SMALL_JOB = """
-[gear]
-teeth = 18
-normal_module = 1.0
-face_width = 2.0
-
-[cutter]
-teeth = 17
-helix_angle = 20.0
-edge = "involute"
-
-[process]
-tool_speed = 2000.0
-axial_feed = 0.2
-passes = [2.25]
-sweep_error = 0.02
-"""
+SMALL_JOB = small_job(sweep_error=0.02)
 
 
 def test_predictor_repeats_the_latest_load_every_pitch_turned_with_the_work() -> None:

@@ -3,26 +3,11 @@
 import json
 
 from click.testing import CliRunner
+from small_jobs import small_job
 
 from virtual_machine.cli import main
 
-SMALL_JOB = """
-[gear]
-teeth = 18
-normal_module = 1.0
-face_width = 2.0
-
-[cutter]
-teeth = 17
-helix_angle = 20.0
-edge = "involute"
-
-[process]
-tool_speed = 2000.0
-axial_feed = 0.2
-passes = [2.25]
-sweep_error = 0.004
-"""
+SMALL_JOB = small_job()
 
 
 def test_cut_writes_the_gear_and_its_measurement(tmp_path):

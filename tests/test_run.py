@@ -8,29 +8,14 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from rerun.chunk import RrdReader
+from small_jobs import small_job
 
 from virtual_machine.cli import main
 from virtual_machine.job import load_job
 from virtual_machine.program import ProgramSettings, program_duration
 from virtual_machine.simulate import LostSynchronismError, simulate
 
-SMALL_JOB = """
-[gear]
-teeth = 18
-normal_module = 1.0
-face_width = 2.0
-
-[cutter]
-teeth = 17
-helix_angle = 20.0
-edge = "involute"
-
-[process]
-tool_speed = 2000.0
-axial_feed = 0.2
-passes = [2.25]
-sweep_error = 0.02
-"""
+SMALL_JOB = small_job(sweep_error=0.02)
 
 
 @pytest.fixture(scope="module")
@@ -107,7 +92,7 @@ def test_the_program_duration_estimate_matches_the_run() -> None:
     assert program_duration(job.skiving) == pytest.approx(rec.t[-1], rel=0.01)
 
 
-GRADABLE_JOB = SMALL_JOB.replace("face_width = 2.0", "face_width = 4.0")  # ISO 1328-1 grades b >= 4 mm
+GRADABLE_JOB = small_job(sweep_error=0.02, face_width=4.0)  # ISO 1328-1 grades b >= 4 mm
 
 
 def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_path) -> None:

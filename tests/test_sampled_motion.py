@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from small_jobs import small_job
 
 from cutting.edge import make_edge
 from cutting.removal import passage_range
@@ -58,26 +59,7 @@ def test_bad_trajectories_are_refused() -> None:
         SampledMotion(setup, 3, s.t, s.rot, s.trans, phi, s.s, s.a)
 
 
-SMALL_JOB = """
-[gear]
-teeth = 18
-normal_module = 1.0
-face_width = 2.0
-
-[cutter]
-teeth = 17
-helix_angle = 20.0
-
-[process]
-tool_speed = 2000.0
-axial_feed = 0.2
-passes = [2.25]
-sweep_error = 0.004
-
-[machine]
-command_pulses_per_rev = 1000000
-encoder_lines = 2500000
-"""
+SMALL_JOB = small_job(edge=None)
 
 
 def test_cut_along_the_simulated_trajectory(tmp_path) -> None:
