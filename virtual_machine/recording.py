@@ -307,6 +307,16 @@ def log_machine(
 
 
 # ---- 2. the blank as it is cut ---------------------------------------------------------------------------
+def _mesh3d(vertices: np.ndarray, triangles: np.ndarray, **style: Any) -> rr.Mesh3D:
+    """A triangle mesh in mm with smooth normals, coloured by ``style`` (albedo_factor or vertex_colors)."""
+    return rr.Mesh3D(
+        vertex_positions=np.asarray(vertices, dtype=np.float32),
+        triangle_indices=np.asarray(triangles, dtype=np.uint32),
+        vertex_normals=vertex_normals(vertices, triangles).astype(np.float32),
+        **style,
+    )
+
+
 def vertex_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Area-weighted unit vertex normals (zero for unused vertices)."""
     v, f = np.asarray(vertices, dtype=float), np.asarray(triangles, dtype=np.int64)
@@ -334,12 +344,7 @@ def log_snapshots(rec: rr.RecordingStream, model: mujoco.MjModel, snapshots: Seq
         rec.set_time(TIMELINE, duration=float(time))
         rec.log(
             f"{frame}/blank",
-            rr.Mesh3D(
-                vertex_positions=np.asarray(vertices, dtype=np.float32),
-                triangle_indices=np.asarray(triangles, dtype=np.uint32),
-                vertex_normals=vertex_normals(vertices, triangles).astype(np.float32),
-                albedo_factor=(190, 190, 200, 255),
-            ),
+            _mesh3d(vertices, triangles, albedo_factor=(190, 190, 200, 255)),
         )
     rec.reset_time()
 
@@ -540,12 +545,7 @@ def log_finished_gear(rec: rr.RecordingStream, gear: Gear, gear_mesh: Mesh, limi
     dev, side = flank_deviation(gear, vertices)
     rec.log(
         f"{GEAR}/finished",
-        rr.Mesh3D(
-            vertex_positions=np.asarray(vertices, dtype=np.float32),
-            triangle_indices=np.asarray(triangles, dtype=np.uint32),
-            vertex_normals=vertex_normals(vertices, triangles).astype(np.float32),
-            vertex_colors=deviation_colors(dev, limit_um),
-        ),
+        _mesh3d(vertices, triangles, vertex_colors=deviation_colors(dev, limit_um)),
         static=True,
     )
     text = deviation_markdown(dev, side, limit_um)
