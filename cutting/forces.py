@@ -50,14 +50,6 @@ class EngagementLoad:
     def peak(self) -> float:
         return float(np.linalg.norm(self.force, axis=1).max()) if len(self.t) else 0.0
 
-    def at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """Force, point and moment at time ``t`` (linear between samples), or None outside the engagement."""
-        if not len(self.t) or t < self.t[0] or t > self.t[-1]:
-            return None
-        i = int(np.clip(np.searchsorted(self.t, t) - 1, 0, len(self.t) - 2))
-        s = (t - self.t[i]) / (self.t[i + 1] - self.t[i])
-        return tuple((1 - s) * a[i] + s * a[i + 1] for a in (self.force, self.point, self.moment))
-
     def mean(self, a: float, b: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The load averaged over [a, b] [s] (a servo tick): the mean force, the force-weighted mean point and the
         mean moment about that point, so that the tick gets the engagement's impulse and angular impulse even when

@@ -251,6 +251,14 @@ def tooth_pose(motion: PassMotion, m: int):
     return pose
 
 
+def in_blank_envelope(gear: Gear, w: np.ndarray, margin: float = 0.0) -> np.ndarray:
+    """Points (..., 3) [mm] inside the blank's envelope (tip cylinder, or the bore of a ring gear, over the face
+    width), grown by ``margin`` [mm]."""
+    r = np.hypot(w[..., 0], w[..., 1])
+    radial = (r > gear.tip_radius - margin) if gear.internal else (r < gear.tip_radius + margin)
+    return radial & (np.abs(w[..., 2]) <= gear.face_width / 2 + margin)
+
+
 class PassCutter:
     """Cuts one pass passage by passage, so the cutting can follow a machine that is still moving (co-simulation).
 
@@ -263,7 +271,7 @@ class PassCutter:
     def __init__(self, stock: Stock, edge: CuttingEdge, plan: PassMotion, tol: float, result: CutResult):
         self.stock, self.result = stock, result
         self.index = plan.index
-        g = self.gear = plan.setup.gear
+        self.gear = plan.setup.gear
         self.z0 = plan.setup.cutter.teeth
         self.pitch = 2 * math.pi / self.z0  # one tooth pitch of the cutter [rad]
         self.half = engagement_half_angle(plan, edge)
@@ -271,24 +279,17 @@ class PassCutter:
         # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist)
         outline, self.outline_err = simplify_outline(edge.outline, tol / 2)
         self.sweep_tol = tol - self.outline_err
-        self.b2 = g.face_width / 2
         self.outline = _balanced_outline(
             plan, outline, self.sweep_tol, self.near_blank, (m_first + m_last) // 2, self.half
         )
         self.points = outline_points(self.outline)
 
-    def near_blank(self, w: np.ndarray, margin: float = 0.1) -> np.ndarray:
-        """Points within ``margin`` [mm] of the blank (a facet wholly farther away cannot reach it)."""
-        g = self.gear
-        r = np.hypot(w[..., 0], w[..., 1])
-        radial = (r > g.tip_radius - margin) if g.internal else (r < g.tip_radius + margin)
-        return radial & (np.abs(w[..., 2]) <= self.b2 + margin)
+    def near_blank(self, w: np.ndarray) -> np.ndarray:
+        """Points within 0.1 mm of the blank (a facet wholly farther away cannot reach it)."""
+        return in_blank_envelope(self.gear, w, 0.1)
 
     def in_blank(self, w: np.ndarray) -> np.ndarray:
-        """Points inside the blank's envelope (tip cylinder or bore, over the face width)."""
-        g = self.gear
-        r = np.hypot(w[..., 0], w[..., 1])
-        return ((r > g.tip_radius) if g.internal else (r < g.tip_radius)) & (np.abs(w[..., 2]) <= self.b2)
+        return in_blank_envelope(self.gear, w)
 
     def window(self, m: int, motion) -> tuple[float, float]:
         """Times [s] of the passage's engagement window: the cutter within the half angle of pitch ``m``."""

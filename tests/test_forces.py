@@ -104,7 +104,7 @@ def test_rotating_edge_force_follows_each_elements_velocity() -> None:
 
 def test_no_chip_no_load() -> None:
     load = engagement_load(translating(1000.0), EDGE, 0.0, 2e-3, 0.0, STEEL, lambda w: np.ones(w.shape[:-1], bool))
-    assert load.peak() == 0.0 and load.at(1e-3) is None
+    assert load.peak() == 0.0 and load.mean(0.0, 1e-3) is None
 
 
 def test_wrench_does_the_work_of_the_forces_along_the_edge() -> None:

@@ -14,6 +14,7 @@ of the chip over the engagements of lag; the run reports that change per engagem
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -26,7 +27,15 @@ from cutting.edge import make_edge
 from cutting.forces import EngagementLoad, engagement_load
 from cutting.holder import check_holder_side
 from cutting.materials import Material, material
-from cutting.removal import Chip, CutResult, engagement_half_angle, expected_genus, passage_count, tooth_pose
+from cutting.removal import (
+    Chip,
+    CutResult,
+    engagement_half_angle,
+    expected_genus,
+    in_blank_envelope,
+    passage_count,
+    tooth_pose,
+)
 from cutting.sampled_motion import SampledMotion
 from cutting.sweep import outline_points, simplify_outline, split_sides
 from cutting.trajectory import ideal_passes
@@ -166,12 +175,7 @@ def cosimulate(
     pitch = 2 * math.pi / setup.cutter.teeth
     half = engagement_half_angle(plans[0], edge)
     chunk = pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
-    g, b2 = setup.gear, setup.gear.face_width / 2
-
-    def in_blank(w: np.ndarray) -> np.ndarray:
-        r = np.hypot(w[..., 0], w[..., 1])
-        return ((r > g.tip_radius) if g.internal else (r < g.tip_radius)) & (np.abs(w[..., 2]) <= b2)
-
+    in_blank = functools.partial(in_blank_envelope, setup.gear)
     sim = CoSimulation(None, removal.result, material=mat)  # the record is assembled at the end
     pending: dict[tuple[int, int], tuple[Samples, float]] = {}
     count = [0]

@@ -48,9 +48,6 @@ class InlineRemoval:
         motion = SampledMotion(self._plans[index].setup, index, *samples)
         self._done.append((index, m, cutter.cut_passage(m, motion)))
 
-    def in_flight(self) -> int:
-        return 0
-
     def finished(self, block: bool = False) -> list[Finished]:
         done, self._done = self._done, []
         return done
@@ -144,9 +141,6 @@ class ParallelRemoval:
         self._order.append((index, m))
         for q in self._tasks:
             q.put(("cut", index, m, samples))
-
-    def in_flight(self) -> int:
-        return len(self._parts)
 
     def _receive(self, block: bool) -> bool:
         try:

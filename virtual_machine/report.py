@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from virtual_machine.formatting import class_table
+from virtual_machine.simulate import SEGMENTS
 
 STYLE = """
 body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }
@@ -32,8 +33,6 @@ def run_chart(path: Path, record, load_rows: np.ndarray, chips: list[tuple[float
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from virtual_machine.simulate import SEGMENTS
 
     fig, ax = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
     feed = record.segment == SEGMENTS.index("feed")  # the run-up's transient would hide the micrometres
