@@ -13,8 +13,9 @@ Seed 001 (thread-cutting group Fv(B1 P2)): mechanical ix = P / (i01 t_TV); maste
 kx = P / (i0 P_TV); equal coordinates kv and kx = c kv / P with c = i01 P_TV.
 
 T is the lead of the gear helix, pi mn z2 / sin(beta2). The sign conventions of skive: the additional
-rotation B4 and the "1 + s/T" of S3 carry the signs of the helix hand and the feed direction
-(s/T -> s_z / p_z with s_z = -s for a downward feed), see :mod:`cutting.skiving`.
+rotation B4 and the "1 + s/T" of S3 carry the signs of the helix hand, the feed direction and the work's
+direction of rotation (s/T -> dir2 s_z / p_z with s_z = -s for a downward feed and dir2 = -1 for an external
+gear, which turns against the cutter), see :func:`feed_over_lead` and :mod:`cutting.skiving`.
 
 A divider (frequency divider = pulse counter + coefficient block) emits one pulse per k input pulses:
 f_out = f_ref / k. Seed 000's ky for S4 is printed as ks t_TV / (c2 T); deriving it from the same
@@ -203,13 +204,21 @@ def _skiving_constants(job: Job, names: tuple[str, ...]) -> dict[str, float]:
     return {n: table[n] for n in names}
 
 
-def signed_feed_over_lead(job: Job) -> float:
-    """s_z / p_z: the carriage travel per work revolution over the signed lead (0 for spur)."""
+def feed_over_lead(job: Job) -> float:
+    """dir2 s_z / p_z: the carriage travel per work revolution over the signed lead, times the work's direction of
+    rotation (+1 with the cutter, -1 against it); 0 for spur.
+
+    The work turns phi2 = r phi0 - 2 pi z / p_z (cutting.skiving), with z = s_z |phi2| / 2 pi, so per work turn
+    the cutter turns (1 + dir2 s_z / p_z) / |r|: B4 slows the work (per cutter turn) when this is positive. An
+    external gear turns against the cutter (dir2 = -1), an internal one with it: the sign is the gear's as much as
+    the feed's.
+    """
     g = job.gear
     if g.helix_angle == 0:
         return 0.0
     s_z = -job.process["axial_feed"] if job.process["feed_direction"] == "down" else job.process["axial_feed"]
-    return s_z / g.lead
+    dir_work = 1.0 if job.skiving.speed_ratio > 0 else -1.0
+    return dir_work * s_z / g.lead
 
 
 def sheet_mechanical(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
@@ -280,7 +289,7 @@ def sheet_hydraulic_shaft(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]
         "kx",
         "pulse generator GGI -> stepping motor GShD (work -> tool)",
         "(z2/z0)(1 + s/T) / c1",
-        g.teeth / c.teeth * (1 + signed_feed_over_lead(job)) / m["c1"],
+        g.teeth / c.teeth * (1 + feed_over_lead(job)) / m["c1"],
     )
     iv = Setting("iv", "two-gear guitar iv (M -> 8)", "n0 / (c3 n_M)", p["tool_speed"] / (m["c3"] * m["motor_speed"]))
     is_ = Setting("is", "guitar is (5 -> 9 -> lead screw)", "s / c4", p["axial_feed"] / m["c4"])
@@ -345,7 +354,7 @@ def sheet_mechatronic(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     else:
         ky_ideal = m["c2"] * ks_int * abs(g.lead) / m["lead_screw_pitch"]
         ky_int = round(ky_ideal)
-        sign = "+" if signed_feed_over_lead(job) * 1 >= 0 else "-"
+        sign = "-" if feed_over_lead(job) > 0 else "+"  # B4 adds to the work pulses when it speeds the work
         ky = Setting(
             "ky",
             "frequency divider 22 (work spindle, B4)",
