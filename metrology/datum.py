@@ -165,19 +165,19 @@ def establish_datum(mesh: MeshData, gear: Gear, name: str = "mesh") -> Datum:
 
 
 def _check_axis(mesh: MeshData, z_lo: float, z_hi: float, name: str, problems: list[Problem]) -> None:
-    """The sections near both faces must have their centroids on one vertical line.
+    """The sections near both faces must have their area centroids on one vertical line.
 
-    The centroid is that of the section's outline weighted by length, so it does not depend on how
-    densely the mesh is tessellated (a cut gear has dense feed marks on some flanks and none on others).
+    The area centroid does not depend on how densely the mesh is tessellated (a cut gear has dense feed marks
+    on some flanks and none on others), and a thin burr left at a face edge (a fin of a few um, which the
+    outline's length would weigh like a flank) barely moves it.
     """
     b = z_hi - z_lo
     centres = []
     for f in (0.2, 0.8):
-        a, bb = level_segments(mesh, "z", z_lo + f * b)
-        length = np.linalg.norm(bb[:, :2] - a[:, :2], axis=1)
-        if length.sum() <= 0.0:
+        centre = _section_centroid(mesh, z_lo + f * b)
+        if centre is None:
             return
-        centres.append(((a[:, :2] + bb[:, :2]) / 2 * length[:, None]).sum(axis=0) / length.sum())
+        centres.append(centre)
     drift = float(np.linalg.norm(centres[1] - centres[0]))
     tilt = math.degrees(math.atan2(drift, 0.6 * b))
     if tilt > MAX_AXIS_TILT_DEG:
@@ -189,3 +189,24 @@ def _check_axis(mesh: MeshData, z_lo: float, z_hi: float, name: str, problems: l
                 "align the gear axis with the mesh's z axis before measuring",
             )
         )
+
+
+def _section_centroid(mesh: MeshData, z: float) -> np.ndarray | None:
+    """Area centroid (x, y) of the plane section at ``z`` (None if the plane misses the mesh).
+
+    Each segment is oriented so the material lies on its left (its triangle's outward normal on the right);
+    the shoelace sums then hold for any order of the segments and any number of loops (a bore counts negative).
+    """
+    a, bb, faces = level_segments(mesh, "z", z, with_faces=True)
+    if len(a) == 0:
+        return None
+    tri = mesh.vertices[mesh.faces[faces]]
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    d = bb - a
+    flip = d[:, 0] * normal[:, 1] - d[:, 1] * normal[:, 0] > 0
+    a, bb = np.where(flip[:, None], bb, a), np.where(flip[:, None], a, bb)
+    cross = a[:, 0] * bb[:, 1] - bb[:, 0] * a[:, 1]
+    area = cross.sum() / 2
+    if abs(area) <= 1e-12:
+        return None
+    return ((a[:, :2] + bb[:, :2]) * cross[:, None]).sum(axis=0) / (6 * area)

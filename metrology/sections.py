@@ -34,8 +34,9 @@ class MeshData:
         return self._ranges[name]
 
 
-def level_segments(mesh: MeshData, name: str, level: float) -> tuple[np.ndarray, np.ndarray]:
-    """Segments where the level set ``field == level`` cuts the mesh: two arrays (m, 3) of end points.
+def level_segments(mesh: MeshData, name: str, level: float, with_faces: bool = False) -> tuple[np.ndarray, ...]:
+    """Segments where the level set ``field == level`` cuts the mesh: two arrays (m, 3) of end points (and with
+    ``with_faces`` a third: the index of the triangle each segment lies in).
 
     ``name`` is "z" (plane) or "r" (cylinder about the z axis). A vertex exactly on the level counts as
     above it, which keeps every crossing triangle to exactly two crossing edges.
@@ -43,7 +44,8 @@ def level_segments(mesh: MeshData, name: str, level: float) -> tuple[np.ndarray,
     lo, hi = mesh.ranges(name)
     cand = np.nonzero((lo < level) & (hi >= level))[0]
     if cand.size == 0:
-        return np.empty((0, 3)), np.empty((0, 3))
+        empty = (np.empty((0, 3)), np.empty((0, 3)))
+        return (*empty, np.empty(0, dtype=np.int64)) if with_faces else empty
     f = mesh.faces[cand]
     vals = mesh.field(name)[f]
     above = vals >= level
@@ -67,4 +69,6 @@ def level_segments(mesh: MeshData, name: str, level: float) -> tuple[np.ndarray,
     first = np.argmax(m, axis=1)
     second = 2 - np.argmax(m[:, ::-1], axis=1)
     idx = np.arange(len(m))
+    if with_faces:
+        return pts[idx, first], pts[idx, second], cand[keep]
     return pts[idx, first], pts[idx, second]

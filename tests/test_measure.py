@@ -233,6 +233,32 @@ def test_bad_meshes_are_refused():
         measure(check_mesh(tilted), Gear(30, 2.0, 20 * DEG, 0.0, tilted.extents[2]))
 
 
+def test_axis_check_uses_the_section_area_centroid():
+    """The axis check's section centre is the area centroid: it follows a shifted gear exactly (1e-6 mm) and a
+    burr fin at a tooth tip (10 um x 1 mm, as a cut leaves at the entry face) moves it by less than 1 um."""
+    import trimesh
+
+    from metrology.datum import _section_centroid
+
+    m = reference_gear_mesh(GEARS["ext_spur"], flank_points=40)
+    z = m.bounds[1, 2] - 1.0
+    centre = _section_centroid(MeshData(m.vertices, m.faces), z)
+    shifted = m.copy()
+    shifted.apply_translation([0.05, -0.03, 0.0])
+    moved = _section_centroid(MeshData(shifted.vertices, shifted.faces), z)
+    assert np.allclose(moved - centre, [0.05, -0.03], atol=1e-6)
+    r_tip = float(np.hypot(m.vertices[:, 0], m.vertices[:, 1]).max())
+    fin = trimesh.creation.box([1.0, 0.01, 2.5])
+    tip = m.vertices[np.argmax(np.hypot(m.vertices[:, 0], m.vertices[:, 1]))]
+    angle = math.atan2(tip[1], tip[0])
+    fin.apply_transform(trimesh.transformations.rotation_matrix(angle, [0, 0, 1]))
+    fin.apply_translation([(r_tip + 0.3) * math.cos(angle), (r_tip + 0.3) * math.sin(angle), z])
+    burred = trimesh.boolean.union([m, fin], engine="manifold")
+    assert burred.volume > m.volume + 0.01  # the fin is on the gear
+    with_fin = _section_centroid(MeshData(burred.vertices, burred.faces), z)
+    assert np.linalg.norm(with_fin - centre) < 1e-3
+
+
 def test_iso_validity_is_enforced_with_a_clear_message():
     """ISO 1328-1:2013 covers b >= 4 mm: a 3 mm gear is measured, but gets no class and says why."""
     g = Gear(30, 2.0, 20 * DEG, 0.0, 3.0)
