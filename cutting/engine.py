@@ -57,7 +57,7 @@ def cut_passes(
             return None if progress is None else (lambda d, n: progress(motions[position].index, d, n))
 
         pass_seconds, pass_triangles = _run_passes(stock, edge, motions, tolerances, result, report)
-        result.gear = stock.solid()
+        result.finish(stock.solid())
         return EngineResult(result, stock.triangles(), pass_seconds, pass_triangles)
 
     ctx = mp.get_context("spawn")  # a fork would copy manifold's thread pool state
@@ -90,7 +90,7 @@ def cut_passes(
         for key, (verts, tris, tolerance) in meshes.items():
             cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
     z_edges = parts[0][2]
-    result.gear = union_cells(cells, z_edges)
+    result.finish(union_cells(cells, z_edges))
     pass_seconds = [float(x) for x in np.max([p[3] for p in parts], axis=0)]
     pass_triangles = [int(x) for x in np.sum([p[4] for p in parts], axis=0)]
     return EngineResult(result, sum(c.num_tri() for c in cells.values()), pass_seconds, pass_triangles)

@@ -47,6 +47,20 @@ class CutResult:
     pass_sweep_error: dict[int, float] = field(default_factory=dict)  # the same, per pass index [mm]
     subtractions: int = 0
     sweeps: int = 0
+    loose_pieces: int = 0  # pieces the cut separated from the gear without sweeping them away (they fall off)
+    loose_volume: float = 0.0  # their volume [mm^3]
+
+    def finish(self, solid: mf.Manifold) -> None:
+        """Set the gear to ``solid`` without the loose pieces: where a tooth's entry and exit cuts meet near the
+        face they can free a sliver of tip no sweep passes through; it falls off a real blank and must not reach
+        the measurement (a gear measuring machine never sees it). The largest body is the gear."""
+        parts = solid.decompose() if solid is not None else []
+        if len(parts) > 1:
+            volumes = [p.volume() for p in parts]
+            keep = int(np.argmax(volumes))
+            self.loose_pieces, self.loose_volume = len(parts) - 1, float(sum(volumes) - volumes[keep])
+            solid = parts[keep]
+        self.gear = solid
 
 
 #: Slab height [mm]: thinner slabs carry fewer triangles per boolean, but a passage then needs more sub-tubes,

@@ -2,6 +2,7 @@
 
 import math
 
+import manifold3d as mf
 import numpy as np
 import pytest
 import trimesh
@@ -193,3 +194,17 @@ def test_union_evaluates_each_sector_column_before_joining_them() -> None:
     u = union_cells(stock.cells, stock.z_edges)
     assert u.genus() == expected_genus(g) == 0
     assert u.volume() == pytest.approx(_m.pi * g.tip_radius**2 * 4.0, rel=1e-4)
+
+
+def test_finish_drops_the_pieces_the_cut_set_free() -> None:
+    """A sliver cut free (here a 0.1 mm cube beside a 10 mm block) falls off a real blank: the gear is the largest
+    body, and the result says how many pieces fell and their volume (to 1e-9 mm^3)."""
+    body = mf.Manifold.cube([10.0, 10.0, 10.0])
+    sliver = mf.Manifold.cube([0.1, 0.1, 0.1]).translate([12.0, 0.0, 0.0])
+    result = CutResult(None)
+    result.finish(body + sliver)
+    assert result.gear.volume() == pytest.approx(1000.0, abs=1e-9)
+    assert result.loose_pieces == 1 and result.loose_volume == pytest.approx(1e-3, abs=1e-9)
+    whole = CutResult(None)
+    whole.finish(body)
+    assert whole.loose_pieces == 0 and whole.gear.volume() == pytest.approx(1000.0, abs=1e-9)

@@ -56,7 +56,7 @@ class InlineRemoval:
         return self.stock.solid()
 
     def close(self) -> CutResult:
-        self.result.gear = self.stock.solid()
+        self.result.finish(self.stock.solid())
         return self.result
 
 
@@ -204,7 +204,7 @@ class ParallelRemoval:
             for k, v in pass_err.items():
                 self.result.pass_sweep_error[k] = max(self.result.pass_sweep_error.get(k, 0.0), v)
             self.result.sweeps = sweeps  # every worker samples every passage alike
-        self.result.gear = _union([r[1] for r in replies], replies[0][2])
+        self.result.finish(_union([r[1] for r in replies], replies[0][2]))
         return self.result
 
     def _stop(self) -> None:
