@@ -51,9 +51,9 @@ class CutResult:
     loose_volume: float = 0.0  # their volume [mm^3]
 
     def finish(self, solid: mf.Manifold) -> None:
-        """Set the gear to ``solid`` without the loose pieces: where a tooth's entry and exit cuts meet near the
-        face they can free a sliver of tip no sweep passes through; it falls off a real blank and must not reach
-        the measurement (a gear measuring machine never sees it). The largest body is the gear."""
+        """Set the gear to ``solid`` without loose pieces: two cuts can meet around a sliver no sweep passes
+        through; it falls off a real blank and must not reach the measurement (a gear measuring machine never
+        sees it). The largest body is the gear."""
         parts = solid.decompose() if solid is not None else []
         if len(parts) > 1:
             volumes = [p.volume() for p in parts]
