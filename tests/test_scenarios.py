@@ -62,20 +62,17 @@ def helix_change(doc, base) -> dict[str, float]:
     return {s: doc["helix"][s]["f_Hbeta_mean"] - base["helix"][s]["f_Hbeta_mean"] for s in SIDES}
 
 
-def predicted_from_drift(job, doc, sim, base_sim) -> float:
-    """|df_Hbeta| [um] that the change of the sync error's drift predicts."""
-    g = job.gear
-    alpha_t = math.atan(math.tan(g.alpha_n) / math.cos(g.beta))
-    z0, z1 = doc["evaluation"]["helix_z_mm"]
-    slope = drift_um_per_mm(sim, g.face_width) - drift_um_per_mm(base_sim, g.face_width)
-    return abs(slope) * (z1 - z0) * math.cos(alpha_t)
-
-
 def base_tangent_length(job, doc) -> float:
     """L_beta cos(alpha_t) [mm]: turns a phase drift per mm of carriage (arc on d) into the helix slope [um]."""
     g = job.gear
     z0, z1 = doc["evaluation"]["helix_z_mm"]
     return (z1 - z0) * math.cos(math.atan(math.tan(g.alpha_n) / math.cos(g.beta)))
+
+
+def predicted_helix_change(job, doc, sim, base_sim) -> float:
+    """The left-flank change of f_Hbeta [um] that the change of the sync error's drift predicts."""
+    slope = drift_um_per_mm(sim, job.gear.face_width) - drift_um_per_mm(base_sim, job.gear.face_width)
+    return -slope * base_tangent_length(job, doc)
 
 
 def helix_parts(doc, ref) -> tuple[float, float]:
@@ -105,7 +102,7 @@ def test_lead_screw_pitch_error_tilts_the_helix(helical) -> None:
     for s in SIDES:
         assert abs(change[s]) == pytest.approx(expected, rel=0.15), change
     # the same from the recorded drift: r2 |dphi2/ds| eps = 2.7 um per mm of carriage
-    assert predicted_from_drift(bad_job, bad, sim, base_sim) == pytest.approx(expected, rel=0.15)
+    assert abs(predicted_helix_change(bad_job, bad, sim, base_sim)) == pytest.approx(expected, rel=0.15)
     # the pitch does not care (within the runs' scatter); the profile slope moves too, by the same amount on both
     # flanks (measured -4.7 um each: in skiving root and tip of a flank are generated at different carriage
     # positions, mirrored between the flanks, and the phase drifts with the carriage), less than the helix
@@ -123,7 +120,7 @@ def test_adaptive_correction_holds_the_phase_under_the_cutting_load(helical) -> 
     assert without > 5 * with_, (with_, without)
     change = helix_change(free, base)
     assert change["left"] * change["right"] < 0, change
-    predicted = predicted_from_drift(job, free, sim, base_sim)
+    predicted = abs(predicted_helix_change(job, free, sim, base_sim))
     assert predicted > 10.0  # a real effect, not scatter
     for s in SIDES:
         assert abs(change[s]) == pytest.approx(predicted, rel=0.2), (change, predicted)
@@ -239,10 +236,4 @@ def test_soft_tool_spindle_twists_inside_the_correction_loop() -> None:
     assert abs(stats["mean_um"] - base_stats["mean_um"]) < 0.3
     assert stats["peak_to_peak_um"] > 1.33 * base_stats["peak_to_peak_um"], (stats, base_stats)
     opposite, _ = helix_parts(doc, base)
-    assert opposite == pytest.approx(predicted_signed(job, doc, sim, base_sim), abs=0.5)
-
-
-def predicted_signed(job, doc, sim, base_sim) -> float:
-    """The left-flank helix change the change of the recorded drift predicts [um]."""
-    slope = drift_um_per_mm(sim, job.gear.face_width) - drift_um_per_mm(base_sim, job.gear.face_width)
-    return -slope * base_tangent_length(job, doc)
+    assert opposite == pytest.approx(predicted_helix_change(job, doc, sim, base_sim), abs=0.5)
