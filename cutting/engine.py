@@ -47,7 +47,7 @@ def cut_passes(
 ) -> EngineResult:
     """Cut every pass in order on a fresh blank; ``result.gear`` is the union of the cells.
 
-    ``workers`` > 1 runs that many processes, each owning every ``workers``-th tooth space.
+    ``workers`` > 1 runs that many processes, each owning a contiguous share of the tooth spaces.
     """
     if workers <= 1:
         stock = Stock(gear, slab=slab)
@@ -63,7 +63,9 @@ def cut_passes(
     ctx = mp.get_context("spawn")  # a fork would copy manifold's thread pool state
     done = ctx.Array("i", len(motions))
     totals = [passage_count(m, edge) for m in motions]
-    shares = [list(range(w, gear.teeth, workers)) for w in range(workers)]
+    # contiguous shares: a passage is sampled by every worker whose spaces it can reach, so interleaved shares
+    # (every space's neighbours owned by the other worker) would have every worker sample nearly every passage
+    shares = [[int(k) for k in part] for part in np.array_split(np.arange(gear.teeth), workers)]
     with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker, initargs=(done,)) as pool:
         futures = [pool.submit(_worker, gear, edge, list(motions), list(tolerances), slab, s) for s in shares]
         while True:
@@ -77,13 +79,15 @@ def cut_passes(
     result = CutResult(None)
     first = parts[0][0]
     for chip_index, chip in enumerate(first.chips):
+        # each worker cut its share of the chip; the passage was sampled by the workers it can reach
         chip.volume = sum(p[0].chips[chip_index].volume for p in parts)
+        chip.sweeps = max(p[0].chips[chip_index].sweeps for p in parts)
         result.chips.append(chip)
     result.sweep_error = max(p[0].sweep_error for p in parts)
     for p in parts:
         for index, err in p[0].pass_sweep_error.items():
             result.pass_sweep_error[index] = max(result.pass_sweep_error.get(index, 0.0), err)
-    result.sweeps = first.sweeps
+    result.sweeps = sum(chip.sweeps for chip in result.chips)
     result.subtractions = sum(p[0].subtractions for p in parts)
     cells: dict[tuple[int, int], mf.Manifold] = {}
     for _, meshes, _, _, _ in parts:

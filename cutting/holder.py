@@ -16,6 +16,7 @@ import numpy as np
 
 from cutting.edge import CuttingEdge
 from cutting.errors import InputError, Problem
+from cutting.sweep import place
 from cutting.trajectory import PassMotion
 
 #: Length of the holder checked behind the cutter body [mm]: a spindle nose is rarely longer.
@@ -59,7 +60,7 @@ def check_holder_side(
     for motion in motions:
         t = np.linspace(0.0, motion.duration, samples)
         rot, trans = motion.pose(t)
-        w = np.einsum("mij,nj->mni", rot, pts) + trans[:, None, :]
+        w = place(pts, rot, trans)
         r = np.hypot(w[..., 0], w[..., 1])
         in_face = np.abs(w[..., 2]) < b2 - eps
         inside = in_face & ((r > r_tip + eps) & (r < r_outer - eps) if g.internal else (r < r_tip - eps))

@@ -127,36 +127,77 @@ class Stock:
                 self.cells[k, s] = cell
         self.volumes = {key: cell.volume() for key, cell in self.cells.items()}
 
-    def reached(self, w: np.ndarray) -> dict[tuple[int, int], tuple[int, int]]:
+    def reached(self, w: np.ndarray, near: np.ndarray | None = None) -> dict[tuple[int, int], tuple[int, int]]:
         """For placed outlines ``w`` (m poses, n points, 3): each cell that the tube between consecutive poses
         can enter, with the first and last pose of the sub-tube that covers all of it.
 
         Between two poses the tube lies in the convex hull of the two outlines, so an interval can only
-        reach the slabs its z range overlaps and the sectors its (untwisted) angle range overlaps.
+        reach the slabs its z range overlaps and the sectors its (untwisted) angle range overlaps. ``near``
+        (m, n) marks the points that can touch the workpiece at all (near the blank's envelope): only the facets
+        with a near corner count, since a facet whose corners all stay clear of the blank cannot reach it.
+        Without it, a tooth in one space would "reach" its neighbours through the part of its outline inside the
+        cutter body (the hub chord): 60 % of the subtractions removed nothing (measured on spur_external).
         """
         pitch = 2 * math.pi / self.n
         theta = np.arctan2(w[..., 1], w[..., 0]) - self.twist_rate * w[..., 2]
         ref = float(np.angle(np.exp(1j * theta).mean()))
         theta = ref + np.angle(np.exp(1j * (theta - ref)))  # continuous around the tube
+        z = w[..., 2]
+        if near is not None:
+            # a facet with a near corner counts with all its corners (its part inside the blank may reach past the
+            # near corner's slab); an interval counts a point at both poses if it counts at either
+            ext = near | np.roll(near, 1, axis=1) | np.roll(near, -1, axis=1)
+            use = ext[:-1] | ext[1:]
+            live = use.any(axis=1)
+            lo_t = np.minimum(np.where(use, theta[:-1], np.inf), np.where(use, theta[1:], np.inf)).min(axis=1)
+            hi_t = np.maximum(np.where(use, theta[:-1], -np.inf), np.where(use, theta[1:], -np.inf)).max(axis=1)
+            lo_z = np.minimum(np.where(use, z[:-1], np.inf), np.where(use, z[1:], np.inf)).min(axis=1)
+            hi_z = np.maximum(np.where(use, z[:-1], -np.inf), np.where(use, z[1:], -np.inf)).max(axis=1)
+        else:
+            live = np.ones(len(w) - 1, dtype=bool)
+            lo_t, hi_t = theta.min(axis=1), theta.max(axis=1)
+            lo_z, hi_z = z.min(axis=1), z.max(axis=1)
+            lo_t, hi_t = np.minimum(lo_t[:-1], lo_t[1:]), np.maximum(hi_t[:-1], hi_t[1:])
+            lo_z, hi_z = np.minimum(lo_z[:-1], lo_z[1:]), np.maximum(hi_z[:-1], hi_z[1:])
         margin = 1e-3 * pitch  # the hull of a short chord bulges by far less than this in angle
-        lo_t, hi_t = theta.min(axis=1), theta.max(axis=1)
-        lo_z, hi_z = w[..., 2].min(axis=1), w[..., 2].max(axis=1)
-        lo_t, hi_t = np.minimum(lo_t[:-1], lo_t[1:]) - margin, np.maximum(hi_t[:-1], hi_t[1:]) + margin
-        lo_z, hi_z = np.minimum(lo_z[:-1], lo_z[1:]), np.maximum(hi_z[:-1], hi_z[1:])
+        lo_t, hi_t = np.where(live, lo_t - margin, 0.0), np.where(live, hi_t + margin, 0.0)
+        lo_z, hi_z = np.where(live, lo_z, 0.0), np.where(live, hi_z, 0.0)
         k_lo, k_hi = np.floor(lo_t / pitch).astype(int), np.floor(hi_t / pitch).astype(int)
         slabs = len(self.z_edges) - 1
         s_lo = np.searchsorted(self.z_edges, lo_z, side="right") - 1
         s_hi = np.searchsorted(self.z_edges, hi_z, side="left") - 1
+        s_lo, s_hi = np.maximum(s_lo, 0), np.minimum(s_hi, slabs - 1)
         out: dict[tuple[int, int], tuple[int, int]] = {}
-        for i in range(len(w) - 1):
-            for s in range(max(s_lo[i], 0), min(s_hi[i], slabs - 1) + 1):
-                for k in range(k_lo[i], k_hi[i] + 1):
-                    key = (k % self.n, s)
-                    if key[0] not in self.owned:
-                        continue
-                    first, _ = out.get(key, (i, i))
-                    out[key] = (first, i + 1)
+        if not live.any():
+            return out
+        for s in range(int(s_lo[live].min()), int(s_hi[live].max()) + 1):
+            in_slab = live & (s_lo <= s) & (s_hi >= s)
+            if not in_slab.any():
+                continue
+            for k in range(int(k_lo[in_slab].min()), int(k_hi[in_slab].max()) + 1):
+                if k % self.n not in self.owned:
+                    continue
+                hit = np.nonzero(in_slab & (k_lo <= k) & (k_hi >= k))[0]
+                if hit.size:
+                    out[k % self.n, s] = (int(hit[0]), int(hit[-1]) + 1)
         return out
+
+    def may_reach_owned(self, w: np.ndarray, near: np.ndarray, pad: float) -> bool:
+        """Whether the points ``w`` (m, n, 3) marked ``near`` can come within a sector this stock owns, when each
+        point moves by at most ``pad`` [mm] between the samples ``w``: a worker skips the passages that only its
+        neighbours' spaces see, without sampling them finely."""
+        if len(self.owned) == self.n:
+            return True
+        p = w[near | np.roll(near, 1, axis=1) | np.roll(near, -1, axis=1)]  # with the other corners of their facets
+        if p.size == 0:
+            return False
+        pitch = 2 * math.pi / self.n
+        theta = np.arctan2(p[:, 1], p[:, 0]) - self.twist_rate * p[:, 2]
+        ref = float(np.angle(np.exp(1j * theta).mean()))
+        theta = ref + np.angle(np.exp(1j * (theta - ref)))
+        margin = 1e-3 * pitch + pad / max(float(np.hypot(p[:, 0], p[:, 1]).min()), 1e-3)
+        k_lo, k_hi = math.floor((theta.min() - margin) / pitch), math.floor((theta.max() + margin) / pitch)
+        return any(k % self.n in self.owned for k in range(k_lo, k_hi + 1))
 
     def subtract(self, tool: mf.Manifold, key: tuple[int, int]) -> float:
         """Remove ``tool`` from one cell; returns the removed volume [mm^3]."""
@@ -260,7 +301,7 @@ def tooth_pose(motion: PassMotion, m: int):
 
     def pose(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         rot, trans = motion.pose(t)
-        return np.einsum("nij,jk->nik", rot, local), trans
+        return rot @ local, trans
 
     return pose
 
@@ -323,22 +364,32 @@ class PassCutter:
             return None
         # keep the part of the window in which the tooth can meet the blank (radius and face), one sample wider
         probe = np.linspace(t0, t1, 65)
-        meets = self.in_blank(place(pts, *pose(probe)))
-        hit = np.nonzero(meets.any(axis=1))[0]
+        w_probe = place(pts, *pose(probe))
+        hit = np.nonzero(self.in_blank(w_probe).any(axis=1))[0]
         if hit.size == 0:
             return None
-        t0, t1 = probe[max(hit[0] - 1, 0)], probe[min(hit[-1] + 1, len(probe) - 1)]
+        lo, hi = max(hit[0] - 1, 0), min(hit[-1] + 1, len(probe) - 1)
+        t0, t1 = probe[lo], probe[hi]
+        chip = Chip(self.index, j, float(tm), 0.0, 0, float(t0), float(t1))
+        # a worker owning a share of the spaces samples only the passages that can reach its cells; every point
+        # moves by at most ``pad`` between probes (1.5 x the longest chord, for the arc)
+        w_probe = w_probe[lo : hi + 1]
+        pad = 1.5 * float(np.linalg.norm(np.diff(w_probe, axis=0), axis=2).max()) if hi > lo else 0.0
+        if not stock.may_reach_owned(w_probe, in_blank_envelope(self.gear, w_probe, 0.1 + pad), pad):
+            result.chips.append(chip)
+            return chip
         times, err = sample_window(pose, pts, t0, t1, self.sweep_tol, self.near_blank)
         rot, trans = pose(times)
         vol = 0.0
-        for key, (i0, i1) in stock.reached(place(pts, rot, trans)).items():
+        w = place(pts, rot, trans)
+        for key, (i0, i1) in stock.reached(w, self.near_blank(w)).items():
             vol += stock.subtract(tube(self.outline, rot[i0 : i1 + 1], trans[i0 : i1 + 1]), key)
             result.subtractions += 1
         result.sweeps += len(times) - 1
         bound = err + self.outline_err
         result.sweep_error = max(result.sweep_error, bound)
         result.pass_sweep_error[self.index] = max(result.pass_sweep_error.get(self.index, 0.0), bound)
-        chip = Chip(self.index, j, float(tm), vol, len(times) - 1, float(t0), float(t1))
+        chip.volume, chip.sweeps = vol, len(times) - 1
         result.chips.append(chip)
         return chip
 

@@ -260,9 +260,9 @@ class SkivingSetup:
         a = self.final_centre_distance if centre_distance is None else centre_distance
         phi2 = self.speed_ratio * phi0 + self.differential_rotation_per_mm * s_arr + self.work_phase
         back = rot_z(-phi2)
-        rot = np.einsum("sij,jk,skl->sil", back, rot_x(self.tilt), rot_z(phi0 + self.cutter_phase))
+        rot = back @ rot_x(self.tilt) @ rot_z(phi0 + self.cutter_phase)
         centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1)
-        return rot, np.einsum("sij,sj->si", back, centre)
+        return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
 
     def edge_in_work_frame(self, edge: np.ndarray, phi0: np.ndarray) -> np.ndarray:
         """Edge points of every cutter tooth for each cutter angle, in the work frame (s = 0), shape (n, m, 3)."""

@@ -106,7 +106,7 @@ def test_ideal_cut_of_a_small_gear():
 
 
 def test_parallel_workers_cut_the_same_gear():
-    """Two worker processes (each owning every other tooth space) give the same gear and chips as one."""
+    """Two worker processes (each owning half of the tooth spaces) give the same gear and chips as one."""
     from cutting.engine import cut_passes
 
     st = small_setup()

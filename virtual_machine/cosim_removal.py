@@ -161,7 +161,8 @@ class ParallelRemoval:
         part[2] += subtractions
         if chip is not None:
             part[1] += chip.volume
-            part[3] = chip
+            if part[3] is None or chip.sweeps > part[3].sweeps:  # the reply of a worker that sampled the passage
+                part[3] = chip
         return True
 
     def finished(self, block: bool = False) -> list[Finished]:
@@ -199,11 +200,12 @@ class ParallelRemoval:
         replies = self._collect("finish")
         for p in self._procs:
             p.join(timeout=60)
-        for _, _, _, (err, pass_err, sweeps) in replies:
+        for _, _, _, (err, pass_err, _sweeps) in replies:
             self.result.sweep_error = max(self.result.sweep_error, err)
             for k, v in pass_err.items():
                 self.result.pass_sweep_error[k] = max(self.result.pass_sweep_error.get(k, 0.0), v)
-            self.result.sweeps = sweeps  # every worker samples every passage alike
+        # each passage is sampled by the workers whose spaces it can reach: count it once
+        self.result.sweeps = sum(chip.sweeps for chip in self.result.chips)
         self.result.finish(_union([r[1] for r in replies], replies[0][2]))
         return self.result
 

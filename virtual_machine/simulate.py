@@ -391,6 +391,6 @@ def relative_pose(setup, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     from cutting.skiving import rot_x, rot_z
 
     back = rot_z(-(q[:, 1] + setup.work_phase))
-    rot = np.einsum("nij,jk,nkl->nil", back, rot_x(setup.tilt), rot_z(q[:, 0] + setup.cutter_phase))
+    rot = back @ rot_x(setup.tilt) @ rot_z(q[:, 0] + setup.cutter_phase)
     centre = np.stack([q[:, 3], np.zeros(len(q)), q[:, 2]], -1)
-    return rot, np.einsum("nij,nj->ni", back, centre)
+    return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
