@@ -21,7 +21,7 @@ from cutting.flank import twist_rate
 from cutting.gear import Gear
 from cutting.skiving import rot_z
 from cutting.solids import blank
-from cutting.sweep import outline_points, place, sample_window, simplify_outline, split_sides, tube
+from cutting.sweep import ZippedSweep, outline_points, place, sample_blocks, simplify_outline, split_sides
 from cutting.trajectory import PassMotion
 
 
@@ -182,6 +182,44 @@ class Stock:
                     out[k % self.n, s] = (int(hit[0]), int(hit[-1]) + 1)
         return out
 
+    def reached_facets(
+        self, verts: np.ndarray, tris: np.ndarray, sample: np.ndarray, near: np.ndarray
+    ) -> dict[tuple[int, int], tuple[int, int]]:
+        """For a tube's side facets (``verts`` (m, 3), ``tris`` (k, 3), each vertex's ``sample`` index and whether it
+        is ``near`` the blank): each cell that a facet with a near corner can enter, with the first and last sample
+        of those facets (the sub-tube between them covers all of the tube that the cell sees).
+
+        A facet lies within the z range of its corners and, being short, within their (untwisted) angle range
+        plus a small margin; a facet whose corners all stay clear of the blank cannot reach it.
+        """
+        tris = tris[near[tris].any(axis=1)]
+        out: dict[tuple[int, int], tuple[int, int]] = {}
+        if len(tris) == 0:
+            return out
+        pitch = 2 * math.pi / self.n
+        theta = np.arctan2(verts[:, 1], verts[:, 0]) - self.twist_rate * verts[:, 2]
+        ref = float(np.angle(np.exp(1j * theta[tris[:, 0]]).mean()))
+        theta = ref + np.angle(np.exp(1j * (theta - ref)))  # continuous around the tube
+        t, z, i = theta[tris], verts[:, 2][tris], sample[tris]
+        margin = 1e-3 * pitch  # a short facet bulges by far less than this in angle
+        k_lo = np.floor((t.min(axis=1) - margin) / pitch).astype(int)
+        k_hi = np.floor((t.max(axis=1) + margin) / pitch).astype(int)
+        slabs = len(self.z_edges) - 1
+        s_lo = np.maximum(np.searchsorted(self.z_edges, z.min(axis=1), side="right") - 1, 0)
+        s_hi = np.minimum(np.searchsorted(self.z_edges, z.max(axis=1), side="left") - 1, slabs - 1)
+        i_lo, i_hi = i.min(axis=1), i.max(axis=1)
+        for s in range(int(s_lo.min()), int(s_hi.max()) + 1):
+            in_slab = (s_lo <= s) & (s_hi >= s)
+            if not in_slab.any():
+                continue
+            for k in range(int(k_lo[in_slab].min()), int(k_hi[in_slab].max()) + 1):
+                if k % self.n not in self.owned:
+                    continue
+                hit = in_slab & (k_lo <= k) & (k_hi >= k)
+                if hit.any():
+                    out[k % self.n, s] = (int(i_lo[hit].min()), int(i_hi[hit].max()))
+        return out
+
     def may_reach_owned(self, w: np.ndarray, near: np.ndarray, pad: float) -> bool:
         """Whether the points ``w`` (m, n, 3) marked ``near`` can come within a sector this stock owns, when each
         point moves by at most ``pad`` [mm] between the samples ``w``: a worker skips the passages that only its
@@ -334,10 +372,12 @@ class PassCutter:
         # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist)
         outline, self.outline_err = simplify_outline(edge.outline, tol / 2)
         self.sweep_tol = tol - self.outline_err
-        self.outline = _balanced_outline(
-            plan, outline, self.sweep_tol, self.near_blank, (m_first + m_last) // 2, self.half
-        )
+        m_mid = (m_first + m_last) // 2
+        self.outline, template = _balanced_outline(plan, outline, self.sweep_tol, self.near_blank, m_mid, self.half)
         self.points = outline_points(self.outline)
+        # every passage's sampling starts from the middle passage's, shifted to its own mesh time: most intervals
+        # pass at once (the same start in every worker, so the cut does not depend on how the spaces are shared)
+        self.start_times = template.relative(plan.time_at_angle(m_mid * self.pitch))
 
     def near_blank(self, w: np.ndarray) -> np.ndarray:
         """Points within 0.1 mm of the blank (a facet wholly farther away cannot reach it)."""
@@ -378,18 +418,20 @@ class PassCutter:
         if not stock.may_reach_owned(w_probe, in_blank_envelope(self.gear, w_probe, 0.1 + pad), pad):
             result.chips.append(chip)
             return chip
-        times, err = sample_window(pose, pts, t0, t1, self.sweep_tol, self.near_blank)
-        rot, trans = pose(times)
+        start = [t + tm for t in self.start_times]
+        sampling = sample_blocks(pose, pts, t0, t1, self.sweep_tol, self.near_blank, start)
+        sweep = ZippedSweep(self.outline, sampling.path_times(), pose)
+        verts, tris, sample, _, _ = sweep.mesh()
         vol = 0.0
-        w = place(pts, rot, trans)
-        for key, (i0, i1) in stock.reached(w, self.near_blank(w)).items():
-            vol += stock.subtract(tube(self.outline, rot[i0 : i1 + 1], trans[i0 : i1 + 1]), key)
+        for key, (i0, i1) in stock.reached_facets(verts, tris, sample, self.near_blank(verts)).items():
+            vol += stock.subtract(sweep.solid(i0, i1), key)
             result.subtractions += 1
-        result.sweeps += len(times) - 1
+        err = sampling.error
+        result.sweeps += sampling.steps
         bound = err + self.outline_err
         result.sweep_error = max(result.sweep_error, bound)
         result.pass_sweep_error[self.index] = max(result.pass_sweep_error.get(self.index, 0.0), bound)
-        chip.volume, chip.sweeps = vol, len(times) - 1
+        chip.volume, chip.sweeps = vol, sampling.steps
         result.chips.append(chip)
         return chip
 
@@ -415,23 +457,25 @@ def cut(
 
 
 def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near, m: int, half: float):
-    """The outline with its long sides split where that makes the tube cheapest.
+    """The outline with its long sides split where that makes the tube cheapest, and its block sampling of the
+    passage of pitch ``m``.
 
     A facet's twist grows with its side's length times the time step, the chord error with the time step
     squared: long sides force short steps. Tried on the middle passage of the pass, the split that gives the
-    fewest facets (sides x samples) is kept; a few sample_window calls per pass.
+    fewest facets (sides x samples per block) is kept; a few sample_blocks calls per pass.
     """
     pose = tooth_pose(motion, m)
     pitch = 2 * math.pi / motion.setup.cutter.teeth
     lo, hi = motion.time_at_angle(m * pitch - half), motion.time_at_angle(m * pitch + half)
-    best, best_cost = outline, math.inf
+    best, best_cost, best_sampling = outline, math.inf, None
     for longest in (math.inf, 2.0, 1.0, 0.5, 0.3, 0.2, 0.1):
         candidate = outline if longest == math.inf else split_sides(outline, longest)
         try:
-            times, _ = sample_window(pose, outline_points(candidate), lo, hi, tol, near)
+            sampling = sample_blocks(pose, outline_points(candidate), lo, hi, tol, near)
         except RuntimeError:
             continue
-        cost = len(candidate) * len(times)
-        if cost < best_cost:
-            best, best_cost = candidate, cost
-    return best
+        if sampling.quads < best_cost:
+            best, best_cost, best_sampling = candidate, sampling.quads, sampling
+    if best_sampling is None:
+        raise RuntimeError(f"the trajectory could not be sampled to a sweep error of {tol * 1e3:.2f} um")
+    return best, best_sampling

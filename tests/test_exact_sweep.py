@@ -4,6 +4,7 @@ import functools
 import math
 
 import numpy as np
+import pytest
 import trimesh
 
 from cutting.edge import make_edge
@@ -60,15 +61,17 @@ def test_conjugate_edge_never_undercuts_and_leaves_feed_marks_that_shrink_with_t
     assert tops[0.1] < 0.6 * tops[0.2]  # feed marks go with the feed squared: 0.25 in theory
 
 
-def test_the_meshed_cut_matches_the_exact_sweep_within_its_sweep_error():
+@pytest.mark.parametrize("tol", [6e-3, 1.5e-3])
+def test_the_meshed_cut_matches_the_exact_sweep_within_its_sweep_error(tol):
     """Along flank normals, the mesh that the booleans leave and the exact surface differ by no more than the
-    reported sweep error (plus the 0.02 um bisection resolution)."""
+    reported sweep error (plus the 0.02 um bisection resolution). Measured: 3.8 um at 6 um, 0.94 um at 1.5 um."""
     st = setup()
     edge, sets = finishing(0.2)
     motion = sets[0].motion
     stock = Stock(st.gear)
     res = CutResult(None)
-    cut(stock, edge, motion, 6e-3, res)
+    cut(stock, edge, motion, tol, res)
+    assert res.sweep_error <= tol
     m = stock.solid().to_mesh64()
     mesh = trimesh.Trimesh(np.asarray(m.vert_properties)[:, :3], np.asarray(m.tri_verts), process=False)
     tri = mesh.vertices[mesh.faces]
