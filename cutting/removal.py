@@ -67,6 +67,9 @@ class CutResult:
 #: whose pose ranges overlap (benchmarks/bench_cut.py --slabs measures the trade-off).
 DEFAULT_SLAB = 2.0
 
+#: The tolerance of the sampling every passage starts from, as a fraction of the allowed sweep error.
+TEMPLATE_MARGIN = 0.85
+
 #: Angular overlap of neighbouring sectors, as a fraction of the pitch (a few micrometres of tooth centre).
 SECTOR_OVERLAP = 2e-4
 
@@ -373,11 +376,18 @@ class PassCutter:
         outline, self.outline_err = simplify_outline(edge.outline, tol / 2)
         self.sweep_tol = tol - self.outline_err
         m_mid = (m_first + m_last) // 2
-        self.outline, template = _balanced_outline(plan, outline, self.sweep_tol, self.near_blank, m_mid, self.half)
+        self.outline = _balanced_outline(plan, outline, self.sweep_tol, self.near_blank, m_mid, self.half)
         self.points = outline_points(self.outline)
-        # every passage's sampling starts from the middle passage's, shifted to its own mesh time: most intervals
-        # pass at once (the same start in every worker, so the cut does not depend on how the spaces are shared)
-        self.start_times = template.relative(plan.time_at_angle(m_mid * self.pitch))
+        # every passage's sampling starts from the middle passage's, shifted to its own mesh time, sampled with a
+        # margin (TEMPLATE_MARGIN x the tolerance): a real machine's passages differ from the plan by far less,
+        # so they keep the template's times and every tooth space carries the same sampling marks (the pitch
+        # of a coarse cut does not scatter with them); the same start in every worker, so the cut does not depend
+        # on how the spaces are shared
+        tm = plan.time_at_angle(m_mid * self.pitch)
+        lo, hi = plan.time_at_angle(m_mid * self.pitch - self.half), plan.time_at_angle(m_mid * self.pitch + self.half)
+        pose = tooth_pose(plan, m_mid)
+        template = sample_blocks(pose, self.points, lo, hi, TEMPLATE_MARGIN * self.sweep_tol, self.near_blank)
+        self.start_times = template.relative(tm)
 
     def near_blank(self, w: np.ndarray) -> np.ndarray:
         """Points within 0.1 mm of the blank (a facet wholly farther away cannot reach it)."""
@@ -457,8 +467,7 @@ def cut(
 
 
 def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near, m: int, half: float):
-    """The outline with its long sides split where that makes the tube cheapest, and its block sampling of the
-    passage of pitch ``m``.
+    """The outline with its long sides split where that makes the tube cheapest.
 
     A facet's twist grows with its side's length times the time step, the chord error with the time step
     squared: long sides force short steps. Tried on the middle passage of the pass, the split that gives the
@@ -467,15 +476,13 @@ def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near,
     pose = tooth_pose(motion, m)
     pitch = 2 * math.pi / motion.setup.cutter.teeth
     lo, hi = motion.time_at_angle(m * pitch - half), motion.time_at_angle(m * pitch + half)
-    best, best_cost, best_sampling = outline, math.inf, None
+    best, best_cost = outline, math.inf
     for longest in (math.inf, 2.0, 1.0, 0.5, 0.3, 0.2, 0.1):
         candidate = outline if longest == math.inf else split_sides(outline, longest)
         try:
-            sampling = sample_blocks(pose, outline_points(candidate), lo, hi, tol, near)
+            cost = sample_blocks(pose, outline_points(candidate), lo, hi, tol, near).quads
         except RuntimeError:
             continue
-        if sampling.quads < best_cost:
-            best, best_cost, best_sampling = candidate, sampling.quads, sampling
-    if best_sampling is None:
-        raise RuntimeError(f"the trajectory could not be sampled to a sweep error of {tol * 1e3:.2f} um")
-    return best, best_sampling
+        if cost < best_cost:
+            best, best_cost = candidate, cost
+    return best
