@@ -65,6 +65,7 @@ def run(setup: SkivingSetup, kind: str, tol: float, passes: list[int], workers: 
         f"slab {slab} mm, {workers} workers, peak RSS {peak_rss_mib():.0f} MiB, genus {genus}",
         flush=True,
     )
+    print("    stages [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in out.stage_seconds.items()), flush=True)
     mesh.export("/tmp/bench_cut_gear.ply")  # kept, so a failed or changed measurement needs no new cut
     try:
         doc = measure_gear(check_mesh(mesh), setup.gear)

@@ -14,7 +14,7 @@ import os
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import manifold3d as mf
 import numpy as np
@@ -34,6 +34,7 @@ class EngineResult:
     stock_triangles: int
     pass_seconds: list[float]
     pass_triangles: list[int]  # stock triangles after each pass: bounded by the cut surface, not the booleans
+    stage_seconds: dict[str, float] = field(default_factory=dict)  # cut, collect (workers' cells), union
 
 
 def cut_passes(
@@ -49,6 +50,7 @@ def cut_passes(
 
     ``workers`` > 1 runs that many processes, each owning a contiguous share of the tooth spaces.
     """
+    t_start = time.perf_counter()
     if workers <= 1:
         stock = Stock(gear, slab=slab)
         result = CutResult(None)
@@ -57,8 +59,10 @@ def cut_passes(
             return None if progress is None else (lambda d, n: progress(motions[position].index, d, n))
 
         pass_seconds, pass_triangles = _run_passes(stock, edge, motions, tolerances, result, report)
+        t_cut = time.perf_counter()
         result.finish(stock.solid())
-        return EngineResult(result, stock.triangles(), pass_seconds, pass_triangles)
+        stages = {"cut": t_cut - t_start, "collect": 0.0, "union": time.perf_counter() - t_cut}
+        return EngineResult(result, stock.triangles(), pass_seconds, pass_triangles, stages)
 
     ctx = mp.get_context("spawn")  # a fork would copy manifold's thread pool state
     done = ctx.Array("i", len(motions))
@@ -75,6 +79,7 @@ def cut_passes(
                     progress(motions[i].index, min(done[i] // workers, total), total)
             if not pending or any(f.exception() for f in finished):
                 break
+        t_cut = time.perf_counter()
         parts = [f.result() for f in futures]
     result = CutResult(None)
     first = parts[0][0]
@@ -94,10 +99,12 @@ def cut_passes(
         for key, (verts, tris, tolerance) in meshes.items():
             cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
     z_edges = parts[0][2]
+    t_collect = time.perf_counter()
     result.finish(union_cells(cells, z_edges))
+    stages = {"cut": t_cut - t_start, "collect": t_collect - t_cut, "union": time.perf_counter() - t_collect}
     pass_seconds = [float(x) for x in np.max([p[3] for p in parts], axis=0)]
     pass_triangles = [int(x) for x in np.sum([p[4] for p in parts], axis=0)]
-    return EngineResult(result, sum(c.num_tri() for c in cells.values()), pass_seconds, pass_triangles)
+    return EngineResult(result, sum(c.num_tri() for c in cells.values()), pass_seconds, pass_triangles, stages)
 
 
 _DONE = None

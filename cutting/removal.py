@@ -67,9 +67,6 @@ class CutResult:
 #: whose pose ranges overlap (benchmarks/bench_cut.py --slabs measures the trade-off).
 DEFAULT_SLAB = 2.0
 
-#: The tolerance of the sampling every passage starts from, as a fraction of the allowed sweep error.
-TEMPLATE_MARGIN = 0.85
-
 #: Angular overlap of neighbouring sectors, as a fraction of the pitch (a few micrometres of tooth centre).
 SECTOR_OVERLAP = 2e-4
 
@@ -378,15 +375,11 @@ class PassCutter:
         m_mid = (m_first + m_last) // 2
         self.outline = _balanced_outline(plan, outline, self.sweep_tol, self.near_blank, m_mid, self.half)
         self.points = outline_points(self.outline)
-        # every passage's sampling starts from the middle passage's, shifted to its own mesh time, sampled with a
-        # margin (TEMPLATE_MARGIN x the tolerance): a real machine's passages differ from the plan by far less,
-        # so they keep the template's times and every tooth space carries the same sampling marks (the pitch
-        # of a coarse cut does not scatter with them); the same start in every worker, so the cut does not depend
-        # on how the spaces are shared
+        # every passage's sampling starts from the middle passage's, shifted to its own mesh time: most intervals
+        # pass at once (the same start in every worker, so the cut does not depend on how the spaces are shared)
         tm = plan.time_at_angle(m_mid * self.pitch)
         lo, hi = plan.time_at_angle(m_mid * self.pitch - self.half), plan.time_at_angle(m_mid * self.pitch + self.half)
-        pose = tooth_pose(plan, m_mid)
-        template = sample_blocks(pose, self.points, lo, hi, TEMPLATE_MARGIN * self.sweep_tol, self.near_blank)
+        template = sample_blocks(tooth_pose(plan, m_mid), self.points, lo, hi, self.sweep_tol, self.near_blank)
         self.start_times = template.relative(tm)
 
     def near_blank(self, w: np.ndarray) -> np.ndarray:
