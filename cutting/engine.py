@@ -11,17 +11,17 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 
-import manifold3d as mf
 import numpy as np
 
 from cutting.edge import CuttingEdge
 from cutting.gear import Gear
-from cutting.removal import DEFAULT_SLAB, CutResult, Stock, cut, passage_count, union_cells
+from cutting.removal import DEFAULT_SLAB, CutResult, Stock, cut, drop_loose, from_arrays, passage_count, to_arrays
 from cutting.trajectory import PassMotion
 
 #: progress(pass_index, passages_done, passages_total)
@@ -46,7 +46,7 @@ def cut_passes(
     slab: float = DEFAULT_SLAB,
     progress: Progress | None = None,
 ) -> EngineResult:
-    """Cut every pass in order on a fresh blank; ``result.gear`` is the union of the cells.
+    """Cut every pass in order on a fresh blank; ``result.gear`` is the union of the sector columns.
 
     ``workers`` > 1 runs that many processes, each owning a contiguous share of the tooth spaces.
     """
@@ -60,7 +60,7 @@ def cut_passes(
 
         pass_seconds, pass_triangles = _run_passes(stock, edge, motions, tolerances, result, report)
         t_cut = time.perf_counter()
-        result.finish(stock.solid())
+        result.finish_columns(list(stock.columns().values()))
         stages = {"cut": t_cut - t_start, "collect": 0.0, "union": time.perf_counter() - t_cut}
         return EngineResult(result, stock.triangles(), pass_seconds, pass_triangles, stages)
 
@@ -70,8 +70,11 @@ def cut_passes(
     # contiguous shares: a passage is sampled by every worker whose spaces it can reach, so interleaved shares
     # (every space's neighbours owned by the other worker) would have every worker sample nearly every passage
     shares = [[int(k) for k in part] for part in np.array_split(np.arange(gear.teeth), workers)]
-    with ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker, initargs=(done,)) as pool:
-        futures = [pool.submit(_worker, gear, edge, list(motions), list(tolerances), slab, s) for s in shares]
+    with (
+        tempfile.TemporaryDirectory(prefix="skive-cut-") as tmp,
+        ProcessPoolExecutor(workers, mp_context=ctx, initializer=_init_worker, initargs=(done,)) as pool,
+    ):
+        futures = [pool.submit(_worker, gear, edge, list(motions), list(tolerances), slab, s, tmp) for s in shares]
         while True:
             finished, pending = wait(futures, timeout=0.25, return_when=FIRST_EXCEPTION)
             if progress is not None:
@@ -79,8 +82,11 @@ def cut_passes(
                     progress(motions[i].index, min(done[i] // workers, total), total)
             if not pending or any(f.exception() for f in finished):
                 break
-        t_cut = time.perf_counter()
         parts = [f.result() for f in futures]
+        t_cut = time.perf_counter()
+        # the workers' sector columns, written to files (a pipe would copy hundreds of MB per worker)
+        columns = [from_arrays(*_load(path)) for p in parts for path in p[1]]
+    t_collect = time.perf_counter()
     result = CutResult(None)
     first = parts[0][0]
     for chip_index, chip in enumerate(first.chips):
@@ -94,17 +100,14 @@ def cut_passes(
             result.pass_sweep_error[index] = max(result.pass_sweep_error.get(index, 0.0), err)
     result.sweeps = sum(chip.sweeps for chip in result.chips)
     result.subtractions = sum(p[0].subtractions for p in parts)
-    cells: dict[tuple[int, int], mf.Manifold] = {}
-    for _, meshes, _, _, _ in parts:
-        for key, (verts, tris, tolerance) in meshes.items():
-            cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
-    z_edges = parts[0][2]
-    t_collect = time.perf_counter()
-    result.finish(union_cells(cells, z_edges))
+    result.finish_columns(columns)
+    for p in parts:  # the pieces each worker's columns shed
+        result.loose_pieces += p[0].loose_pieces
+        result.loose_volume += p[0].loose_volume
     stages = {"cut": t_cut - t_start, "collect": t_collect - t_cut, "union": time.perf_counter() - t_collect}
-    pass_seconds = [float(x) for x in np.max([p[3] for p in parts], axis=0)]
-    pass_triangles = [int(x) for x in np.sum([p[4] for p in parts], axis=0)]
-    return EngineResult(result, sum(c.num_tri() for c in cells.values()), pass_seconds, pass_triangles, stages)
+    pass_seconds = [float(x) for x in np.max([p[2] for p in parts], axis=0)]
+    pass_triangles = [int(x) for x in np.sum([p[3] for p in parts], axis=0)]
+    return EngineResult(result, pass_triangles[-1], pass_seconds, pass_triangles, stages)
 
 
 _DONE = None
@@ -128,7 +131,15 @@ def _run_passes(stock, edge, motions, tolerances, result, report) -> tuple[list[
     return pass_seconds, pass_triangles
 
 
-def _worker(gear, edge, motions, tolerances, slab, sectors):
+def _load(path: str) -> tuple[np.ndarray, np.ndarray, float]:
+    with np.load(path) as f:
+        return f["verts"], f["tris"], float(f["tolerance"])
+
+
+def _worker(gear, edge, motions, tolerances, slab, sectors, tmp):
+    """Cut every pass on the worker's sectors; unite each sector's slabs (in parallel with the other workers),
+    shed its loose pieces and write it to ``tmp``. Returns the worker's result (chips, loose pieces), the column
+    files, the seconds and the stock triangles after each pass."""
     stock = Stock(gear, slab=slab, sectors=sectors)
     result = CutResult(None)
 
@@ -142,10 +153,12 @@ def _worker(gear, edge, motions, tolerances, slab, sectors):
         return tick
 
     pass_seconds, pass_triangles = _run_passes(stock, edge, motions, tolerances, result, report)
-    meshes = {}
-    for key, cell in stock.cells.items():
-        m = cell.to_mesh64()
-        # fresh, writable arrays: Mesh64 refuses read-only views
-        verts, tris = np.array(m.vert_properties, dtype=float), np.array(m.tri_verts, dtype=np.uint64)
-        meshes[key] = (verts, tris, cell.get_tolerance())
-    return result, meshes, stock.z_edges, pass_seconds, pass_triangles
+    paths = []
+    for k, column in stock.columns().items():
+        body, pieces, volume = drop_loose(column)
+        result.loose_pieces += pieces
+        result.loose_volume += volume
+        verts, tris, tolerance = to_arrays(body)
+        paths.append(os.path.join(tmp, f"column_{k}.npz"))
+        np.savez(paths[-1], verts=verts, tris=tris, tolerance=tolerance)
+    return result, paths, pass_seconds, pass_triangles

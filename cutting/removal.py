@@ -4,7 +4,7 @@ The stock is kept as cells: one angular sector per tooth space (twisted with the
 slabs, so each subtraction involves only a cell a tooth passage reaches and the cost follows what is cut,
 not the whole blank. A tooth passage is the interval in which one cutter tooth crosses the mesh zone; it
 is sampled to the allowed sweep error and swept as one sub-tube per cell it reaches (:mod:`cutting.sweep`).
-Cells meet in real overlaps (sectors) or in exact planes (slabs, see :func:`union_cells`).
+Cells meet in real overlaps (sectors) or in exact planes (slabs, see :func:`sector_columns`).
 """
 
 from __future__ import annotations
@@ -54,13 +54,29 @@ class CutResult:
         """Set the gear to ``solid`` without loose pieces: two cuts can meet around a sliver no sweep passes
         through; it falls off a real blank and must not reach the measurement (a gear measuring machine never
         sees it). The largest body is the gear."""
-        parts = solid.decompose() if solid is not None else []
-        if len(parts) > 1:
-            volumes = [p.volume() for p in parts]
-            keep = int(np.argmax(volumes))
-            self.loose_pieces, self.loose_volume = len(parts) - 1, float(sum(volumes) - volumes[keep])
-            solid = parts[keep]
-        self.gear = solid
+        self.finish_columns([solid])
+
+    def finish_columns(self, columns: Sequence[mf.Manifold]) -> None:
+        """The gear from the stock's sector columns (:meth:`Stock.columns`), each without its loose pieces, then
+        united. A loose piece lies in a tooth space, never on the tooth centre lines where the columns meet, so
+        dropping it per column is dropping it from the gear, at the cost of a column instead of the whole gear."""
+        kept = []
+        for column in columns:
+            body, pieces, volume = drop_loose(column)
+            self.loose_pieces += pieces
+            self.loose_volume += volume
+            kept.append(body)
+        self.gear = kept[0] if len(kept) == 1 else mf.Manifold.batch_boolean(kept, mf.OpType.Add)
+
+
+def drop_loose(solid: mf.Manifold) -> tuple[mf.Manifold, int, float]:
+    """The largest body of ``solid``, the number of the other pieces and their volume [mm^3]."""
+    parts = solid.decompose()
+    if len(parts) <= 1:
+        return solid, 0, 0.0
+    volumes = [p.volume() for p in parts]
+    keep = int(np.argmax(volumes))
+    return parts[keep], len(parts) - 1, float(sum(volumes) - volumes[keep])
 
 
 #: Slab height [mm]: thinner slabs carry fewer triangles per boolean, but a passage then needs more sub-tubes,
@@ -253,12 +269,21 @@ class Stock:
     def triangles(self) -> int:
         return sum(cell.num_tri() for cell in self.cells.values())
 
+    def columns(self) -> dict[int, mf.Manifold]:
+        """Per owned sector the union of its slabs (:func:`sector_columns`)."""
+        return sector_columns(self.cells, self.z_edges)
+
     def solid(self) -> mf.Manifold:
         return union_cells(self.cells, self.z_edges)
 
 
 def union_cells(cells: dict[tuple[int, int], mf.Manifold], z_edges: np.ndarray) -> mf.Manifold:
-    """The union of the cells: per sector its slabs, then the sectors.
+    """The union of the cells: per sector its slabs (:func:`sector_columns`), then the sectors."""
+    return mf.Manifold.batch_boolean(list(sector_columns(cells, z_edges).values()), mf.OpType.Add)
+
+
+def sector_columns(cells: dict[tuple[int, int], mf.Manifold], z_edges: np.ndarray) -> dict[int, mf.Manifold]:
+    """Per sector the union of its slabs, each evaluated into a solid of its own.
 
     The slabs meet in exact planes z = const: vertices that the booleans left within manifold's tolerance of a
     slab plane are put back on it first, so the union merges the faces instead of leaving a sliver void (which a
@@ -280,20 +305,26 @@ def union_cells(cells: dict[tuple[int, int], mf.Manifold], z_edges: np.ndarray) 
     sectors: dict[int, list[mf.Manifold]] = {}
     for (k, _), cell in sorted(cells.items()):
         sectors.setdefault(k, []).append(cell.warp_batch(snap) if planes.size else cell)
-    columns = []
-    for parts in sectors.values():
+    columns = {}
+    for k, parts in sectors.items():
         column = mf.Manifold.batch_boolean(parts, mf.OpType.Add)
-        mesh = column.to_mesh64()  # evaluate now: a lazy node would be flattened into one batch with the rest
-        columns.append(
-            mf.Manifold(
-                mf.Mesh64(
-                    vert_properties=np.array(mesh.vert_properties, dtype=float),
-                    tri_verts=np.array(mesh.tri_verts, dtype=np.uint64),
-                    tolerance=column.get_tolerance(),
-                )
-            )
-        )
-    return mf.Manifold.batch_boolean(columns, mf.OpType.Add)
+        # evaluate now: a lazy node would be flattened into one batch with the rest
+        columns[k] = from_arrays(*to_arrays(column))
+    return columns
+
+
+def to_arrays(solid: mf.Manifold) -> tuple[np.ndarray, np.ndarray, float]:
+    """Vertices (float64), triangles (uint64) and tolerance of a solid: fresh, writable arrays, as Mesh64 needs."""
+    mesh = solid.to_mesh64()
+    return (
+        np.array(mesh.vert_properties, dtype=float),
+        np.array(mesh.tri_verts, dtype=np.uint64),
+        solid.get_tolerance(),
+    )
+
+
+def from_arrays(verts: np.ndarray, tris: np.ndarray, tolerance: float) -> mf.Manifold:
+    return mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
 
 
 def expected_genus(gear: Gear) -> int:

@@ -20,7 +20,7 @@ import numpy as np
 
 from cutting.edge import CuttingEdge
 from cutting.gear import Gear
-from cutting.removal import Chip, CutResult, PassCutter, Stock, union_cells
+from cutting.removal import Chip, CutResult, PassCutter, Stock, from_arrays, to_arrays
 from cutting.sampled_motion import SampledMotion
 from cutting.trajectory import PassMotion
 
@@ -56,28 +56,20 @@ class InlineRemoval:
         return self.stock.solid()
 
     def close(self) -> CutResult:
-        self.result.finish(self.stock.solid())
+        self.result.finish_columns(list(self.stock.columns().values()))
         return self.result
 
 
-def _cell_meshes(stock: Stock) -> dict:
-    out = {}
-    for key, cell in stock.cells.items():
-        m = cell.to_mesh64()
-        out[key] = (
-            np.array(m.vert_properties, dtype=float),
-            np.array(m.tri_verts, dtype=np.uint64),
-            cell.get_tolerance(),
-        )
-    return out
+def _column_meshes(stock: Stock) -> dict[int, tuple[np.ndarray, np.ndarray, float]]:
+    """The stock's sector columns as arrays (each worker unites its own sectors' slabs)."""
+    return {k: to_arrays(column) for k, column in stock.columns().items()}
 
 
-def _union(parts: list[dict], z_edges: np.ndarray) -> mf.Manifold:
-    cells = {}
-    for meshes in parts:
-        for key, (verts, tris, tolerance) in meshes.items():
-            cells[key] = mf.Manifold(mf.Mesh64(vert_properties=verts, tri_verts=tris, tolerance=tolerance))
-    return union_cells(cells, z_edges)
+def _columns(parts: list[dict]) -> list[mf.Manifold]:
+    """The workers' columns in sector order, whichever worker replied first: the union's triangulation depends on
+    the order, and a run must not depend on the workers' timing."""
+    meshes = {k: arrays for part in parts for k, arrays in part.items()}
+    return [from_arrays(*meshes[k]) for k in sorted(meshes)]
 
 
 def _worker(gear, edge, plans, tols, sectors, tasks, results) -> None:
@@ -96,10 +88,10 @@ def _worker(gear, edge, plans, tols, sectors, tasks, results) -> None:
                 chip = cutters[index].cut_passage(m, SampledMotion(plans[index].setup, index, *samples))
                 results.put(("cut", index, m, chip, result.subtractions - before))
             elif msg[0] == "mesh":
-                results.put(("mesh", _cell_meshes(stock), stock.z_edges))
+                results.put(("mesh", _column_meshes(stock)))
             else:  # "finish"
                 stats = (result.sweep_error, dict(result.pass_sweep_error), result.sweeps)
-                results.put(("finish", _cell_meshes(stock), stock.z_edges, stats))
+                results.put(("finish", _column_meshes(stock), stats))
                 return
     except Exception:
         results.put(("error", traceback.format_exc()))
@@ -192,7 +184,7 @@ class ParallelRemoval:
         for q in self._tasks:
             q.put(("mesh",))
         replies = self._collect("mesh")
-        return _union([r[1] for r in replies], replies[0][2])
+        return mf.Manifold.batch_boolean(_columns([r[1] for r in replies]), mf.OpType.Add)
 
     def close(self) -> CutResult:
         for q in self._tasks:
@@ -200,13 +192,13 @@ class ParallelRemoval:
         replies = self._collect("finish")
         for p in self._procs:
             p.join(timeout=60)
-        for _, _, _, (err, pass_err, _sweeps) in replies:
+        for _, _, (err, pass_err, _sweeps) in replies:
             self.result.sweep_error = max(self.result.sweep_error, err)
             for k, v in pass_err.items():
                 self.result.pass_sweep_error[k] = max(self.result.pass_sweep_error.get(k, 0.0), v)
         # each passage is sampled by the workers whose spaces it can reach: count it once
         self.result.sweeps = sum(chip.sweeps for chip in self.result.chips)
-        self.result.finish(_union([r[1] for r in replies], replies[0][2]))
+        self.result.finish_columns(_columns([r[1] for r in replies]))
         return self.result
 
     def _stop(self) -> None:
