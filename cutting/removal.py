@@ -67,6 +67,7 @@ class CutResult:
             self.loose_volume += volume
             kept.append(body)
         self.gear = kept[0] if len(kept) == 1 else mf.Manifold.batch_boolean(kept, mf.OpType.Add)
+        self.gear.status()  # evaluate the union here, not lazily in whoever reads the gear first
 
 
 def drop_loose(solid: mf.Manifold) -> tuple[mf.Manifold, int, float]:
