@@ -21,7 +21,7 @@ import numpy as np
 
 from cutting.edge import CuttingEdge
 from cutting.gear import Gear
-from cutting.removal import DEFAULT_SLAB, CutResult, Stock, cut, drop_loose, from_arrays, passage_count, to_arrays
+from cutting.removal import DEFAULT_SLAB, CutResult, Stock, cut, from_arrays, passage_count, to_arrays
 from cutting.trajectory import PassMotion
 
 #: progress(pass_index, passages_done, passages_total)
@@ -34,7 +34,7 @@ class EngineResult:
     stock_triangles: int
     pass_seconds: list[float]
     pass_triangles: list[int]  # stock triangles after each pass: bounded by the cut surface, not the booleans
-    stage_seconds: dict[str, float] = field(default_factory=dict)  # cut, collect (workers' cells), union
+    stage_seconds: dict[str, float] = field(default_factory=dict)  # cut (with column unions), collect, union
 
 
 def cut_passes(
@@ -101,9 +101,6 @@ def cut_passes(
     result.sweeps = sum(chip.sweeps for chip in result.chips)
     result.subtractions = sum(p[0].subtractions for p in parts)
     result.finish_columns(columns)
-    for p in parts:  # the pieces each worker's columns shed
-        result.loose_pieces += p[0].loose_pieces
-        result.loose_volume += p[0].loose_volume
     stages = {"cut": t_cut - t_start, "collect": t_collect - t_cut, "union": time.perf_counter() - t_collect}
     pass_seconds = [float(x) for x in np.max([p[2] for p in parts], axis=0)]
     pass_triangles = [int(x) for x in np.sum([p[3] for p in parts], axis=0)]
@@ -137,9 +134,9 @@ def _load(path: str) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 def _worker(gear, edge, motions, tolerances, slab, sectors, tmp):
-    """Cut every pass on the worker's sectors; unite each sector's slabs (in parallel with the other workers),
-    shed its loose pieces and write it to ``tmp``. Returns the worker's result (chips, loose pieces), the column
-    files, the seconds and the stock triangles after each pass."""
+    """Cut every pass on the worker's sectors; unite each sector's slabs (in parallel with the other workers) and
+    write the column to ``tmp``. Returns the worker's result (chips), the column files, the seconds and the stock
+    triangles after each pass."""
     stock = Stock(gear, slab=slab, sectors=sectors)
     result = CutResult(None)
 
@@ -155,10 +152,7 @@ def _worker(gear, edge, motions, tolerances, slab, sectors, tmp):
     pass_seconds, pass_triangles = _run_passes(stock, edge, motions, tolerances, result, report)
     paths = []
     for k, column in stock.columns().items():
-        body, pieces, volume = drop_loose(column)
-        result.loose_pieces += pieces
-        result.loose_volume += volume
-        verts, tris, tolerance = to_arrays(body)
+        verts, tris, tolerance = to_arrays(column)
         paths.append(os.path.join(tmp, f"column_{k}.npz"))
         np.savez(paths[-1], verts=verts, tris=tris, tolerance=tolerance)
     return result, paths, pass_seconds, pass_triangles

@@ -119,7 +119,7 @@ class Stock:
             # tooth that is never cut: the final union then meets real overlaps, not two nearly coincident walls
             a0, a1 = k * pitch - SECTOR_OVERLAP * pitch, (k + 1) * pitch + SECTOR_OVERLAP * pitch
             # the apex lies behind the axis, so near the axis the sectors overlap by a real width too; from half
-            # the root radius outwards the sides are the exact radii a0, a1 (the ones reached() assumes)
+            # the root radius outwards the sides are the exact radii a0, a1 (the ones reached_facets() assumes)
             back, inner, mid = -0.05 * gear.root_radius, 0.5 * gear.root_radius, (a0 + a1) / 2
             corners = [
                 [back * math.cos(mid), back * math.sin(mid)],
@@ -144,61 +144,6 @@ class Stock:
                 self.cells[k, s] = cell
         self.volumes = {key: cell.volume() for key, cell in self.cells.items()}
 
-    def reached(self, w: np.ndarray, near: np.ndarray | None = None) -> dict[tuple[int, int], tuple[int, int]]:
-        """For placed outlines ``w`` (m poses, n points, 3): each cell that the tube between consecutive poses
-        can enter, with the first and last pose of the sub-tube that covers all of it.
-
-        Between two poses the tube lies in the convex hull of the two outlines, so an interval can only
-        reach the slabs its z range overlaps and the sectors its (untwisted) angle range overlaps. ``near``
-        (m, n) marks the points that can touch the workpiece at all (near the blank's envelope): only the facets
-        with a near corner count, since a facet whose corners all stay clear of the blank cannot reach it.
-        Without it, a tooth in one space would "reach" its neighbours through the part of its outline inside the
-        cutter body (the hub chord): 60 % of the subtractions removed nothing (measured on spur_external).
-        """
-        pitch = 2 * math.pi / self.n
-        theta = np.arctan2(w[..., 1], w[..., 0]) - self.twist_rate * w[..., 2]
-        ref = float(np.angle(np.exp(1j * theta).mean()))
-        theta = ref + np.angle(np.exp(1j * (theta - ref)))  # continuous around the tube
-        z = w[..., 2]
-        if near is not None:
-            # a facet with a near corner counts with all its corners (its part inside the blank may reach past the
-            # near corner's slab); an interval counts a point at both poses if it counts at either
-            ext = near | np.roll(near, 1, axis=1) | np.roll(near, -1, axis=1)
-            use = ext[:-1] | ext[1:]
-            live = use.any(axis=1)
-            lo_t = np.minimum(np.where(use, theta[:-1], np.inf), np.where(use, theta[1:], np.inf)).min(axis=1)
-            hi_t = np.maximum(np.where(use, theta[:-1], -np.inf), np.where(use, theta[1:], -np.inf)).max(axis=1)
-            lo_z = np.minimum(np.where(use, z[:-1], np.inf), np.where(use, z[1:], np.inf)).min(axis=1)
-            hi_z = np.maximum(np.where(use, z[:-1], -np.inf), np.where(use, z[1:], -np.inf)).max(axis=1)
-        else:
-            live = np.ones(len(w) - 1, dtype=bool)
-            lo_t, hi_t = theta.min(axis=1), theta.max(axis=1)
-            lo_z, hi_z = z.min(axis=1), z.max(axis=1)
-            lo_t, hi_t = np.minimum(lo_t[:-1], lo_t[1:]), np.maximum(hi_t[:-1], hi_t[1:])
-            lo_z, hi_z = np.minimum(lo_z[:-1], lo_z[1:]), np.maximum(hi_z[:-1], hi_z[1:])
-        margin = 1e-3 * pitch  # the hull of a short chord bulges by far less than this in angle
-        lo_t, hi_t = np.where(live, lo_t - margin, 0.0), np.where(live, hi_t + margin, 0.0)
-        lo_z, hi_z = np.where(live, lo_z, 0.0), np.where(live, hi_z, 0.0)
-        k_lo, k_hi = np.floor(lo_t / pitch).astype(int), np.floor(hi_t / pitch).astype(int)
-        slabs = len(self.z_edges) - 1
-        s_lo = np.searchsorted(self.z_edges, lo_z, side="right") - 1
-        s_hi = np.searchsorted(self.z_edges, hi_z, side="left") - 1
-        s_lo, s_hi = np.maximum(s_lo, 0), np.minimum(s_hi, slabs - 1)
-        out: dict[tuple[int, int], tuple[int, int]] = {}
-        if not live.any():
-            return out
-        for s in range(int(s_lo[live].min()), int(s_hi[live].max()) + 1):
-            in_slab = live & (s_lo <= s) & (s_hi >= s)
-            if not in_slab.any():
-                continue
-            for k in range(int(k_lo[in_slab].min()), int(k_hi[in_slab].max()) + 1):
-                if k % self.n not in self.owned:
-                    continue
-                hit = np.nonzero(in_slab & (k_lo <= k) & (k_hi >= k))[0]
-                if hit.size:
-                    out[k % self.n, s] = (int(hit[0]), int(hit[-1]) + 1)
-        return out
-
     def reached_facets(
         self, verts: np.ndarray, tris: np.ndarray, sample: np.ndarray, near: np.ndarray
     ) -> dict[tuple[int, int], tuple[int, int]]:
@@ -214,10 +159,7 @@ class Stock:
         if len(tris) == 0:
             return out
         pitch = 2 * math.pi / self.n
-        theta = np.arctan2(verts[:, 1], verts[:, 0]) - self.twist_rate * verts[:, 2]
-        ref = float(np.angle(np.exp(1j * theta[tris[:, 0]]).mean()))
-        theta = ref + np.angle(np.exp(1j * (theta - ref)))  # continuous around the tube
-        t, z, i = theta[tris], verts[:, 2][tris], sample[tris]
+        t, z, i = self._untwisted_angle(verts)[tris], verts[:, 2][tris], sample[tris]
         margin = 1e-3 * pitch  # a short facet bulges by far less than this in angle
         k_lo = np.floor((t.min(axis=1) - margin) / pitch).astype(int)
         k_hi = np.floor((t.max(axis=1) + margin) / pitch).astype(int)
@@ -237,6 +179,13 @@ class Stock:
                     out[k % self.n, s] = (int(i_lo[hit].min()), int(i_hi[hit].max()))
         return out
 
+    def _untwisted_angle(self, p: np.ndarray) -> np.ndarray:
+        """Polar angle of points (n, 3) with the helix twist taken out, continuous around their circular mean (a
+        tube or a probe spans far less than a turn): the sector boundaries are then fixed angles."""
+        theta = np.arctan2(p[:, 1], p[:, 0]) - self.twist_rate * p[:, 2]
+        ref = float(np.angle(np.exp(1j * theta).mean()))
+        return ref + np.angle(np.exp(1j * (theta - ref)))
+
     def may_reach_owned(self, w: np.ndarray, near: np.ndarray, pad: float) -> bool:
         """Whether the points ``w`` (m, n, 3) marked ``near`` can come within a sector this stock owns, when each
         point moves by at most ``pad`` [mm] between the samples ``w``: a worker skips the passages that only its
@@ -247,9 +196,7 @@ class Stock:
         if p.size == 0:
             return False
         pitch = 2 * math.pi / self.n
-        theta = np.arctan2(p[:, 1], p[:, 0]) - self.twist_rate * p[:, 2]
-        ref = float(np.angle(np.exp(1j * theta).mean()))
-        theta = ref + np.angle(np.exp(1j * (theta - ref)))
+        theta = self._untwisted_angle(p)
         margin = 1e-3 * pitch + pad / max(float(np.hypot(p[:, 0], p[:, 1]).min()), 1e-3)
         k_lo, k_hi = math.floor((theta.min() - margin) / pitch), math.floor((theta.max() + margin) / pitch)
         return any(k % self.n in self.owned for k in range(k_lo, k_hi + 1))
@@ -461,9 +408,8 @@ class PassCutter:
         for key, (i0, i1) in stock.reached_facets(verts, tris, sample, self.near_blank(verts)).items():
             vol += stock.subtract(sweep.solid(i0, i1), key)
             result.subtractions += 1
-        err = sampling.error
         result.sweeps += sampling.steps
-        bound = err + self.outline_err
+        bound = sampling.error + self.outline_err
         result.sweep_error = max(result.sweep_error, bound)
         result.pass_sweep_error[self.index] = max(result.pass_sweep_error.get(self.index, 0.0), bound)
         chip.volume, chip.sweeps = vol, sampling.steps

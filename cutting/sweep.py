@@ -187,11 +187,11 @@ def sample_blocks(
     """Times in [t0, t1] per block of sides such that the tube through the closed polygon ``points`` deviates
     from the exact sweep of that polygon by at most ``tol`` [mm] wherever a facet can touch the workpiece.
 
-    The checks are :func:`sample_window`'s (each side's end points against their chords, the side's true
-    midpoint at mid-interval against the facets split along a-d), made per interval of each block and only
-    where a facet has a corner ``inside``. A failing interval is split into ceil(sqrt(dev / tol)) parts. ``start``
-    gives initial times per block (a similar passage's, shifted: most intervals then pass in the first round);
-    by default 8 even samples.
+    Per interval of each block and only where a facet has a corner ``inside``, two deviations are checked: each
+    side's end points at mid-interval against their chords (the sagitta), and the side's true midpoint at
+    mid-interval against the quad's two facets split along a-d, along their normal (the twist). A failing
+    interval is split into ceil(sqrt(dev / tol)) parts. ``start`` gives initial times per block (a similar
+    passage's, shifted: most intervals then pass in the first round); by default 8 even samples.
     """
     n = len(points)
     blk = blocks_of(n) if block_of_side is None else np.asarray(block_of_side)
