@@ -3,8 +3,8 @@
     python benchmarks/bench_feed_marks.py                          # spur_external, conjugate, feed 0.2/0.1/0.05
     python benchmarks/bench_feed_marks.py helical_internal --edge involute --feeds 0.2 0.05
 
-For each feed the finishing pass's exact swept volume (cutting.exact_sweep: point membership, no chord
-error) is bisected along the flank normals of one tooth over the measurement's profile evaluation range,
+For each feed the finishing pass's exact swept volume (cutting.exact_sweep: no chord
+error) is probed along the flank normals of one tooth over the measurement's profile evaluation range,
 in two transverse sections (z = 0 and z = 0.07 mm, between generating lines). The deviation (transverse,
 excess material positive) is evaluated like a measuring machine does: f_Halpha, f_falpha. Deviations
 that shrink with the feed squared are feed marks; what stays at a small feed belongs to the edge.
@@ -20,7 +20,7 @@ from dataclasses import replace
 import numpy as np
 
 from cutting.edge import make_edge
-from cutting.exact_sweep import passages, surface_offset
+from cutting.exact_sweep import SweptVolumes
 from cutting.flank import SIDES, flank_normals, flank_points
 from cutting.trajectory import ideal_passes
 from metrology.flank_lines import evaluate
@@ -45,13 +45,13 @@ def main() -> None:
         st = replace(job.skiving, axial_feed=feed)
         edge = make_edge(st, a.edge)
         t0 = time.perf_counter()
-        sets = [passages(ideal_passes(st)[-1], edge)]
+        sv = SweptVolumes(g, edge, ideal_passes(st)[-1:])
         rows = []
         for z in (0.0, 0.07):
             for side in SIDES:
                 p = flank_points(g, side, roll / g.base_radius, z, 0)
                 n = flank_normals(g, side, roll / g.base_radius, z, 0)
-                e = surface_offset(p, n, sets, edge, span=0.03, resolution=2e-5) * to_transverse
+                e = sv.probe(p, n, 0.03) * to_transverse
                 ev = evaluate(roll, e)
                 rows.append((z, side, ev["f_H"], ev["f_f"], np.nanmin(e), np.nanmax(e)))
         for z, side, fh, ff, lo, hi in rows:
