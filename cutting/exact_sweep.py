@@ -39,7 +39,7 @@ SUBWINDOWS = 8
 
 #: a passage whose estimated in-plane track stays this far [mm] from the outline (plus its own length) is settled
 #: without solving: the estimate's error (pose between table samples ~1 um, distance field 6 um) is far below it
-SETTLE_MARGIN = 0.02
+SETTLE_MARGIN = 0.012
 
 
 class Outline:
@@ -106,6 +106,10 @@ class PassTable:
     angle: np.ndarray
     ball_centre: np.ndarray  # (m, S, 3)
     ball_radius: np.ndarray  # (m, S)
+
+    def __post_init__(self) -> None:
+        self.normal = np.ascontiguousarray(self.rot[..., :, 2])  # the rake plane's normal (m, P, 3)
+        self.offset = np.einsum("mpc,mpc->mp", self.normal, self.origin)  # its distance from the work axis origin
 
     @classmethod
     def build(cls, motion: PassMotion, edge: CuttingEdge) -> PassTable:
@@ -254,17 +258,31 @@ class SweptVolumes:
 
     # ---- one passage along many lines ------------------------------------------------------------------------
     def _events(self, tb: PassTable, passage, lo_j, hi_j, q):
-        """Rake-plane crossings of the points ``q`` (k, 3) by ``passage`` (k,) within samples [lo_j, hi_j]:
-        rows (point, j) with the bracket's g values (exact table values)."""
-        span = int((hi_j - lo_j).max()) + 1
-        idx = np.minimum(lo_j[:, None] + np.arange(span)[None, :], hi_j[:, None])
-        n = tb.rot[passage[:, None], idx, :, 2]  # (k, span, 3): rake normal
-        o = tb.origin[passage[:, None], idx]
-        g = np.einsum("kjc,kjc->kj", n, q[:, None, :] - o)
-        same = idx[:, 1:] == idx[:, :-1]  # padding repeats the last sample
-        change = (np.sign(g[:, :-1]) * np.sign(g[:, 1:]) <= 0) & ~same
-        row, j = np.nonzero(change)
-        return row, idx[row, j], g[row, j], g[row, j + 1]
+        """The rake-plane crossing of the points ``q`` (k, 3) by ``passage`` (k,) within the samples [lo_j, hi_j],
+        bracketed between two neighbouring samples by bisection over the table (near the tooth the plane sweeps
+        a point once, in one direction): rows (point) with a crossing, the sample j before it and the exact
+        plane distances g at j and j + 1."""
+
+        def g(rows: np.ndarray, j: np.ndarray) -> np.ndarray:
+            pa = passage[rows]
+            return np.einsum("kc,kc->k", tb.normal[pa, j], q[rows]) - tb.offset[pa, j]
+
+        every = np.arange(len(q))
+        g_lo, g_hi = g(every, lo_j), g(every, hi_j)
+        row = np.nonzero(np.sign(g_lo) * np.sign(g_hi) <= 0)[0]
+        a, b, ga, gb = lo_j[row], hi_j[row], g_lo[row], g_hi[row]
+        while True:
+            open_ = np.nonzero(b - a > 1)[0]
+            if open_.size == 0:
+                break
+            mid = (a[open_] + b[open_]) // 2
+            gm = g(row[open_], mid)
+            left = np.sign(gm) == np.sign(ga[open_])  # the crossing lies after mid
+            a[open_] = np.where(left, mid, a[open_])
+            ga[open_] = np.where(left, gm, ga[open_])
+            b[open_] = np.where(left, b[open_], mid)
+            gb[open_] = np.where(left, gb[open_], gm)
+        return row, a, ga, gb
 
     def _solve_time(self, tb: PassTable, passage, q, j, ga, gb, iterations: int = 40):
         """t* (exact to 1e-10 mm of plane distance) by the Illinois method in [t_j, t_j+1], and the in-plane xy."""
@@ -304,23 +322,50 @@ class SweptVolumes:
             np.maximum.at(out, row, self.outline.margin(x, y))
         return out
 
-    def _estimate(self, tb: PassTable, passage, lo_j, hi_j, q):
-        """Like :meth:`_margin_exact` from the table alone (pose linear between samples): signed distance to the
-        outline [mm] (raster), and the in-plane point; -pad where the plane does not cross."""
-        row, j, ga, gb = self._events(tb, passage, lo_j, hi_j, q)
-        dist = np.full(len(q), -self.outline._pad)
-        xy = np.full((len(q), 2), np.nan)
-        if row.size:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                f = np.where(ga != gb, ga / (ga - gb), 0.5)
-            pr = passage[row]
-            rot = tb.rot[pr, j] * (1 - f)[:, None, None] + tb.rot[pr, j + 1] * f[:, None, None]
-            org = tb.origin[pr, j] * (1 - f)[:, None] + tb.origin[pr, j + 1] * f[:, None]
-            local = np.einsum("kji,kj->ki", rot, q[row] - org)
-            s = self.outline.distance(local[:, 0], local[:, 1])
-            order = np.lexsort((s, row))  # the deepest crossing of each point last
-            dist[row[order]] = s[order]
-            xy[row[order]] = local[order, :2]
+    def _estimate(self, tb: PassTable, passage, lo_j, hi_j, p, u, ds):
+        """From the table alone, for segments p + d u (one per passage): the signed distance to the outline
+        [mm] (raster; -pad where the plane does not cross) and the in-plane point at each d of ``ds``.
+
+        The plane distance is linear in d at every sample, so one bisection (at the middle d that has a crossing)
+        brackets the crossing for every d; the pose is taken linear between the two samples."""
+        k = len(ds)
+        n_lo, n_hi = tb.normal[passage, lo_j], tb.normal[passage, hi_j]
+        g_lo = np.einsum("kc,kc->k", n_lo, p) - tb.offset[passage, lo_j]
+        g_hi = np.einsum("kc,kc->k", n_hi, p) - tb.offset[passage, hi_j]
+        lo_d = g_lo[:, None] + ds[None, :] * np.einsum("kc,kc->k", n_lo, u)[:, None]
+        hi_d = g_hi[:, None] + ds[None, :] * np.einsum("kc,kc->k", n_hi, u)[:, None]
+        crossing = np.sign(lo_d) * np.sign(hi_d) <= 0
+        has = crossing.any(axis=1)
+        # the sample of d to bisect at: the middle one if it has a crossing, else the nearest that does
+        pref = np.argsort(np.abs(np.arange(k) - (k - 1) / 2), kind="stable")
+        pick = pref[np.argmax(crossing[:, pref], axis=1)]
+        dist = np.full((len(p), k), -self.outline._pad)
+        xy = np.full((len(p), k, 2), np.nan)
+        rows = np.nonzero(has)[0]
+        if rows.size == 0:
+            return dist, xy
+        row, j, _, _ = self._events(tb, passage[rows], lo_j[rows], hi_j[rows], p[rows] + ds[pick[rows], None] * u[rows])
+        rows = rows[row]
+        pa = passage[rows]
+        n0, n1 = tb.normal[pa, j], tb.normal[pa, j + 1]
+        ga = (np.einsum("kc,kc->k", n0, p[rows]) - tb.offset[pa, j])[:, None] + ds * np.einsum("kc,kc->k", n0, u[rows])[
+            :, None
+        ]
+        gb = (np.einsum("kc,kc->k", n1, p[rows]) - tb.offset[pa, j + 1])[:, None] + ds * np.einsum(
+            "kc,kc->k", n1, u[rows]
+        )[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f = np.clip(np.where(ga != gb, ga / (ga - gb), 0.5), -1.0, 2.0)  # (rows, k)
+        r0, r1 = tb.rot[pa, j], tb.rot[pa, j + 1]
+        o0, o1 = tb.origin[pa, j], tb.origin[pa, j + 1]
+        for c in range(k):
+            fc = f[:, c]
+            rot = r0 + (r1 - r0) * fc[:, None, None]
+            org = o0 + (o1 - o0) * fc[:, None]
+            local = np.einsum("kji,kj->ki", rot, p[rows] + ds[c] * u[rows] - org)
+            cross = crossing[rows, c]  # where the plane misses the point in the balls' time range, nothing is cut
+            dist[rows[cross], c] = self.outline.distance(local[cross, 0], local[cross, 1])
+            xy[rows[cross], c] = local[cross, :2]
         return dist, xy
 
     # ---- probing -----------------------------------------------------------------------------------------------
@@ -366,9 +411,7 @@ class SweptVolumes:
         """What each passage pa removes of its line li: (line, start, end)."""
         n, k = len(li), len(ds)
         rep = np.repeat
-        q = (p[li][:, None, :] + ds[None, :, None] * u[li][:, None, :]).reshape(-1, 3)
-        est, xy = self._estimate(tb, rep(pa, k), rep(lo_j, k), rep(hi_j, k), q)
-        est, xy = est.reshape(n, k), xy.reshape(n, k, 2)
+        est, xy = self._estimate(tb, pa, lo_j, hi_j, p[li], u[li], ds)
         # the estimate's in-plane track between samples; where the plane misses a sample (the point is outside
         # the balls' time range there, so not removed) assume the fastest track a cutting tooth makes
         step = np.linalg.norm(np.diff(xy, axis=1), axis=2)
