@@ -191,6 +191,12 @@ class SweptVolumes:
         self._tree = cKDTree(centres)
 
     # ---- the blank -------------------------------------------------------------------------------------------
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The blank's box [mm]: nothing outside it is material."""
+        r = self.rim_radius if self.gear.internal else self.gear.tip_radius
+        half = self.gear.face_width / 2
+        return np.array([-r, -r, -half]), np.array([r, r, half])
+
     def in_blank(self, q: np.ndarray) -> np.ndarray:
         g = self.gear
         r = np.hypot(q[..., 0], q[..., 1])
@@ -397,7 +403,9 @@ class SweptVolumes:
         p = np.asarray(points, dtype=float).reshape(-1, 3)
         u = np.asarray(directions, dtype=float).reshape(-1, 3)
         u = u / np.linalg.norm(u, axis=1, keepdims=True)
-        ds = np.linspace(-reach, reach, max(2, math.ceil(2 * reach / 0.025)) + 1)
+        # samples of d: 25 um apart on a flank probe, at most 32 intervals on a long one (an axial probe through
+        # the gear body, where the passages stay far from it and the estimate settles them)
+        ds = np.linspace(-reach, reach, min(32, max(2, math.ceil(2 * reach / 0.025))) + 1)
         out = [[a] for a in self._air_intervals(p, u, reach)]
         for tb, li, pa, lo_j, hi_j in self._pairs(p, reach):
             for a in range(0, len(li), PAIR_CHUNK):
@@ -475,14 +483,23 @@ class SweptVolumes:
         return surface_from_intervals(len(p), line, start, end, reach)
 
     def removed(self, points: np.ndarray) -> np.ndarray:
-        """True where some passage sweeps the point (the blank aside)."""
+        """True where some passage sweeps the point (the blank aside): the table's estimate settles the passages
+        far from the point's in-plane position; only those near the edge are solved exactly."""
         p = np.asarray(points, dtype=float).reshape(-1, 3)
         out = np.zeros(len(p), dtype=bool)
+        zero, at = np.zeros((1, 3)), np.zeros(1)
         for tb, li, pa, lo_j, hi_j in self._pairs(p, 0.0):
             for a in range(0, len(li), PAIR_CHUNK):
                 s = slice(a, a + PAIR_CHUNK)
-                m = self._margin_exact(tb, pa[s], lo_j[s], hi_j[s], p[li[s]])
-                out[li[s][m > 0]] = True
+                keep = ~out[li[s]]  # a point already removed needs no more passages
+                l_, pa_, lo_, hi_ = li[s][keep], pa[s][keep], lo_j[s][keep], hi_j[s][keep]
+                est, _ = self._estimate(tb, pa_, lo_, hi_, p[l_], np.repeat(zero, len(l_), axis=0), at)
+                est = est[:, 0]
+                out[l_[est > SETTLE_MARGIN]] = True
+                near = np.abs(est) <= SETTLE_MARGIN
+                if near.any():
+                    m = self._margin_exact(tb, pa_[near], lo_[near], hi_[near], p[l_[near]])
+                    out[l_[near][m > 0]] = True
         return out
 
     def inside(self, points: np.ndarray) -> np.ndarray:

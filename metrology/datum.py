@@ -1,9 +1,10 @@
 """Reading a mesh and setting up the measuring datum: gear axis, face, angular position, tooth numbers.
 
-Datum (issue 3): the mesh's z axis is the gear axis, the face spans the mesh's z extent, tooth 1 is the
-first tooth counter-clockwise from +x. Like a measuring machine, the angular position of the gear is
-found from the flanks themselves: the mean of left and right flank positions on a circle near mid
-depth, so a uniform change of tooth thickness splits equally onto both flanks.
+Datum (issue 3): the workpiece's z axis is the gear axis, the face spans its end faces (probed along the axis in
+the gear body), tooth 1 is the first tooth counter-clockwise from +x. Like a measuring machine, the teeth are
+found by scanning the circle near mid depth in the mid section, and the angular position of the gear from the
+flanks themselves: the mean of left and right flank positions on that circle, so a uniform change of tooth
+thickness splits equally onto both flanks. A mesh is also checked for being a closed solid with its axis on z.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from cutting.errors import InputError, Problem
 from cutting.flank import flank_polar_angle
 from cutting.gear import Gear
 from metrology.sections import MeshData, level_segments
+from metrology.workpiece import Workpiece
 
 #: An axis tilted by more than this from z is not "on z" (a gross error, not a deviation to measure).
 MAX_AXIS_TILT_DEG = 0.5
@@ -83,33 +85,59 @@ def measuring_radius(gear: Gear) -> float:
     return (gear.tip_radius + gear.root_radius) / 2
 
 
-def circle_crossings(a: np.ndarray, b: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """Polar angles where section segments (a, b) cross the circle ``radius``, and the sign of d(theta)/dr.
-
-    On a left flank theta falls as r grows (external and internal gears alike): sign -1; right flank +1.
-    """
-    ra, rb = np.hypot(a[:, 0], a[:, 1]), np.hypot(b[:, 0], b[:, 1])
-    hit = (ra - radius) * (rb - radius) < 0
-    a, b, ra, rb = a[hit, :2], b[hit, :2], ra[hit], rb[hit]
-    d = b - a
-    # |a + t d| = radius
-    qa = np.einsum("ij,ij->i", d, d)
-    qb = 2 * np.einsum("ij,ij->i", a, d)
-    qc = ra**2 - radius**2
-    disc = np.sqrt(np.maximum(qb**2 - 4 * qa * qc, 0.0))
-    t1, t2 = (-qb + disc) / (2 * qa), (-qb - disc) / (2 * qa)
-    t = np.where((t1 >= 0) & (t1 <= 1), t1, t2)
-    p = a + t[:, None] * d
-    theta = np.arctan2(p[:, 1], p[:, 0])
-    ta, tb = np.arctan2(a[:, 1], a[:, 0]), np.arctan2(b[:, 1], b[:, 0])
-    dtheta = (tb - ta + math.pi) % (2 * math.pi) - math.pi
-    return theta, np.sign(dtheta / (rb - ra))
+def face_positions(wp: Workpiece, gear: Gear) -> tuple[float, float]:
+    """The end faces [mm]: probed along the axis from inside the gear body (inside the root circle of an external
+    gear, in the rim of an internal one) at 16 angles; the median of the touches."""
+    lo, hi = wp.bounds()
+    r_body = gear.root_radius + (0.5 if gear.internal else -0.5) * gear.mn
+    z_c = (lo[2] + hi[2]) / 2
+    reach = (hi[2] - lo[2]) / 2 + 1.0
+    a = np.linspace(0.0, 2 * math.pi, 16, endpoint=False) + 0.1
+    p = np.column_stack([r_body * np.cos(a), r_body * np.sin(a), np.full(len(a), z_c)])
+    up = np.tile([0.0, 0.0, 1.0], (len(a), 1))
+    top, bottom = wp.probe(p, up, reach), wp.probe(p, -up, reach)
+    if not (np.isfinite(top).any() and np.isfinite(bottom).any()):
+        return float(lo[2]), float(hi[2])  # no body where a gear has one: its extent, for the checks to report
+    return z_c - float(np.nanmedian(bottom)), z_c + float(np.nanmedian(top))
 
 
-def establish_datum(mesh: MeshData, gear: Gear, name: str = "mesh") -> Datum:
-    """Check that the mesh is the job's gear with its axis on z; find face, rotation and tooth 1."""
-    z = mesh.vertices[:, 2]
-    z_lo, z_hi = float(z.min()), float(z.max())
+def circle_flanks(wp: Workpiece, gear: Gear, radius: float, z: float, per_pitch: int = 8) -> tuple[np.ndarray, ...]:
+    """The flanks met going counter-clockwise round the circle ``radius`` at height ``z``: polar angles [rad] of
+    the crossings and +1 where material ends there (the counter-clockwise flank of a tooth), -1 where it begins.
+
+    The circle is scanned with :meth:`Workpiece.inside` (``per_pitch`` points a pitch: a tooth and a space each
+    hold several), each change bisected to 1e-4 of a pitch, then the probe touches the flank along the circle's
+    tangent from the air side (the tangent leaves the circle by r (1e-4 pitch)^2 / 2, under 1e-6 um)."""
+    n = per_pitch * gear.teeth
+    a = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+
+    def on_circle(angle: np.ndarray) -> np.ndarray:
+        return np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.full(len(angle), z)])
+
+    state = wp.inside(on_circle(a))
+    i = np.nonzero(state != np.roll(state, -1))[0]
+    lo, hi = a[i], a[i] + 2 * math.pi / n
+    leaving = state[i]  # material before the crossing, air after
+    if i.size == 0:
+        return np.empty(0), np.empty(0, dtype=int)
+    while (hi - lo).max() > 1e-4 * 2 * math.pi / gear.teeth:
+        mid = (lo + hi) / 2
+        before = wp.inside(on_circle(mid)) == leaving
+        lo, hi = np.where(before, mid, lo), np.where(before, hi, mid)
+    mid = (lo + hi) / 2
+    for _ in range(2):  # the touch, and once more from the circle point at its angle
+        tangent = np.column_stack([-np.sin(mid), np.cos(mid), np.zeros(len(mid))])
+        air = np.where(leaving, 1.0, -1.0)[:, None] * tangent  # the side of the crossing that is air
+        d = wp.probe(on_circle(mid), air, radius * (hi - lo).max() + 1e-6)
+        hit = on_circle(mid) + np.where(np.isfinite(d), d, 0.0)[:, None] * air
+        mid = np.arctan2(hit[:, 1], hit[:, 0])
+    return mid % (2 * math.pi), np.where(leaving, 1, -1)
+
+
+def establish_datum(wp: Workpiece, gear: Gear, name: str | None = None) -> Datum:
+    """Check that the workpiece is the job's gear with its axis on z; find face, rotation and tooth 1."""
+    name = name or wp.name
+    z_lo, z_hi = face_positions(wp, gear)
     b = z_hi - z_lo
     problems: list[Problem] = []
     if abs(b - gear.face_width) > 0.01 * gear.face_width + 0.01:
@@ -121,14 +149,17 @@ def establish_datum(mesh: MeshData, gear: Gear, name: str = "mesh") -> Datum:
                 "put the gear axis on the mesh's z axis (is it lying on its side?) or use the right job",
             )
         )
-    _check_axis(mesh, z_lo, z_hi, name, problems)
+    mesh = getattr(wp, "mesh", None)
+    if mesh is not None:  # a mesh may come in any orientation; a cut's swept volumes are on the axis by making
+        _check_axis(mesh, z_lo, z_hi, name, problems)
     if problems:
         raise InputError(problems)
     z_mid = (z_lo + z_hi) / 2
     radius = measuring_radius(gear)
-    a, bb = level_segments(mesh, "z", z_mid)
-    theta, slope = circle_crossings(a, bb, radius)
-    n_left, n_right = int((slope < 0).sum()), int((slope > 0).sum())
+    theta, ccw = circle_flanks(wp, gear, radius, z_mid)
+    # the counter-clockwise flank of a tooth is its left flank on an external gear, its right on an internal one
+    left = ccw < 0 if gear.internal else ccw > 0
+    n_left, n_right = int(left.sum()), int((~left).sum())
     if n_left != gear.teeth or n_right != gear.teeth:
         raise InputError(
             Problem(
@@ -141,8 +172,8 @@ def establish_datum(mesh: MeshData, gear: Gear, name: str = "mesh") -> Datum:
         )
     pitch = 2 * math.pi / gear.teeth
     offsets = {}
-    for side, sgn in (("left", -1), ("right", 1)):
-        d = theta[slope == sgn] - flank_polar_angle(gear, radius, 0.0, side, 0)
+    for side, sel in (("left", left), ("right", ~left)):
+        d = theta[sel] - flank_polar_angle(gear, radius, 0.0, side, 0)
         offsets[side] = np.angle(np.mean(np.exp(1j * gear.teeth * d))) / gear.teeth
     # left and right offsets may sit on either side of a pitch wrap: bring right next to left
     dr = offsets["right"] - offsets["left"]

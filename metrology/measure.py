@@ -1,7 +1,9 @@
-"""Measure a gear mesh like a gear measuring machine: profile, helix, pitch, runout, thickness, ISO class.
+"""Measure a gear like a gear measuring machine: profile, helix, pitch, runout, thickness, ISO class.
 
-The measurement uses the mesh and the nominal gear data only. The result is the fixed JSON schema of
-issue 3 (deviations in micrometres, lengths in mm), built by :func:`measure`.
+The measurement probes its workpiece (:mod:`metrology.workpiece`: a mesh, or the exact swept volumes of a cut)
+along nominal directions and uses nothing else but the nominal gear data. The result is the fixed JSON schema
+of issue 3 (deviations in micrometres, lengths in mm), built by :func:`measure`; ``workpiece`` says what was
+measured.
 """
 
 from __future__ import annotations
@@ -20,9 +22,9 @@ from metrology import tolerances as iso
 from metrology.datum import Datum, establish_datum, measuring_radius
 from metrology.flank_lines import evaluate_many
 from metrology.probe import ball_seats
-from metrology.sections import MeshData
 from metrology.span import measure_span
 from metrology.traces import helix_trace, profile_trace
+from metrology.workpiece import Workpiece, as_workpiece, probe_growing, turn
 
 UM = 1e3  # mm -> um
 
@@ -146,10 +148,12 @@ def ball_centre_radius(gear: Gear, diameter: float) -> float:
     return g.base_radius / math.cos(a_k)
 
 
-def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, name: str = "mesh") -> dict[str, Any]:
-    """Measure ``mesh`` as the gear ``gear``; returns the issue-3 JSON document."""
+def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name: str | None = None) -> dict[str, Any]:
+    """Measure ``workpiece`` (a :class:`metrology.workpiece.Workpiece`, or a mesh) as the gear ``gear``; returns
+    the issue-3 JSON document."""
     opt = opt or MeasureOptions()
-    datum = establish_datum(mesh, gear, name)
+    wp = as_workpiece(workpiece, name)
+    datum = establish_datum(wp, gear, name)
     z = gear.teeth
     result: dict[str, Any] = {}
 
@@ -162,7 +166,7 @@ def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, 
     prof = {side: [] for side in SIDES}
     traces = {"profile": {}, "helix": {}}
     for j, zz in enumerate(zs):
-        tr = profile_trace(mesh, gear, datum, zz, radii)
+        tr = profile_trace(wp, gear, datum, zz, radii)
         for side in SIDES:
             prof[side].append(evaluate_many(L, tr[side]))
             if j == mid:
@@ -173,7 +177,7 @@ def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, 
     # ---- helix on the reference cylinder ----
     z0, z1 = helix_range(gear)
     zz = np.linspace(z0, z1, opt.helix_points)
-    ht = helix_trace(mesh, gear, datum, gear.reference_radius, zz)
+    ht = helix_trace(wp, gear, datum, gear.reference_radius, zz)
     traces["helix"] = ht
     result["evaluation"]["helix_z_mm"] = [z0, z1]
     result["helix"] = {side: _flank_block("beta", [evaluate_many(zz, ht[side])], 0, datum, [0.0]) for side in SIDES}
@@ -188,7 +192,7 @@ def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, 
     order = np.argsort(datum.number(np.arange(z)))
     k_sector = opt.sector_teeth or iso.default_sector_pitches(z)
     pitch = {}
-    at_circle = profile_trace(mesh, gear, datum, 0.0, np.array([r_p]))
+    at_circle = profile_trace(wp, gear, datum, 0.0, np.array([r_p]))
     for side in SIDES:
         e = at_circle[side][:, 0]
         u = r_p * e / (side_sign(gear, side) * gear.base_radius) * UM  # arc on the circle, counter-clockwise
@@ -197,7 +201,7 @@ def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, 
 
     # ---- runout and dimension over balls with the same ball ----
     D = opt.ball_diameter or nominal.ball_diameter(gear)
-    centres = ball_seats(mesh, gear, datum, D, ball_centre_radius(gear, D))
+    centres = ball_seats(wp, gear, datum, D, ball_centre_radius(gear, D))
     rho = np.hypot(centres[:, 0], centres[:, 1])
     result["runout"] = {
         "F_r": float((rho.max() - rho.min()) * UM),
@@ -225,8 +229,7 @@ def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, 
         }
     else:
         k_span = opt.span_teeth or nominal.span_teeth(gear)
-        r_lo = math.sqrt(gear.base_radius**2 + L0**2)
-        w = measure_span(mesh, gear, datum, k_span, r_lo, gear.tip_radius)
+        w = measure_span(wp, gear, datum, k_span, helix_range(gear)[1])
         thickness["span"] = {
             "k": k_span,
             "W_k_mm": float(np.nanmean(w)),
@@ -234,12 +237,13 @@ def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, 
             "W_k_max_mm": float(np.nanmax(w)),
             "W_k_nominal_mm": float(nominal.span(gear, k_span)),
         }
-    thickness["tip_diameter_mm"], thickness["root_diameter_mm"] = _tip_root(mesh, gear, datum)
+    thickness["tip_diameter_mm"], thickness["root_diameter_mm"] = _tip_root(wp, gear, datum)
     thickness["tip_diameter_nominal_mm"] = gear.tip_diameter_value
     thickness["root_diameter_nominal_mm"] = gear.root_diameter_value
     result["thickness"] = thickness
 
     result["iso1328"] = iso1328_block(gear, result, k_sector)
+    result["workpiece"] = {"kind": wp.kind, "name": wp.name}
     result["gear"] = {
         "teeth": z,
         "normal_module_mm": gear.mn,
@@ -252,26 +256,28 @@ def measure_gear(mesh: MeshData, gear: Gear, opt: MeasureOptions | None = None, 
     return result
 
 
-def _tip_root(mesh: MeshData, gear: Gear, datum: Datum) -> tuple[float, float]:
-    """Measured tip and root diameters: median over teeth of the extreme radius in each tooth / space."""
-    r = mesh.radius
-    theta = np.arctan2(mesh.vertices[:, 1], mesh.vertices[:, 0])
-    zr = mesh.vertices[:, 2] - datum.z_mid
+def _tip_root(wp: Workpiece, gear: Gear, datum: Datum) -> tuple[float, float]:
+    """Measured tip and root diameters: probed radially on every tooth's centre line (tip) and every space's (root)
+    in the profile sections; the median of each."""
     pitch = 2 * math.pi / gear.teeth
-    rel = (theta - datum.rotation - twist_rate(gear) * zr) / pitch  # tooth centres at integers
-    k = np.round(rel).astype(int) % gear.teeth
-    in_space = np.abs(rel - np.round(rel)) > 0.25
-    in_tooth = ~in_space
-    near_teeth = np.abs(r - gear.reference_radius) < 2 * gear.mn
-    tips, roots = [], []
-    for j in range(gear.teeth):
-        t = near_teeth & in_tooth & (k == j)
-        s = near_teeth & in_space & (k == j)
-        if t.any():
-            tips.append(r[t].min() if gear.internal else r[t].max())
-        if s.any():
-            roots.append(r[s].max() if gear.internal else r[s].min())
-    return 2 * float(np.median(tips)), 2 * float(np.median(roots))
+    k = np.arange(gear.teeth)[:, None]
+    zs = np.array([-0.35, 0.0, 0.35]) * gear.face_width
+    tw = twist_rate(gear) * zs[None, :]
+    out = []
+    for radius, offset in ((gear.tip_radius, 0.0), (gear.root_radius, 0.5)):
+        a = (k + offset) * pitch + tw + 0 * zs
+        radial = np.stack([np.cos(a), np.sin(a), np.zeros_like(a)], -1)
+        # air lies outside the tip and above the root of an external gear, inside both on an internal one
+        up = -radial if gear.internal else radial
+        p = turn(
+            radius * radial + np.array([0.0, 0.0, 1.0]) * (zs[None, :, None] + 0 * a[..., None]),
+            datum.rotation,
+            datum.z_mid,
+        )
+        d = probe_growing(wp, p, turn(up, datum.rotation), (0.02, 0.1, 0.25 * gear.mn, 0.5 * gear.mn))
+        r = radius + d * (-1 if gear.internal else 1)
+        out.append(2 * float(np.nanmedian(r)) if np.isfinite(r).any() else float("nan"))
+    return out[0], out[1]
 
 
 def iso1328_block(gear: Gear, result: dict[str, Any], k: int) -> dict[str, Any]:

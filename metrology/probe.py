@@ -1,6 +1,10 @@
-"""A ball probe on the mesh: exact point-to-triangle distances and the seat of a ball in a tooth space.
+"""A ball seated in every tooth space, on the flanks the probe scanned: runout and the dimension over balls.
 
-Used for runout (a ball in every space, touching both flanks) and for the dimension over/between balls.
+As on a gear measuring machine, the ball is virtual: both flanks of a space are scanned around the nominal
+contact points (a patch along the profile and the face, refined around the points nearest the ball), and the
+ball of the given diameter is seated on those points: its centre stays in the mid-face plane and moves in
+radius and angle until its distance to the scanned points on each side is the ball radius. The scan spacing
+is fine enough that the ball cannot settle between two points by more than ~0.02 um (spacing^2 / (8 R)).
 """
 
 from __future__ import annotations
@@ -8,114 +12,126 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
+from scipy.optimize import brentq, minimize
 
+from cutting.flank import SIDES, flank_points, side_sign
 from cutting.gear import Gear
 from metrology.datum import Datum
-from metrology.sections import MeshData
+from metrology.workpiece import Workpiece, flank_surface
+
+#: half size of the scanned patch around the nominal contact [mm] and points across it; refinement grid
+PATCH_HALF = 0.12
+PATCH_POINTS = 9
+REFINE_POINTS = 7
+REFINE_BEST = 3
 
 
-def point_triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """Distance from point ``p`` (3,) to each triangle ``tri`` (n, 3, 3): closest point by Voronoi regions."""
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
-    bp = p - b
-    d3, d4 = np.einsum("ij,ij->i", ab, bp), np.einsum("ij,ij->i", ac, bp)
-    cp = p - c
-    d5, d6 = np.einsum("ij,ij->i", ab, cp), np.einsum("ij,ij->i", ac, cp)
-    va = d3 * d6 - d5 * d4
-    vb = d5 * d2 - d1 * d6
-    vc = d1 * d4 - d3 * d2
-    # face region by default
-    denom = va + vb + vc
-    denom = np.where(np.abs(denom) < 1e-300, 1e-300, denom)
-    v, w = vb / denom, vc / denom
-    q = a + ab * v[:, None] + ac * w[:, None]
+def _contact_foot(gear: Gear, side: str, tooth: int, centre: np.ndarray, diameter: float) -> tuple[float, float]:
+    """(roll angle, height) of the point of the nominal flank nearest the ball centre (the nominal contact)."""
+    rb = gear.base_radius
+    r_k = float(np.hypot(centre[0], centre[1]))
+    xi0 = math.sqrt(max(r_k**2 - rb**2, 1e-9)) / rb
 
-    def put(mask: np.ndarray, value: np.ndarray) -> None:
-        q[mask] = value[mask]
+    def dist(v: np.ndarray) -> float:
+        return float(np.linalg.norm(flank_points(gear, side, v[0], v[1], tooth) - centre))
 
-    # edge regions (checked before vertices so vertex regions win)
-    m_bc = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
-    t_bc = (d4 - d3) / np.where((d4 - d3) + (d5 - d6) == 0, 1, (d4 - d3) + (d5 - d6))
-    put(m_bc, b + (c - b) * t_bc[:, None])
-    m_ac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
-    t_ac = d2 / np.where(d2 - d6 == 0, 1, d2 - d6)
-    put(m_ac, a + ac * t_ac[:, None])
-    m_ab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
-    t_ab = d1 / np.where(d1 - d3 == 0, 1, d1 - d3)
-    put(m_ab, a + ab * t_ab[:, None])
-    put((d6 >= 0) & (d5 <= d6), c)
-    put((d3 >= 0) & (d4 <= d3), b)
-    put((d1 <= 0) & (d2 <= 0), a)
-    return np.linalg.norm(p - q, axis=1)
+    best = min(
+        (
+            minimize(
+                dist,
+                np.array([xi0, s * 0.5 * diameter * math.sin(gear.base_helix_angle)]),
+                method="Nelder-Mead",
+                options={"xatol": 1e-12, "fatol": 1e-14, "maxiter": 4000},
+            )
+            for s in (-1.0, 1.0)
+        ),
+        key=lambda r: r.fun,
+    )
+    return float(best.x[0]), float(best.x[1])
 
 
-def ball_seats(mesh: MeshData, gear: Gear, datum: Datum, diameter: float, centre_radius: float) -> np.ndarray:
+def scanned_patches(
+    wp: Workpiece, gear: Gear, datum: Datum, side: str, teeth: np.ndarray, xi_c: float, z_c: float, target
+) -> list[np.ndarray]:
+    """Per tooth of ``teeth``, the probed points of the ``side`` flank around (xi_c, z_c) (nominal frame, tooth 0):
+    a PATCH_POINTS^2 grid, refined where ``target(tooth_index, points)`` is smallest (REFINE_BEST points, each a
+    REFINE_POINTS^2 grid of a third of the spacing). NaN rows dropped."""
+    rb = gear.base_radius
+    step = 2 * PATCH_HALF / (PATCH_POINTS - 1)
+    u = np.linspace(-PATCH_HALF, PATCH_HALF, PATCH_POINTS)
+    xi = xi_c + u[:, None] / rb
+    zz = z_c + u[None, :] + 0 * xi
+    xi = xi + 0 * zz
+    pts = flank_surface(wp, gear, datum, side, xi[None], zz[None], teeth[:, None, None])  # (t, n, n, 3)
+    coarse = pts.reshape(len(teeth), -1, 3)
+    score = np.array([target(i, coarse[i]) for i in range(len(teeth))])  # (t, n*n)
+    score = np.where(np.isfinite(score), score, np.inf)
+    best = np.argsort(score, axis=1)[:, :REFINE_BEST]
+    fine = np.linspace(-step / 1.5, step / 1.5, REFINE_POINTS)
+    bx, bz = xi.ravel()[best], zz.ravel()[best]  # (t, k)
+    fxi = bx[:, :, None, None] + fine[None, None, :, None] / rb
+    fz = bz[:, :, None, None] + fine[None, None, None, :]
+    refined = flank_surface(wp, gear, datum, side, fxi, fz, teeth[:, None, None, None]).reshape(len(teeth), -1, 3)
+    out = []
+    for i in range(len(teeth)):
+        p = np.concatenate([coarse[i], refined[i]])
+        out.append(p[np.isfinite(p).all(axis=1)])
+    return out
+
+
+def ball_seats(wp: Workpiece, gear: Gear, datum: Datum, diameter: float, centre_radius: float) -> np.ndarray:
     """Centres (z, 3) of a ball of ``diameter`` seated in every space at mid face, touching both flanks.
 
     Row j is the space after nominal tooth j (between teeth j and j+1). ``centre_radius`` is the nominal
-    radius of the ball centre, used as the start. The centre stays in the mid-face plane and moves in
-    radius and angle until its distance to the mesh on each side of it is the ball radius.
+    radius of the ball centre, used as the start.
     """
     pitch = 2 * math.pi / gear.teeth
     half = diameter / 2
-    # only triangles the ball can touch: near the ball-centre circle, near the mid plane
-    v = mesh.vertices
-    vr = mesh.radius
-    f = mesh.faces
-    fr_lo, fr_hi = vr[f].min(axis=1), vr[f].max(axis=1)
-    fz_lo, fz_hi = v[f, 2].min(axis=1), v[f, 2].max(axis=1)
-    # a ball touches within half its diameter of its centre; the centre moves little from nominal
-    reach = 0.5 * diameter + 0.5 * gear.mn
-    zone = (fr_hi > centre_radius - reach) & (fr_lo < centre_radius + reach)
-    zone &= (fz_lo < datum.z_mid + reach) & (fz_hi > datum.z_mid - reach)
-    tri = v[f[zone]]
-    cen = tri.mean(axis=1)
-    thc = np.arctan2(cen[:, 1], cen[:, 0])
+    teeth = np.arange(gear.teeth)
+    # the space after tooth j: tooth j's counter-clockwise flank, tooth j+1's clockwise flank
+    ccw_side = next(s for s in SIDES if side_sign(gear, s) > 0)
+    cw_side = next(s for s in SIDES if side_sign(gear, s) < 0)
+    c0 = np.array([centre_radius * math.cos(0.5 * pitch), centre_radius * math.sin(0.5 * pitch), 0.0])
+    centres = np.column_stack(
+        [
+            centre_radius * np.cos(datum.rotation + (teeth + 0.5) * pitch),
+            centre_radius * np.sin(datum.rotation + (teeth + 0.5) * pitch),
+            np.full(gear.teeth, datum.z_mid),
+        ]
+    )
+
+    def nearest_to_ball(owner_offset: int):
+        def target(i: int, pts: np.ndarray) -> np.ndarray:
+            return np.linalg.norm(pts - centres[(i - owner_offset) % gear.teeth], axis=1)
+
+        return target
+
+    xi_a, z_a = _contact_foot(gear, ccw_side, 0, c0, diameter)
+    xi_b, z_b = _contact_foot(gear, cw_side, 1, c0, diameter)
+    # tooth j's ccw flank faces space j; tooth j's cw flank faces space j - 1
+    on_cw_of_space = scanned_patches(wp, gear, datum, ccw_side, teeth, xi_a, z_a, nearest_to_ball(0))
+    on_ccw_of_space = scanned_patches(wp, gear, datum, cw_side, teeth, xi_b, z_b, nearest_to_ball(1))
     out = np.zeros((gear.teeth, 3))
-    radius = half
     for j in range(gear.teeth):
         phi0 = datum.rotation + (j + 0.5) * pitch
-        dphi = (thc - phi0 + math.pi) % (2 * math.pi) - math.pi
-        local = np.abs(dphi) < 0.75 * pitch + half / centre_radius
-        t_loc, a_loc = tri[local], dphi[local]
-
-        # Keep only triangles within reach of the ball around its nominal seat (one exact distance pass);
-        # if the seat found touches anything left out, widen the reach and solve again.
-        nominal_seat = np.array([centre_radius * math.cos(phi0), centre_radius * math.sin(phi0), datum.z_mid])
-        d_nominal = point_triangle_distance(nominal_seat, t_loc)
-        for margin in (0.05 * gear.mn, 0.3 * gear.mn, math.inf):
-            reach = d_nominal < radius + margin
-            try:
-                seat, dist = _seat(
-                    t_loc[(a_loc > 0) & reach],
-                    t_loc[(a_loc <= 0) & reach],
-                    radius,
-                    centre_radius,
-                    phi0,
-                    pitch,
-                    gear.mn,
-                    datum.z_mid,
-                    diameter,
-                    j,
-                )
-            except RuntimeError:
-                if math.isinf(margin):
-                    raise
-                continue
-            # triangle inequality: only triangles this close to the nominal seat can be closer to the found one
-            near = d_nominal < dist + np.linalg.norm(seat - nominal_seat) + 1e-9
-            if point_triangle_distance(seat, t_loc[near]).min() >= dist - 1e-9:
-                break
-        out[j] = seat
+        out[j] = _seat(
+            on_ccw_of_space[(j + 1) % gear.teeth],
+            on_cw_of_space[j],
+            half,
+            centre_radius,
+            phi0,
+            pitch,
+            gear.mn,
+            datum.z_mid,
+            diameter,
+            j,
+        )
     return out
 
 
 def _seat(
-    t_ccw: np.ndarray,
-    t_cw: np.ndarray,
+    s_ccw: np.ndarray,
+    s_cw: np.ndarray,
     radius: float,
     centre_radius: float,
     phi0: float,
@@ -124,29 +140,32 @@ def _seat(
     z_mid: float,
     diameter: float,
     j: int,
-) -> tuple[np.ndarray, float]:
-    """Ball seat between the flank triangles on either side of the space centre line phi0."""
+) -> np.ndarray:
+    """Ball seat between the scanned flank points on either side of the space centre line phi0."""
+    if len(s_ccw) == 0 or len(s_cw) == 0:
+        raise RuntimeError(f"the ball of {diameter:.3f} mm finds no flank on one side of space {j}")
 
     def point(rho: float, phi: float) -> np.ndarray:
         return np.array([rho * math.cos(phi0 + phi), rho * math.sin(phi0 + phi), z_mid])
+
+    def gap_to(points: np.ndarray, c: np.ndarray) -> float:
+        return float(np.sqrt(np.min(np.einsum("ij,ij->i", points - c, points - c))))
 
     def centred(rho: float) -> tuple[float, float]:
         """Angle at which the ball at radius rho is equidistant from both flanks, and that distance."""
 
         def gap(phi: float) -> float:
             c = point(rho, phi)
-            return point_triangle_distance(c, t_ccw).min() - point_triangle_distance(c, t_cw).min()
+            return gap_to(s_ccw, c) - gap_to(s_cw, c)
 
         phi = brentq(gap, -0.45 * pitch, 0.45 * pitch, xtol=1e-13)
-        return phi, point_triangle_distance(point(rho, phi), t_ccw).min()
+        return phi, gap_to(s_ccw, point(rho, phi))
 
-    if len(t_ccw) == 0 or len(t_cw) == 0:
-        raise RuntimeError(f"the ball of {diameter:.3f} mm finds no flank on one side of space {j}")
     lo, hi = centre_radius - 0.5 * mn, centre_radius + 0.5 * mn
     try:
         rho = brentq(lambda rr: centred(rr)[1] - radius, lo, hi, xtol=1e-10)
     except ValueError as exc:
         msg = f"the ball of {diameter:.3f} mm does not seat in space {j} near r = {centre_radius:.3f} mm"
         raise RuntimeError(msg) from exc
-    phi, dist = centred(rho)
-    return point(rho, phi), dist
+    phi, _ = centred(rho)
+    return point(rho, phi)
