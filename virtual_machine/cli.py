@@ -12,7 +12,23 @@ import click
 from cutting.errors import InputError, Problem
 from virtual_machine.formatting import format_measurement, format_sheet
 from virtual_machine.job import STRUCTURES, default_job_path, load_job
+from virtual_machine.progress import Progress, stage
 from virtual_machine.setup_sheet import setup_sheet
+
+MESH_TOLERANCE_HELP = (
+    "Sweep error of the finishing pass's manifold solid [um] (default: the job's process.sweep_error). The gear is "
+    "measured on its exact swept surface either way; a finer mesh costs time and a larger gear.stl."
+)
+
+
+class _NullStream:
+    """Where progress goes when stdout carries JSON and stderr should stay quiet too."""
+
+    def write(self, _text: str) -> int:
+        return 0
+
+    def flush(self) -> None:
+        pass
 
 
 def _fail(exc: Exception) -> None:
@@ -83,28 +99,35 @@ def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) 
     type=click.Path(exists=True, dir_okay=False, path_type=Path),
     help="Cut along a simulated pose trajectory (trajectory.npz of `skive simulate`) instead of the ideal motion.",
 )
-def cut(job: Path | None, out: Path, edge: str | None, workers: int | None, trajectory: Path | None) -> None:
-    from tqdm import tqdm
-
+@click.option("--mesh-tolerance", type=click.FloatRange(min=0.0, min_open=True), metavar="UM", help=MESH_TOLERANCE_HELP)
+def cut(
+    job: Path | None,
+    out: Path,
+    edge: str | None,
+    workers: int | None,
+    trajectory: Path | None,
+    mesh_tolerance: float | None,
+) -> None:
     from cutting.ideal_cut import cut_ideal, default_workers, to_trimesh
+    from cutting.trajectory import ideal_passes
     from metrology.charts import finite, write_charts
+    from metrology.cut_measurement import measure_cut
     from metrology.datum import check_mesh
-    from metrology.measure import MeasureOptions, measure_gear
+    from metrology.measure import MeasureOptions
+    from virtual_machine.run import with_mesh_tolerance
 
     path = job or default_job_path()
     try:
-        j = load_job(path)
+        j = with_mesh_tolerance(load_job(path), None if mesh_tolerance is None else mesh_tolerance * 1e-3)
     except (InputError, ValueError) as exc:
         _fail(exc)
     st = j.skiving
-    bars: dict[int, tqdm] = {}
+    bars: dict[int, Progress] = {}
 
     def progress(i: int, done: int, total: int) -> None:
         if i not in bars:
-            bars[i] = tqdm(total=total, desc=f"pass {i + 1}/{len(st.passes)}", unit="passage", leave=True)
-        if bars[i].n != done:  # the engine reports every 0.25 s; redraw only on progress (quiet logs)
-            bars[i].n = done
-            bars[i].refresh()
+            bars[i] = Progress(f"pass {i + 1}/{len(st.passes)}", total, "passages")
+        bars[i].update_to(done)
 
     kind = edge or j.cutter_options["edge"]
     motions = None
@@ -124,11 +147,16 @@ def cut(job: Path | None, out: Path, edge: str | None, workers: int | None, traj
         _fail(exc)
     for b in bars.values():
         b.close()
+    stage("measurement: the exact swept surface and the mesh")
     out.mkdir(parents=True, exist_ok=True)
     mesh = to_trimesh(report.result.gear)
     mesh.export(out / "gear.stl")
     opts = MeasureOptions(**{k: v for k, v in (j.measurement or {}).items() if v is not None})
-    result = measure_gear(check_mesh(mesh), j.gear, opts, str(out / "gear.stl"))
+    last = len(st.passes) - 1
+    bound = report.result.pass_sweep_error.get(last, report.result.sweep_error)
+    result, _ = measure_cut(
+        j.gear, report.edge, motions or ideal_passes(st), check_mesh(mesh), opts, bound, str(out / "gear.stl")
+    )
     r = report.result
     result["cut"] = {
         "edge": kind,
@@ -180,9 +208,8 @@ if __name__ == "__main__":
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 @click.option("--rrd", type=click.Path(dir_okay=False, path_type=Path), help="Also write the Rerun recording here.")
 @click.option("--workers", type=click.IntRange(1, 64), help="Removal processes (default: one per core, at most 8).")
-def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None) -> None:
-    from tqdm import tqdm
-
+@click.option("--mesh-tolerance", type=click.FloatRange(min=0.0, min_open=True), metavar="UM", help=MESH_TOLERANCE_HELP)
+def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh_tolerance: float | None) -> None:
     from virtual_machine.program import program_duration
     from virtual_machine.run import run_job
 
@@ -194,24 +221,23 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None) -> N
         total = program_duration(j.skiving)
     except (InputError, ValueError) as exc:
         _fail(exc)
-    fmt = "{l_bar}{bar}| {n:.2f}/{total:.2f} s of machine time [{elapsed}<{remaining}{postfix}]"
-    bar = tqdm(total=total, desc="machine and cut", bar_format=fmt, mininterval=0.5, leave=True)
+    bar = Progress("machine and cut", total, "s of machine time", value_format="{:.2f}")
 
     def progress(t: float, passages: int) -> None:
-        bar.total = max(bar.total, t)
-        bar.set_postfix(engagements=passages, refresh=False)
-        bar.update(t - bar.n)  # redraws at most every 0.5 s (quiet logs)
+        bar.set_total(t)
+        bar.update_to(t, engagements=passages)
 
-    def stage(name: str) -> None:
+    def announce(name: str) -> None:
         if name != "machine and cut":
             bar.close()
-            click.echo(f"{name} ...")
+            stage(name)
 
     from virtual_machine.physics import SimulationDivergedError
     from virtual_machine.simulate import LostSynchronismError
 
     try:
-        doc = run_job(path, out, rrd, progress, stage, workers)
+        tol = None if mesh_tolerance is None else mesh_tolerance * 1e-3
+        doc = run_job(path, out, rrd, progress, announce, workers, tol)
     except (InputError, SimulationDivergedError, LostSynchronismError) as exc:
         bar.close()
         _fail(exc)
@@ -288,8 +314,6 @@ def simulate(
 ) -> None:
     import time
 
-    from tqdm import tqdm
-
     from virtual_machine import motion_io
     from virtual_machine.physics import SimulationDivergedError
     from virtual_machine.simulate import LostSynchronismError
@@ -311,19 +335,11 @@ def simulate(
         return
     st = j.skiving
     total = duration or (sum(st.pass_times) + 0.5 + 1.2 * (len(st.passes) - 1))  # strokes + run-up + returns (approx.)
-    bar = tqdm(
-        total=round(total, 2),
-        unit="s",
-        desc="machine time",
-        disable=as_json,
-        bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s",
-    )
-    last = [0.0]
+    bar = Progress("machine time", total, "s", value_format="{:.2f}", stream=None if not as_json else _NullStream())
 
     def progress(t: float) -> None:
-        if t - last[0] >= 0.05:
-            bar.update(round(t - last[0], 2))
-            last[0] = t
+        bar.set_total(t)
+        bar.update_to(t)
 
     t0 = time.perf_counter()
     try:
@@ -331,7 +347,6 @@ def simulate(
     except (SimulationDivergedError, LostSynchronismError, NotImplementedError) as exc:
         bar.close()
         _fail(exc)
-    bar.n = bar.total  # the estimate of the total is approximate: end the bar where the run ended
     bar.close()
     wall = time.perf_counter() - t0
     meta = {

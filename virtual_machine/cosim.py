@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import manifold3d as mf
 import numpy as np
 
-from cutting.edge import make_edge
+from cutting.edge import CuttingEdge, make_edge
 from cutting.forces import EngagementLoad, engagement_load
 from cutting.holder import check_holder_side
 from cutting.materials import Material, material
@@ -110,6 +110,7 @@ class CoSimulation:
     actuator_work: float = 0.0  # work of all actuators over the run [J]
     load_rows: np.ndarray | None = None  # per servo tick: t [s], resultant on the workpiece [N] (3), torque [N m]
     snapshots: list[tuple[float, np.ndarray, np.ndarray]] = field(default_factory=list)  # t, vertices, triangles
+    edge: CuttingEdge | None = None  # the cutting edge the removal swept
 
     def chip_change(self) -> float:
         """Median relative change of the chip volume between consecutive engagements of a pass: the size of the
@@ -173,10 +174,11 @@ def cosimulate(
     # finest facets of the sweep
     edge_pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
     pitch = 2 * math.pi / setup.cutter.teeth
-    half = engagement_half_angle(plans[0], edge)
+    # each pass's own engagement: a deeper pass engages earlier, and its passages' samples must cover the window
+    halves = [engagement_half_angle(plan, edge) for plan in plans]
     chunk = pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
     in_blank = functools.partial(in_blank_envelope, setup.gear)
-    sim = CoSimulation(None, removal.result, material=mat)  # the record is assembled at the end
+    sim = CoSimulation(None, removal.result, material=mat, edge=edge)  # the record is assembled at the end
     pending: dict[tuple[int, int], tuple[Samples, float]] = {}
     count = [0]
 
@@ -219,7 +221,7 @@ def cosimulate(
                 segment, index = int(row[6]), int(row[7])
                 if segment == FEED:
                     if current is None or current.index != index:
-                        current = _Stroke(index, half)
+                        current = _Stroke(index, halves[index])
                     current.t.append(row[0])
                     current.q.append(list(row[1:6]))
                 elif current is not None:

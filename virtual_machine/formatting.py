@@ -80,7 +80,9 @@ def class_table(doc: dict) -> list[tuple[str, float, float | None, object, objec
 def format_measurement(doc: dict, source: str) -> str:
     """The class table a gear engineer reads first."""
     iso = doc["iso1328"]
-    lines = [f"MEASUREMENT  {source}", ""]
+    wp = doc.get("workpiece") or {}
+    what = source if wp.get("kind", "mesh") == "mesh" else f"{wp['kind']} of the cut (mesh: {source})"
+    lines = [f"MEASUREMENT  {what}", ""]
     lines.append(f"{'parameter':10s} {'left':>9s} {'right':>9s} {'tol':>7s} {'class':>6s}")
     cls = iso.get("class") or {}
     for key, left, right, t, c in class_table(doc):
@@ -101,4 +103,12 @@ def format_measurement(doc: dict, source: str) -> str:
     if sp.get("k"):
         lines.append(f"span W_{sp['k']} = {sp['W_k_mm']:.4f} mm (nominal {sp['W_k_nominal_mm']:.4f})")
     lines.append(f"tip diameter {th['tip_diameter_mm']:.4f} mm, root diameter {th['root_diameter_mm']:.4f} mm")
+    mesh = doc.get("mesh")
+    if mesh:
+        verdict = "within" if mesh["within_bound"] else "OUTSIDE"
+        lines.append(
+            f"the mesh ({mesh['triangles']} triangles, sweep error <= {mesh['sweep_bound_um']:.2f} um) measures class "
+            f"{mesh['class']}; along the traces it differs from the exact surface by at most "
+            f"{mesh['trace_difference_um']:.2f} um, {verdict} its bound ({mesh['trace_bound_um']:.2f} um)"
+        )
     return "\n".join(lines)

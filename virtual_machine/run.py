@@ -7,6 +7,7 @@ order fixed, so the same job gives the same gear.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import platform
@@ -18,10 +19,13 @@ from typing import Any
 
 import numpy as np
 
+from cutting.errors import InputError, Problem
 from cutting.ideal_cut import default_workers, to_trimesh
+from cutting.sampled_motion import sampled_passes
 from metrology.charts import finite, write_charts
+from metrology.cut_measurement import measure_cut
 from metrology.datum import check_mesh
-from metrology.measure import MeasureOptions, measure_gear
+from metrology.measure import MeasureOptions
 from virtual_machine.cosim import CoSimulation, cosimulate, max_lag
 from virtual_machine.formatting import format_sheet
 from virtual_machine.job import Job, load_job
@@ -50,13 +54,15 @@ def run_job(
     progress: Callable[[float, int], None] | None = None,
     stage: Callable[[str], None] | None = None,
     workers: int | None = None,
+    mesh_tolerance: float | None = None,
 ) -> dict[str, Any]:
     """Run the job at ``path``; write its files into ``out``; return the measurement document with ``run``.
     ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage;
-    ``workers``: removal processes (default one per core)."""
+    ``workers``: removal processes (default one per core); ``mesh_tolerance`` [mm]: the finishing pass's sweep
+    error (default the job's process.sweep_error)."""
     announce = stage or (lambda name: None)
     durations: dict[str, float] = {}
-    job = load_job(path)
+    job = with_mesh_tolerance(load_job(path), mesh_tolerance)
     out.mkdir(parents=True, exist_ok=True)
     announce("machine and cut")
     t0 = time.perf_counter()
@@ -68,7 +74,10 @@ def run_job(
     mesh = to_trimesh(sim.cut.gear)
     mesh.export(out / "gear.stl")
     opts = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None})
-    measurement = measure_gear(check_mesh(mesh), job.gear, opts, str(out / "gear.stl"))
+    # the truth: the exact swept surface of the motion the machine made; the mesh measured beside it
+    motions = sampled_passes(job.skiving, sim.record.passes)
+    bound = sim.cut.pass_sweep_error.get(len(job.skiving.passes) - 1, sim.cut.sweep_error)
+    measurement, _ = measure_cut(job.gear, sim.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"))
     durations["measurement"] = time.perf_counter() - t0
     announce("report")
     t0 = time.perf_counter()
@@ -88,6 +97,15 @@ def run_job(
     title = f"skive run: {Path(path).name}"
     write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
     return doc
+
+
+def with_mesh_tolerance(job: Job, tolerance: float | None) -> Job:
+    """The job with the finishing pass's sweep error set to ``tolerance`` [mm] (None: as the job says)."""
+    if tolerance is None:
+        return job
+    if not tolerance > 0:
+        raise InputError(Problem("--mesh-tolerance", tolerance * 1e3, "must be positive", "give micrometres > 0"))
+    return dataclasses.replace(job, process={**job.process, "sweep_error": tolerance})
 
 
 def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, float], triangles: int) -> dict:

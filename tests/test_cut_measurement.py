@@ -1,0 +1,116 @@
+"""The cut measured on its exact swept surface: against the ideal kinematics (physics only), against the mesh of
+the same cut (within the mesh's bound) and against the direct feed-mark probe of benchmarks/bench_feed_marks.py."""
+
+import functools
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from cutting.edge import make_edge
+from cutting.exact_sweep import SweptVolumes
+from cutting.flank import SIDES, flank_normals, flank_points
+from cutting.gear import Gear
+from cutting.ideal_cut import cut_ideal, to_trimesh
+from cutting.skiving import SkivingSetup
+from cutting.trajectory import ideal_passes
+from metrology.cut_measurement import measure_cut
+from metrology.datum import check_mesh, establish_datum, measuring_radius
+from metrology.flank_lines import evaluate
+from metrology.measure import MeasureOptions, helix_range, profile_range
+from metrology.workpiece import flank_deviation
+from virtual_machine.job import load_job
+
+DEG = math.pi / 180
+UM = 1e3
+
+
+@functools.cache
+def small_cut():
+    """z 16, mn 1, b 2, cutter z0 11, one full-depth pass at 0.2 mm/rev, conjugate edge, cut at a 1.5 um mesh."""
+    st = SkivingSetup(Gear(16, 1.0, 20 * DEG, 0.0, 2.0), Gear(11, 1.0, 20 * DEG, 20 * DEG, 5.0), 2000, 0.2, (2.25,))
+    report = cut_ideal(st, "conjugate", 1.5e-3, 1.5e-3, workers=1)
+    mesh = check_mesh(to_trimesh(report.result.gear))
+    doc, mesh_doc = measure_cut(
+        st.gear, report.edge, ideal_passes(st), mesh, MeasureOptions(), report.result.sweep_error
+    )
+    return st, report, doc, mesh_doc
+
+
+def test_the_exact_and_the_mesh_measurement_of_one_cut_agree_within_the_mesh_bound():
+    st, report, doc, mesh_doc = small_cut()
+    assert doc["workpiece"]["kind"] == "exact swept surface" and mesh_doc["workpiece"]["kind"] == "mesh"
+    m = doc["mesh"]
+    bound = report.result.sweep_error * UM / math.cos(st.gear.base_helix_angle)
+    assert m["trace_bound_um"] == pytest.approx(bound)
+    assert m["within_bound"] and m["trace_difference_um"] <= bound
+    assert m["trace_difference_um"] > 0.01  # the mesh's facets do show: the comparison sees them
+    # ranges of values that each differ by the bound pointwise differ by at most twice it
+    for key in ("F_alpha", "f_Halpha", "F_beta", "f_Hbeta", "f_fbeta", "f_p", "F_p", "F_r"):
+        assert abs(m["difference_um"][key]) <= 2 * bound + 0.05, key
+    assert abs(m["size_difference_um"]["M_dK_um"]) <= 2 * bound + 0.05
+
+
+def test_the_exact_measurement_is_the_direct_probe_of_the_feed_marks_benchmark():
+    """bench_feed_marks.py probes one tooth's profile along the flank normals and evaluates it; the measurement's
+    mid-section profile of the same tooth is that probe (same numbers to 0.01 um): datum, ranges and the normal
+    to base-tangent conversion add nothing of their own."""
+    st, report, doc, _ = small_cut()
+    g = st.gear
+    sv = SweptVolumes(g, report.edge, ideal_passes(st))
+    L = np.asarray(doc["_traces"]["L_mm"])
+    k = 2  # nominal tooth index; reported as the tooth at its place in the measurement's order
+    number = int(np.nonzero(np.asarray(doc["_traces"]["order"]) == k)[0][0]) + 1
+    for side in SIDES:
+        xi = L / g.base_radius
+        e = sv.probe(flank_points(g, side, xi, 0.0, k), flank_normals(g, side, xi, 0.0, k), 0.03)
+        e = e / math.cos(g.base_helix_angle) * UM
+        trace = np.asarray(doc["_traces"]["profile"][side])[k] * UM
+        assert np.nanmax(np.abs(trace - e)) < 0.01
+        tooth = next(t for t in doc["profile"][side]["teeth"] if t["tooth"] == number)
+        assert tooth["f_falpha"] == pytest.approx(evaluate(L, e)["f_f"], abs=0.01)
+
+
+def _finishing_at(feed: float, edge: str):
+    job = load_job("assets/jobs/spur_external.toml")
+    st = replace(job.skiving, axial_feed=feed)
+    e = make_edge(st, edge)
+    return st, SweptVolumes(st.gear, e, ideal_passes(st)[-1:])  # the finishing pass alone, from the blank
+
+
+@pytest.mark.parametrize("edge", ["conjugate", "involute"])
+def test_ideal_kinematics_leave_only_physics(edge):
+    """spur_external's finishing pass at 0.02 mm/rev with the ideal motion, probed exactly on two teeth: the
+    conjugate edge leaves feed marks of a few hundredths of a micrometre (0.10-0.13 um at 0.05 mm/rev, the feed
+    squared) and nothing else: every deviation <= 0.3 um. The involute edge leaves its own profile bow
+    (f_falpha 0.9-1.0 um at 0.05 mm/rev), which the feed does not refine away."""
+    st, sv = _finishing_at(0.02, edge)
+    g = st.gear
+    datum = establish_datum(sv, g)
+    assert abs(datum.rotation) < 1e-7 and abs(datum.z_mid) < 1e-9
+    L0, L1 = profile_range(g, MeasureOptions())
+    L = np.linspace(L0, L1, 60)
+    z0, z1 = helix_range(g)
+    zz = np.linspace(z0, z1, 40)
+    xi_ref = math.sqrt(g.reference_radius**2 - g.base_radius**2) / g.base_radius
+    xi_p = math.sqrt(measuring_radius(g) ** 2 - g.base_radius**2) / g.base_radius
+    teeth = np.array([0, 1])[:, None]
+    worst = {}
+    for side in SIDES:
+        prof = flank_deviation(sv, g, datum, side, L[None, :] / g.base_radius, 0.0, teeth) * UM
+        hel = flank_deviation(sv, g, datum, side, xi_ref, zz[None, :], teeth) * UM
+        pitch = flank_deviation(sv, g, datum, side, xi_p, 0.0, teeth)[:, 0] * UM
+        for t in range(2):
+            p, h = evaluate(L, prof[t]), evaluate(zz, hel[t])
+            for key, v in (("F_alpha", p["F"]), ("f_Halpha", p["f_H"]), ("f_falpha", p["f_f"])):
+                worst[key] = max(worst.get(key, 0.0), abs(v))
+            for key, v in (("F_beta", h["F"]), ("f_Hbeta", h["f_H"]), ("f_fbeta", h["f_f"])):
+                worst[key] = max(worst.get(key, 0.0), abs(v))
+        worst["f_pt"] = max(worst.get("f_pt", 0.0), abs(pitch[1] - pitch[0]))
+    print(edge, {k: round(v, 3) for k, v in worst.items()})
+    if edge == "conjugate":
+        assert max(worst.values()) <= 0.3, worst
+    else:
+        assert worst["f_falpha"] > 0.5  # the involute edge's own bow
+        assert worst["F_beta"] <= 0.3 and worst["f_pt"] <= 0.3  # the helix and the pitch are still clean
