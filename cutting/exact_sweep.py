@@ -25,6 +25,7 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from cutting.edge import CuttingEdge
+from cutting.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
 from cutting.gear import Gear
 from cutting.removal import passage_range
 from cutting.sweep import outline_points, simplify_outline
@@ -36,6 +37,22 @@ CROSSING_TOLERANCE = 1e-9
 #: samples of the pose table per passage window, and bounding balls per window (SAMPLES - 1 divisible by it)
 SAMPLES = 65
 SUBWINDOWS = 8
+
+#: the compiled estimate's raster of the outline: cell, pad beyond the outline's box, band of exact distances [mm]
+RASTER_CELL = 0.002
+RASTER_PAD = 0.1
+RASTER_BAND = 0.05
+#: its error bound [mm]: bilinear lookup 0.71 cell, the pose quadratic in the table (~0.01 um) and rounding
+ESTIMATE_ERROR = 0.71 * RASTER_CELL + 0.00025
+#: probe-line samples: fine ones this far apart [mm] at most 129 on a line, coarse ones (every stride-th) ~25 um
+FINE_STEP = 0.0025
+COARSE_STEP = 0.025
+#: the balls' grid cell [mm], lines per cluster and its cell [mm], and the exact items a line may leave before it
+#: takes the table-wide path
+GRID_CELL = 2.0
+CLUSTER = 8
+CLUSTER_CELL = 0.5
+ITEMS_PER_LINE = 64
 
 #: a passage whose estimated in-plane track stays this far [mm] from the outline (plus its own length) is settled
 #: without solving: the estimate's error (pose between table samples ~1 um, distance field 6 um) is far below it
@@ -69,6 +86,22 @@ class Outline:
         inside = self.margin(gx, gy) > 0
         self._sdf = (ndimage.distance_transform_edt(inside) - ndimage.distance_transform_edt(~inside)) * cell
         self._lo, self._cell, self._pad = lo, cell, pad
+
+    def exact_raster(self, cell: float = RASTER_CELL, pad: float = RASTER_PAD, band: float = RASTER_BAND):
+        """The signed distance [mm] on a raster of ``cell`` over the outline's box grown by ``pad``: exact at every
+        node within ``band`` of the polygon, clamped to +-band beyond (a bound that keeps its side). Bilinear
+        lookups are then within 0.71 cell of the truth wherever it matters. Returns (raster, lower corner)."""
+        p = np.concatenate([self.lower, self.upper[::-1][1:-1]])  # the polygon, counter-clockwise
+        lo = p.min(axis=0) - pad
+        nx, ny = (np.ceil((p.max(axis=0) + pad - lo) / cell).astype(int) + 1).tolist()
+        dist = np.full((nx, ny), band)
+        segment_distances(p, float(lo[0]), float(lo[1]), cell, dist, band)
+        gy = lo[1] + cell * np.arange(ny)
+        for i in range(0, nx, 256):  # the sign, row block by row block (memory)
+            gx = lo[0] + cell * np.arange(i, min(i + 256, nx))
+            inside = self.margin(gx[:, None], gy[None, :]) > 0
+            dist[i : i + 256] = np.where(inside, dist[i : i + 256], -dist[i : i + 256])
+        return dist.astype(np.float32), lo
 
     def margin(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
@@ -106,6 +139,9 @@ class PassTable:
     angle: np.ndarray
     ball_centre: np.ndarray  # (m, S, 3)
     ball_radius: np.ndarray  # (m, S)
+    box_centre: np.ndarray  # (m, S, 3): a box per subwindow, in the tooth frame of its middle sample
+    box_axes: np.ndarray  # (m, S, 3, 3): rows are the box's axes
+    box_half: np.ndarray  # (m, S, 3): half extents along them
 
     def __post_init__(self) -> None:
         self.normal = np.ascontiguousarray(self.rot[..., :, 2])  # the rake plane's normal (m, P, 3)
@@ -131,7 +167,6 @@ class PassTable:
         angle: np.ndarray,
         outline: np.ndarray,
         m: np.ndarray | None = None,
-        chunk: int = 256,
     ) -> PassTable:
         """Passages of any motion with ``pose(t)``: windows [t0, t1] [s] and the tooth's angle about the cutter
         axis [rad] (the tooth frame is the motion's frame turned by it)."""
@@ -141,19 +176,11 @@ class PassTable:
         rot, origin = motion.pose(t.ravel())
         rot = (rot.reshape(n, SAMPLES, 3, 3) @ _rot_z(angle)[:, None]).copy()
         origin = origin.reshape(n, SAMPLES, 3)
-        # balls from the outline simplified to 20 um; the margin covers that and the bulge between samples
+        # balls and boxes from the outline simplified to 20 um; the margin covers that and the bulge between samples
         coarse = outline_points(simplify_outline(outline, 0.02)[0])
-        per = (SAMPLES - 1) // SUBWINDOWS
-        centre = np.empty((n, SUBWINDOWS, 3))
-        radius = np.empty((n, SUBWINDOWS))
-        for a in range(0, n, chunk):
-            w = np.einsum("mpij,nj->mpni", rot[a : a + chunk], coarse) + origin[a : a + chunk, :, None, :]
-            for s in range(SUBWINDOWS):
-                part = w[:, s * per : (s + 1) * per + 1]
-                lo, hi = part.min(axis=(1, 2)), part.max(axis=(1, 2))
-                centre[a : a + chunk, s] = (lo + hi) / 2
-                radius[a : a + chunk, s] = np.linalg.norm(hi - lo, axis=1) / 2 + 0.1
-        return cls(motion, np.arange(n) if m is None else m, t, rot, origin, angle, centre, radius)
+        bounds = sweep_bounds(rot, origin, np.ascontiguousarray(coarse, dtype=float), SUBWINDOWS, 0.1)
+        m = np.arange(n) if m is None else m
+        return cls(motion, m, t, rot, origin, angle, *bounds)
 
     def exact_pose(self, passage: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The tooth frame of the passages at times t, from the motion itself."""
@@ -189,6 +216,10 @@ class SweptVolumes:
         self._owner = np.concatenate([np.full(tb.ball_radius.size, k) for k, tb in enumerate(self.tables)])
         self._offset = np.concatenate([[0], np.cumsum([tb.ball_radius.size for tb in self.tables])])
         self._tree = cKDTree(centres)
+        self._compiled = _CompiledTables(self.tables, centres, self._radius, self.outline)
+        #: what the probes took so far: lines, (line, passage) pairs, near pairs, fine estimates, exact items,
+        #: lines that took the table-wide path
+        self.work = np.zeros(6, np.int64)
 
     # ---- the blank -------------------------------------------------------------------------------------------
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -479,8 +510,94 @@ class SweptVolumes:
         probe coming from ``points + reach * directions`` (air) first touches material; NaN where that end is
         not in air or the segment holds no material within ``reach``."""
         p = np.asarray(points, dtype=float).reshape(-1, 3)
-        line, start, end = self.removed_intervals(p, directions, reach)
-        return surface_from_intervals(len(p), line, start, end, reach)
+        u = np.asarray(directions, dtype=float).reshape(-1, 3)
+        u = u / np.linalg.norm(u, axis=1, keepdims=True)
+        out = np.full(len(p), np.nan)
+        for a in range(0, len(p), LINE_CHUNK):
+            s = slice(a, a + LINE_CHUNK)
+            line, start, end = self.settled_intervals(p[s], u[s], reach)
+            out[s] = surface_from_intervals(len(p[s]), line, start, end, reach)
+        return out
+
+    def settled_intervals(self, p: np.ndarray, u: np.ndarray, reach: float) -> tuple[np.ndarray, ...]:
+        """What :meth:`removed_intervals` gives where it decides the surface, from the compiled estimate (every
+        pair the pose table settles within its bound) and the exact solution of the pairs it leaves."""
+        n = len(p)
+        ds, stride = line_samples(reach)
+        air = self._air_intervals(p, u, reach)
+        air_cov, solid = _segment_cover(n, ds, *air)
+        items, counts, covered, flag = self._settle(p, u, ds, stride, air_cov, solid)
+        i, f = np.nonzero(covered)
+        whole = np.nonzero(flag == 2)[0]
+        parts = [air, (i, ds[f], ds[f + 1]), (whole, np.full(len(whole), ds[0]), np.full(len(whole), ds[-1]))]
+        over = np.nonzero(flag == 1)[0]
+        if over.size:  # too many unsettled passages: the table-wide path for these lines
+            li, s0, e0 = self.removed_intervals(p[over], u[over], reach)
+            parts.append((over[li], s0, e0))
+        keep = np.arange(ITEMS_PER_LINE)[None, :] < counts[:, None]
+        li = np.broadcast_to(np.arange(n)[:, None], keep.shape)[keep]
+        if li.size:
+            parts.append(self._solve_items(p, u, ds, li, items[keep]))
+        return tuple(np.concatenate([q[k] for q in parts]) for k in range(3))
+
+    def _settle(self, p, u, ds, stride, air_cov, solid):
+        """:func:`cutting.exact_kernels.settle_lines` on these lines: (items, counts, covered, flag)."""
+        n, ct = len(p), self._compiled
+        items = np.zeros((n, ITEMS_PER_LINE, 4), np.int64)
+        counts = np.zeros(n, np.int64)
+        covered = np.zeros((n, len(ds) - 1), bool)
+        flag = np.zeros(n, np.int8)
+        work = np.zeros((n, 3), np.int64)
+        grid = (ct.grid_lo, GRID_CELL, ct.grid_dims, ct.cell_ptr, ct.cell_ball)
+        per = (SAMPLES - 1) // SUBWINDOWS
+        balls = (ct.centre, ct.radius, ct.ball_g, ct.ball_sub, per, ct.box_centre, ct.box_axes, ct.box_half)
+        tab = (ct.table, ct.sdf, *map(float, ct.sdf_lo), RASTER_CELL, -RASTER_PAD)
+        clusters = _clusters(p)
+        out = (items, counts, covered, flag, work)
+        settle_lines(p, u, ds, stride, clusters, grid, balls, tab, ESTIMATE_ERROR, air_cov, solid, *out)
+        self.work += [n, *work.sum(axis=0), counts.sum(), (flag == 1).sum()]
+        return items, counts, covered, flag
+
+    def _solve_items(self, p, u, ds, li, items) -> tuple[np.ndarray, ...]:
+        """The exact removal of each (line, passage, segment) item: the margin at both ends, the root between."""
+        g, lo_j, hi_j, f = items.T
+        ends = np.concatenate([f, f + 1])
+        key_line, key_g, key_s = np.tile(li, 2), np.tile(g, 2), ends
+        key = (key_line * (int(g.max()) + 1) + key_g) * (len(ds) + 1) + key_s  # one integer per (line, g, sample)
+        _, first_of, back = np.unique(key, return_index=True, return_inverse=True)
+        keys = np.stack([key_line[first_of], key_g[first_of], key_s[first_of]])
+        lo2, hi2 = np.tile(lo_j, 2), np.tile(hi_j, 2)
+        first = np.zeros(keys.shape[1], np.int64)
+        first[back] = np.arange(len(back))
+        margin = np.empty(keys.shape[1])
+        ul, ug, us = keys
+        table = np.searchsorted(self._compiled.first_g, ug, side="right") - 1
+        for k, tb in enumerate(self.tables):
+            sel = np.nonzero(table == k)[0]
+            if sel.size:
+                q = p[ul[sel]] + ds[us[sel], None] * u[ul[sel]]
+                pa = ug[sel] - self._compiled.first_g[k]
+                margin[sel] = self._margin_exact(tb, pa, lo2[first[sel]], hi2[first[sel]], q)
+        m = margin[back]
+        m0, m1 = m[: len(li)], m[len(li) :]
+        lines, starts, ends_ = [], [], []
+        both = (m0 > 0) & (m1 > 0)
+        lines.append(li[both]), starts.append(ds[f[both]]), ends_.append(ds[f[both] + 1])
+        change = np.nonzero((m0 > 0) != (m1 > 0))[0]
+        table = np.searchsorted(self._compiled.first_g, g[change], side="right") - 1
+        for k, tb in enumerate(self.tables):
+            sel = change[table == k]
+            if sel.size == 0:
+                continue
+            pa = g[sel] - self._compiled.first_g[k]
+            root = self._root(
+                tb, pa, lo_j[sel], hi_j[sel], p[li[sel]], u[li[sel]], ds[f[sel]], ds[f[sel] + 1], m0[sel], m1[sel]
+            )
+            rising = m1[sel] > 0
+            lines.append(li[sel])
+            starts.append(np.where(rising, root, ds[f[sel]]))
+            ends_.append(np.where(rising, ds[f[sel] + 1], root))
+        return np.concatenate(lines), np.concatenate(starts), np.concatenate(ends_)
 
     def removed(self, points: np.ndarray) -> np.ndarray:
         """True where some passage sweeps the point (the blank aside): the table's estimate settles the passages
@@ -513,6 +630,85 @@ class SweptVolumes:
 
 #: (line, passage) pairs handled at once: bounds the memory of the table gathers
 PAIR_CHUNK = 20000
+#: probe lines settled at once: bounds the memory of the items and segment flags
+LINE_CHUNK = 20000
+
+
+def line_samples(reach: float) -> tuple[np.ndarray, int]:
+    """The samples d of a probe line |d| <= reach: fine ones FINE_STEP apart (at most 129), every stride-th of
+    them a coarse one about COARSE_STEP apart."""
+    coarse = max(2, math.ceil(2 * reach / COARSE_STEP))
+    stride = max(1, min(math.ceil(2 * reach / coarse / FINE_STEP), 128 // coarse))
+    return np.linspace(-reach, reach, coarse * stride + 1), stride
+
+
+def _segment_cover(n: int, ds: np.ndarray, line: np.ndarray, start: np.ndarray, end: np.ndarray):
+    """Per line and segment [d_c, d_c+1]: whether an air interval holds all of it, and whether none touches it."""
+    lo, hi = ds[:-1][None, :], ds[1:][None, :]
+    inside = (start[:, None] <= lo) & (end[:, None] >= hi)
+    touch = (start[:, None] < hi) & (end[:, None] > lo)
+    air = np.zeros((n, len(ds) - 1), bool)
+    hit = np.zeros((n, len(ds) - 1), bool)
+    np.logical_or.at(air, line, inside)
+    np.logical_or.at(hit, line, touch)
+    return air, ~hit
+
+
+def _clusters(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lines in Morton order of their points' CLUSTER_CELL cells, at most CLUSTER at a time from one cell (a
+    cluster stays compact: its candidates are few): (pointer, line index)."""
+    q = np.minimum(np.floor((p - p.min(axis=0)) / CLUSTER_CELL), 2**21 - 1).astype(np.uint64)
+    code = np.zeros(len(p), np.uint64)
+    for axis in range(3):
+        x = q[:, axis]
+        for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F),
+                            (4, 0x10C30C30C30C30C3), (2, 0x1249249249249249)):  # fmt: skip
+            x = (x | (x << np.uint64(shift))) & np.uint64(mask)
+        code |= x << np.uint64(axis)
+    order = np.argsort(code, kind="stable")
+    code = code[order]
+    new_cell = np.r_[True, code[1:] != code[:-1]]
+    rank = np.arange(len(p)) - np.maximum.accumulate(np.where(new_cell, np.arange(len(p)), 0))  # index in its cell
+    start = np.nonzero(new_cell | (rank % CLUSTER == 0))[0]
+    return np.r_[start, len(p)].astype(np.int64), order.astype(np.int64)
+
+
+class _CompiledTables:
+    """Every pass table's poses as one array per quantity (passage g over all passes, in order), the balls on a
+    grid, and the outline's exact raster: what :func:`cutting.exact_kernels.settle_lines` reads."""
+
+    def __init__(self, tables: Sequence[PassTable], centres: np.ndarray, radius: np.ndarray, outline: Outline):
+        sizes = [len(tb.m) for tb in tables]
+        self.first_g = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+        self.table = np.concatenate(
+            [pack_table(tb.normal, tb.offset, tb.rot, tb.origin) for tb in tables] or [np.zeros((0, SAMPLES, PACKED))]
+        )
+        # the balls: passage g and subwindow of each (balls are ordered pass, passage, subwindow)
+        per_table = [np.arange(tb.ball_radius.size) for tb in tables]
+        self.ball_g = np.concatenate(
+            [self.first_g[k] + b // SUBWINDOWS for k, b in enumerate(per_table)] or [np.zeros(0, np.int64)]
+        ).astype(np.int64)
+        self.ball_sub = np.concatenate([b % SUBWINDOWS for b in per_table] or [np.zeros(0, np.int64)]).astype(np.int64)
+        boxes = [
+            (tb.box_centre.reshape(-1, 3), tb.box_axes.reshape(-1, 3, 3), tb.box_half.reshape(-1, 3)) for tb in tables
+        ]
+        self.box_centre, self.box_axes, self.box_half = (
+            np.ascontiguousarray(np.concatenate([b[k] for b in boxes])) if boxes else np.zeros((0, *shape))
+            for k, shape in enumerate([(3,), (3, 3), (3,)])
+        )
+        self.centre = np.ascontiguousarray(centres if len(centres) else np.zeros((1, 3)))
+        self.radius = np.ascontiguousarray(radius if len(radius) else np.zeros(1))
+        lo = self.centre.min(axis=0) - GRID_CELL
+        dims = np.floor((self.centre.max(axis=0) + GRID_CELL - lo) / GRID_CELL).astype(np.int64) + 1
+        ijk = np.floor((self.centre - lo) / GRID_CELL).astype(np.int64)
+        cell = (ijk[:, 0] * dims[1] + ijk[:, 1]) * dims[2] + ijk[:, 2]
+        self.cell_ball = np.argsort(cell, kind="stable").astype(np.int64)
+        self.cell_ptr = np.r_[0, np.cumsum(np.bincount(cell, minlength=int(np.prod(dims))))].astype(np.int64)
+        if not len(radius):  # no passage: an empty grid
+            self.cell_ball = np.zeros(0, np.int64)
+            self.cell_ptr = np.zeros(int(np.prod(dims)) + 1, np.int64)
+        self.grid_lo, self.grid_dims = lo, dims
+        self.sdf, self.sdf_lo = outline.exact_raster()
 
 
 def surface_from_intervals(
