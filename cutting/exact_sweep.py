@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 
 from cutting.edge import CuttingEdge
 from cutting.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
+from cutting.exact_solve import ItemSolver
 from cutting.gear import Gear
 from cutting.removal import passage_range
 from cutting.sweep import outline_points, simplify_outline
@@ -50,7 +51,7 @@ COARSE_STEP = 0.025
 #: the balls' grid cell [mm], lines per cluster and its cell [mm], and the exact items a line may leave before it
 #: takes the table-wide path
 GRID_CELL = 2.0
-CLUSTER = 8
+CLUSTER = 32
 CLUSTER_CELL = 0.5
 ITEMS_PER_LINE = 64
 
@@ -217,6 +218,8 @@ class SweptVolumes:
         self._offset = np.concatenate([[0], np.cumsum([tb.ball_radius.size for tb in self.tables])])
         self._tree = cKDTree(centres)
         self._compiled = _CompiledTables(self.tables, centres, self._radius, self.outline)
+        #: the compiled item solve when every motion has a compiled pose (else None: the numpy path)
+        self._solver = ItemSolver.build(self.tables, self._compiled.table, self.outline)
         #: what the probes took so far: lines, (line, passage) pairs, near pairs, fine estimates, exact items,
         #: lines that took the table-wide path
         self.work = np.zeros(6, np.int64)
@@ -559,7 +562,8 @@ class SweptVolumes:
         return items, counts, covered, flag
 
     def _solve_items(self, p, u, ds, li, items) -> tuple[np.ndarray, ...]:
-        """The exact removal of each (line, passage, segment) item: the margin at both ends, the root between."""
+        """The exact removal of each (line, passage, segment) item: the margin at both ends, the root between;
+        compiled (:mod:`cutting.exact_solve`) when every motion has a compiled pose, else in numpy."""
         g, lo_j, hi_j, f = items.T
         ends = np.concatenate([f, f + 1])
         key_line, key_g, key_s = np.tile(li, 2), np.tile(g, 2), ends
@@ -569,21 +573,33 @@ class SweptVolumes:
         lo2, hi2 = np.tile(lo_j, 2), np.tile(hi_j, 2)
         first = np.zeros(keys.shape[1], np.int64)
         first[back] = np.arange(len(back))
-        margin = np.empty(keys.shape[1])
         ul, ug, us = keys
-        table = np.searchsorted(self._compiled.first_g, ug, side="right") - 1
-        for k, tb in enumerate(self.tables):
-            sel = np.nonzero(table == k)[0]
-            if sel.size:
-                q = p[ul[sel]] + ds[us[sel], None] * u[ul[sel]]
-                pa = ug[sel] - self._compiled.first_g[k]
-                margin[sel] = self._margin_exact(tb, pa, lo2[first[sel]], hi2[first[sel]], q)
+        solver = self._solver
+        if solver is not None:
+            margin = solver.margins(p, u, ds, ul, ug, us, lo2[first], hi2[first])
+        else:
+            margin = np.empty(keys.shape[1])
+            table = np.searchsorted(self._compiled.first_g, ug, side="right") - 1
+            for k, tb in enumerate(self.tables):
+                sel = np.nonzero(table == k)[0]
+                if sel.size:
+                    q = p[ul[sel]] + ds[us[sel], None] * u[ul[sel]]
+                    pa = ug[sel] - self._compiled.first_g[k]
+                    margin[sel] = self._margin_exact(tb, pa, lo2[first[sel]], hi2[first[sel]], q)
         m = margin[back]
         m0, m1 = m[: len(li)], m[len(li) :]
         lines, starts, ends_ = [], [], []
         both = (m0 > 0) & (m1 > 0)
         lines.append(li[both]), starts.append(ds[f[both]]), ends_.append(ds[f[both] + 1])
         change = np.nonzero((m0 > 0) != (m1 > 0))[0]
+        if solver is not None:
+            c = change
+            root = solver.roots(p, u, ds, li[c], g[c], lo_j[c], hi_j[c], f[c], m0[c], m1[c], CROSSING_TOLERANCE)
+            rising = m1[c] > 0
+            lines.append(li[c])
+            starts.append(np.where(rising, root, ds[f[c]]))
+            ends_.append(np.where(rising, ds[f[c] + 1], root))
+            return np.concatenate(lines), np.concatenate(starts), np.concatenate(ends_)
         table = np.searchsorted(self._compiled.first_g, g[change], side="right") - 1
         for k, tb in enumerate(self.tables):
             sel = change[table == k]

@@ -1,0 +1,352 @@
+"""The exact solve of a probe line's unsettled (passage, segment) items, compiled (numba).
+
+:meth:`cutting.exact_sweep.SweptVolumes.settled_intervals` leaves some items the pose table cannot settle; each
+needs the removal margin at both ends of its segment (the rake-plane crossing bracketed over the table, the crossing
+instant solved on the motion itself to 1e-10 mm, the outline's margin there) and, where the sign changes, the
+root in d. In numpy that is a few dozen flops per item spread over hundreds of small-array calls (the vectorised
+pose above all), so Python overhead dominates; here it is one loop per item, in parallel.
+
+The kernels reproduce :meth:`SweptVolumes._margin_exact` and :meth:`SweptVolumes._root` step for step (the same
+bisection, the same Illinois iterations and stopping rules, the same arithmetic order): the surface they give
+is the Python path's within rounding. They need the pose as a compiled function: :func:`compiled_pose` gives it
+for the ideal motion (:class:`cutting.trajectory.PassMotion`) and the sampled one
+(:class:`cutting.sampled_motion.SampledMotion`); any other motion keeps the Python path.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit, prange
+
+from cutting.sampled_motion import SampledMotion, _log
+from cutting.skiving import SkivingSetup
+from cutting.trajectory import PassMotion
+
+#: the kinds of compiled pose
+IDEAL, SAMPLED = 0, 1
+#: floats per interval of a sampled motion: the log of the next sample, the rotation and translation tangents
+#: (each still to be scaled by the interval's length)
+_PER_INTERVAL = 15
+
+
+def compiled_pose(motion) -> tuple[int, np.ndarray] | None:
+    """(kind, float parameters) that the kernels evaluate the pose of ``motion`` from, exactly as its ``pose``
+    does; None for a motion they do not know (or a subclass that changes its pose)."""
+    if isinstance(motion, PassMotion) and type(motion).pose is PassMotion.pose:
+        st = motion.setup
+        if type(st).cutter_pose is not SkivingSetup.cutter_pose:
+            return None
+        a = st.final_centre_distance if motion.centre_distance is None else motion.centre_distance
+        params = [motion.omega0, motion.s_start, motion.v_s, a, st.speed_ratio, st.differential_rotation_per_mm]
+        params += [st.work_phase, math.cos(st.tilt), math.sin(st.tilt), st.cutter_phase]
+        return IDEAL, np.array(params, dtype=float)
+    if isinstance(motion, SampledMotion) and type(motion).pose is SampledMotion.pose:
+        return SAMPLED, _sampled_parameters(motion)
+    return None
+
+
+def _sampled_parameters(motion: SampledMotion) -> np.ndarray:
+    """[n, t (n), rot (n, 9), trans (n, 3), per interval i (n - 1, 15)]: what SampledMotion.pose derives from the
+    samples around interval i (the logs of R_i^T R_neighbours, the finite-difference tangents), so that the kernel
+    only evaluates the Hermite curves and Rodrigues' formula. Same expressions, so the same values."""
+    t, rot, p = motion.t, motion.rot, motion.trans
+    n = len(t)
+    i = np.arange(n - 1)
+    i0, i2, i3 = np.maximum(i - 1, 0), i + 1, np.minimum(i + 2, n - 1)
+    ri_t = np.swapaxes(rot[i], -1, -2)
+    v0, v2, v3 = _log(ri_t @ rot[i0]), _log(ri_t @ rot[i2]), _log(ri_t @ rot[i3])
+    per = np.concatenate(
+        [
+            v2,
+            (v2 - v0) / (t[i2] - t[i0])[:, None],
+            (v3 - 0.0) / (t[i3] - t[i])[:, None],
+            (p[i2] - p[i0]) / (t[i2] - t[i0])[:, None],
+            (p[i3] - p[i]) / (t[i3] - t[i])[:, None],
+        ],
+        axis=1,
+    )
+    return np.concatenate([[float(n)], t, rot.reshape(-1), p.reshape(-1), per.reshape(-1)]).astype(float)
+
+
+class ItemSolver:
+    """The compiled item solve of a set of pass tables: every table's pose parameters side by side (passage g over
+    all tables, in order, as :class:`cutting.exact_sweep._CompiledTables` numbers them)."""
+
+    def __init__(self, motion: tuple, tables: tuple, outline: tuple):
+        self.motion, self.tables, self.outline = motion, tables, outline
+        #: margins evaluated and roots found so far (tests check that this path ran)
+        self.points = 0
+        self.roots_found = 0
+
+    @classmethod
+    def build(cls, tables: Sequence, packed: np.ndarray, outline) -> ItemSolver | None:
+        """From the pass tables (``motion``, ``t`` (m, P), ``angle`` (m,)), their packed pose table and the
+        :class:`cutting.exact_sweep.Outline`; None unless every table's motion has a compiled pose."""
+        poses = [compiled_pose(tb.motion) for tb in tables]
+        if not poses or any(q is None for q in poses):
+            return None
+        kind = np.array([q[0] for q in poses], np.int64)
+        ptr = np.concatenate([[0], np.cumsum([len(q[1]) for q in poses])]).astype(np.int64)
+        params = np.concatenate([q[1] for q in poses])
+        owner = np.concatenate([np.full(len(tb.m), k, np.int64) for k, tb in enumerate(tables)])
+        times = np.ascontiguousarray(np.concatenate([tb.t for tb in tables]), dtype=float)
+        angle = np.concatenate([np.asarray(tb.angle, dtype=float) for tb in tables])
+        chains = [np.ascontiguousarray(c[:, k], dtype=float) for c in (outline.lower, outline.upper) for k in (0, 1)]
+        return cls(
+            (owner, kind, ptr, params),
+            (np.ascontiguousarray(packed), times, np.cos(angle), np.sin(angle)),
+            (*chains, float(outline.x0), float(outline.x1)),
+        )
+
+    def margins(self, p, u, ds, line, g, sample, lo_j, hi_j) -> np.ndarray:
+        """The removal margin of passage g at the points p[line] + ds[sample] u[line] (SweptVolumes._margin_exact)."""
+        out = np.empty(len(line))
+        p, u, ds = (np.ascontiguousarray(a, dtype=float) for a in (p, u, ds))
+        ints = [np.ascontiguousarray(a, dtype=np.int64) for a in (line, g, sample, lo_j, hi_j)]
+        exact_margins(p, u, ds, *ints, self.motion, self.tables, self.outline, out)
+        self.points += len(line)
+        return out
+
+    def roots(self, p, u, ds, line, g, lo_j, hi_j, f, m0, m1, tol: float) -> np.ndarray:
+        """Where passage g's margin changes sign on segment f of the line, to ``tol`` [mm] (SweptVolumes._root)."""
+        out = np.empty(len(line))
+        p, u, ds, m0, m1 = (np.ascontiguousarray(a, dtype=float) for a in (p, u, ds, m0, m1))
+        ints = [np.ascontiguousarray(a, dtype=np.int64) for a in (line, g, lo_j, hi_j, f)]
+        exact_roots(p, u, ds, *ints, m0, m1, tol, self.motion, self.tables, self.outline, out)
+        self.roots_found += len(line)
+        return out
+
+
+# ---- the pose ----------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always", error_model="numpy")
+def _mm(a, b):
+    """3x3 product of row-major 9-tuples (the sums in matmul's order)."""
+    return (
+        a[0] * b[0] + a[1] * b[3] + a[2] * b[6],
+        a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
+        a[0] * b[2] + a[1] * b[5] + a[2] * b[8],
+        a[3] * b[0] + a[4] * b[3] + a[5] * b[6],
+        a[3] * b[1] + a[4] * b[4] + a[5] * b[7],
+        a[3] * b[2] + a[4] * b[5] + a[5] * b[8],
+        a[6] * b[0] + a[7] * b[3] + a[8] * b[6],
+        a[6] * b[1] + a[7] * b[4] + a[8] * b[7],
+        a[6] * b[2] + a[7] * b[5] + a[8] * b[8],
+    )
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _rz(c, s):
+    return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _ideal(w, o, t, full):
+    """SkivingSetup.cutter_pose at phi0 = omega0 t, s = s_start + v_s t: (rotation 9-tuple, origin). Unless
+    ``full``, only the rotation's third column (the rake plane's normal) is right: the turn about the cutter axis
+    leaves it as it is (bit for bit: it adds products with zero), so it is skipped."""
+    phi0 = w[o] * t
+    s = w[o + 1] + w[o + 2] * t
+    phi2 = w[o + 4] * phi0 + w[o + 5] * s + w[o + 6]
+    c, sn = math.cos(-phi2), math.sin(-phi2)
+    tilt = (1.0, 0.0, 0.0, 0.0, w[o + 7], -w[o + 8], 0.0, w[o + 8], w[o + 7])
+    rot = _mm(_rz(c, sn), tilt)
+    if full:
+        phi = phi0 + w[o + 9]
+        rot = _mm(rot, _rz(math.cos(phi), math.sin(phi)))
+    a = w[o + 3]
+    return rot, (c * a, sn * a, s)
+
+
+@njit(cache=True, error_model="numpy")
+def _sampled(w, o, t):
+    """SampledMotion.pose: cubic Hermite with Catmull-Rom tangents, the rotation in the tangent space of the
+    interval's first sample (R_i exp(v)); t clipped to the samples."""
+    n = int(w[o])
+    ts, rs, ps = o + 1, o + 1 + n, o + 1 + 10 * n
+    t = min(max(t, w[ts]), w[ts + n - 1])
+    lo, hi = 0, n  # searchsorted(side="right"): the first sample after t
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if w[ts + mid] <= t:
+            lo = mid + 1
+        else:
+            hi = mid
+    i = min(max(lo - 1, 0), n - 2)
+    h = w[ts + i + 1] - w[ts + i]
+    x = (t - w[ts + i]) / h
+    x2 = x * x
+    x3 = x * x * x
+    h00, h10, h01, h11 = 2 * x3 - 3 * x2 + 1, x3 - 2 * x2 + x, -2 * x3 + 3 * x2, x3 - x2
+    e = o + 1 + 13 * n + _PER_INTERVAL * i
+    pi, pn = ps + 3 * i, ps + 3 * i + 3
+    org = (
+        h00 * w[pi] + h10 * (w[e + 9] * h) + h01 * w[pn] + h11 * (w[e + 12] * h),
+        h00 * w[pi + 1] + h10 * (w[e + 10] * h) + h01 * w[pn + 1] + h11 * (w[e + 13] * h),
+        h00 * w[pi + 2] + h10 * (w[e + 11] * h) + h01 * w[pn + 2] + h11 * (w[e + 14] * h),
+    )
+    v0 = h10 * (w[e + 3] * h) + h01 * w[e] + h11 * (w[e + 6] * h)
+    v1 = h10 * (w[e + 4] * h) + h01 * w[e + 1] + h11 * (w[e + 7] * h)
+    v2 = h10 * (w[e + 5] * h) + h01 * w[e + 2] + h11 * (w[e + 8] * h)
+    # Rodrigues, as sampled_motion._exp
+    angle = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    den = max(angle, 1e-300)
+    k0, k1, k2 = v0 / den, v1 / den, v2 / den
+    kx = (0.0, -k2, k1, k2, 0.0, -k0, -k1, k0, 0.0)
+    kk = _mm(kx, kx)
+    s, c1 = math.sin(angle), 1 - math.cos(angle)
+    ex = (
+        1.0 + s * kx[0] + c1 * kk[0],
+        0.0 + s * kx[1] + c1 * kk[1],
+        0.0 + s * kx[2] + c1 * kk[2],
+        0.0 + s * kx[3] + c1 * kk[3],
+        1.0 + s * kx[4] + c1 * kk[4],
+        0.0 + s * kx[5] + c1 * kk[5],
+        0.0 + s * kx[6] + c1 * kk[6],
+        0.0 + s * kx[7] + c1 * kk[7],
+        1.0 + s * kx[8] + c1 * kk[8],
+    )
+    r = rs + 9 * i
+    ri = (w[r], w[r + 1], w[r + 2], w[r + 3], w[r + 4], w[r + 5], w[r + 6], w[r + 7], w[r + 8])
+    return _mm(ri, ex), org
+
+
+@njit(cache=True, error_model="numpy")
+def _tooth_pose(motion, tables, g, t, full=True):
+    """PassTable.exact_pose: the motion's frame at t turned by passage g's tooth angle (rotation 9-tuple, origin);
+    unless ``full``, only the rotation's third column (turns about the tooth's z axis leave it)."""
+    owner, kind, ptr, params = motion
+    k = owner[g]
+    if kind[k] == IDEAL:
+        rot, org = _ideal(params, ptr[k], t, full)
+    else:
+        rot, org = _sampled(params, ptr[k], t)
+    if full:
+        rot = _mm(rot, _rz(tables[2][g], tables[3][g]))
+    return rot, org
+
+
+# ---- the margin ----------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always", error_model="numpy")
+def _sign(x):
+    return 1.0 if x > 0 else (-1.0 if x < 0 else (0.0 if x == 0 else math.nan))
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _plane(table, g, j, q0, q1, q2):
+    return table[g, j, 0] * q0 + table[g, j, 1] * q1 + table[g, j, 2] * q2 - table[g, j, 3]
+
+
+@njit(cache=True, error_model="numpy")
+def _interp(x, xp, fp):
+    """np.interp(x, xp, fp) for one x: clamped at the ends, the last xp[j] <= x, its value where x hits it."""
+    n = len(xp)
+    if x != x:
+        return x
+    if x < xp[0]:
+        return fp[0]
+    if x > xp[n - 1]:
+        return fp[n - 1]
+    lo, hi = 0, n
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if x >= xp[mid]:
+            lo = mid + 1
+        else:
+            hi = mid
+    j = lo - 1
+    if j == n - 1 or xp[j] == x:
+        return fp[j]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    out = slope * (x - xp[j]) + fp[j]
+    if out != out:
+        out = slope * (x - xp[j + 1]) + fp[j + 1]
+        if out != out and fp[j] == fp[j + 1]:
+            out = fp[j]
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _outline_margin(outline, x, y):
+    """Outline.margin: min(above the lower chain, below the upper, x - x0, x1 - x)."""
+    lx, ly, ux, uy, x0, x1 = outline
+    below = y - _interp(x, lx, ly)
+    above = _interp(x, ux, uy) - y
+    return min(min(below, above), min(x - x0, x1 - x))
+
+
+@njit(cache=True, error_model="numpy")
+def _margin(motion, tables, outline, g, lo, hi, q0, q1, q2):
+    """SweptVolumes._margin_exact at one point: the crossing bracketed over the table samples [lo, hi]
+    (_events), the instant solved by the Illinois method to 1e-10 mm (_solve_time), the outline's margin there
+    (at least -1); -1 where the plane does not cross the point."""
+    table, times = tables[0], tables[1]
+    ga, gb = _plane(table, g, lo, q0, q1, q2), _plane(table, g, hi, q0, q1, q2)
+    if not _sign(ga) * _sign(gb) <= 0:
+        return -1.0
+    a, b = lo, hi
+    while b - a > 1:
+        mid = (a + b) // 2
+        gm = _plane(table, g, mid, q0, q1, q2)
+        if _sign(gm) == _sign(ga):
+            a, ga = mid, gm
+        else:
+            b, gb = mid, gm
+    ta, tb = times[g, a], times[g, a + 1]
+    tk = ta
+    for _ in range(40):
+        denom = gb - ga
+        tk = tb - gb * (tb - ta) / denom if denom != 0 else (ta + tb) / 2
+        tk = min(max(tk, min(ta, tb)), max(ta, tb))
+        rot, org = _tooth_pose(motion, tables, g, tk, False)  # the plane only
+        w0, w1, w2 = q0 - org[0], q1 - org[1], q2 - org[2]
+        gk = rot[2] * w0 + rot[5] * w1 + rot[8] * w2
+        if _sign(gk) == _sign(gb):  # Illinois: halve the stale end's value when the same end moves twice
+            ga = ga / 2
+        else:
+            ga, ta = gb, tb
+        tb, gb = tk, gk
+        if abs(gk) < 1e-10 or abs(tb - ta) <= 1e-15 * max(1.0, abs(tk)):
+            break
+    rot, org = _tooth_pose(motion, tables, g, tk, True)
+    w0, w1, w2 = q0 - org[0], q1 - org[1], q2 - org[2]
+    x = rot[0] * w0 + rot[3] * w1 + rot[6] * w2
+    y = rot[1] * w0 + rot[4] * w1 + rot[7] * w2
+    m = _outline_margin(outline, x, y)
+    return -1.0 if m < -1.0 else m
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def exact_margins(p, u, ds, line, g, sample, lo_j, hi_j, motion, tables, outline, out):
+    """``out[k]``: the margin of passage g[k] (table samples [lo_j, hi_j]) at p[line] + ds[sample] u[line]."""
+    for k in prange(len(line)):
+        i, d = line[k], ds[sample[k]]
+        q0, q1, q2 = p[i, 0] + d * u[i, 0], p[i, 1] + d * u[i, 1], p[i, 2] + d * u[i, 2]
+        out[k] = _margin(motion, tables, outline, g[k], lo_j[k], hi_j[k], q0, q1, q2)
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def exact_roots(p, u, ds, line, g, lo_j, hi_j, f, m0, m1, tol, motion, tables, outline, out):
+    """``out[k]``: the d in [ds[f], ds[f + 1]] where passage g[k]'s margin along the line changes sign, from the
+    margins m0, m1 at the ends: the Illinois method to ``tol`` [mm] as SweptVolumes._root."""
+    for k in prange(len(line)):
+        i = line[k]
+        d_lo, d_hi, m_lo, m_hi = ds[f[k]], ds[f[k] + 1], m0[k], m1[k]
+        d = (d_lo + d_hi) / 2
+        for _ in range(80):
+            denom = m_hi - m_lo
+            dk = d_hi - m_hi * (d_hi - d_lo) / denom if denom != 0 else (d_lo + d_hi) / 2
+            dk = min(max(dk, min(d_lo, d_hi)), max(d_lo, d_hi))
+            q0, q1, q2 = p[i, 0] + dk * u[i, 0], p[i, 1] + dk * u[i, 1], p[i, 2] + dk * u[i, 2]
+            mk = _margin(motion, tables, outline, g[k], lo_j[k], hi_j[k], q0, q1, q2)
+            d = dk
+            if (mk > 0) == (m_hi > 0):  # Illinois: halve the stale end
+                m_lo = m_lo / 2
+            else:
+                m_lo, d_lo = m_hi, d_hi
+            d_hi, m_hi = dk, mk
+            if abs(d_hi - d_lo) <= tol or abs(mk) <= 1e-12:
+                break
+        out[k] = d
