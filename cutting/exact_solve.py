@@ -71,6 +71,19 @@ def _sampled_parameters(motion: SampledMotion) -> np.ndarray:
     return np.concatenate([[float(n)], t, rot.reshape(-1), p.reshape(-1), per.reshape(-1)]).astype(float)
 
 
+def pose_table(motion, t: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """``motion.pose(t)`` evaluated compiled: rotations (n, 3, 3) and origins (n, 3), the same values to rounding
+    (the pass tables take 65 poses per passage: 1.5M on spur_external); None for a motion without a compiled
+    pose."""
+    q = compiled_pose(motion)
+    if q is None:
+        return None
+    t = np.ascontiguousarray(np.atleast_1d(t), dtype=float)
+    rot, org = np.empty((len(t), 9)), np.empty((len(t), 3))
+    _poses(q[0], q[1], t, rot, org)
+    return rot.reshape(-1, 3, 3), org
+
+
 class ItemSolver:
     """The compiled item solve of a set of pass tables: every table's pose parameters side by side (passage g over
     all tables, in order, as :class:`cutting.exact_sweep._CompiledTables` numbers them)."""
@@ -350,3 +363,17 @@ def exact_roots(p, u, ds, line, g, lo_j, hi_j, f, m0, m1, tol, motion, tables, o
             if abs(d_hi - d_lo) <= tol or abs(mk) <= 1e-12:
                 break
         out[k] = d
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def _poses(kind, w, t, rot, org):
+    """The motion's frame at every time t: rows of the rotation (9 per pose) and the origin."""
+    for k in prange(len(t)):
+        if kind == IDEAL:
+            r, o = _ideal(w, 0, t[k], True)
+        else:
+            r, o = _sampled(w, 0, t[k])
+        for c in range(9):
+            rot[k, c] = r[c]
+        for c in range(3):
+            org[k, c] = o[c]

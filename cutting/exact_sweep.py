@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy import ndimage
@@ -26,7 +27,7 @@ from scipy.spatial import cKDTree
 
 from cutting.edge import CuttingEdge
 from cutting.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
-from cutting.exact_solve import ItemSolver
+from cutting.exact_solve import ItemSolver, pose_table
 from cutting.gear import Gear
 from cutting.removal import passage_range
 from cutting.sweep import outline_points, simplify_outline
@@ -80,13 +81,18 @@ class Outline:
                 raise ValueError(f"the edge outline's {name} chain is not monotone in x: not a tooth centred on +x")
         self.lower, self.upper = lower, upper
         self.x0, self.x1 = float(p[i0, 0]), float(p[i1, 0])
-        # signed distance raster for the estimates
+        self._points, self._cell, self._pad = p, cell, pad
+
+    @cached_property
+    def _raster(self) -> tuple[np.ndarray, np.ndarray]:
+        """The signed distance raster of :meth:`distance` and its lower corner (built when first needed: only the
+        numpy estimate reads it)."""
+        p, cell, pad = self._points, self._cell, self._pad
         lo, hi = p.min(axis=0) - pad, p.max(axis=0) + pad
         nx, ny = (np.ceil((hi - lo) / cell).astype(int) + 1).tolist()
         gx, gy = np.meshgrid(lo[0] + cell * np.arange(nx), lo[1] + cell * np.arange(ny), indexing="ij")
         inside = self.margin(gx, gy) > 0
-        self._sdf = (ndimage.distance_transform_edt(inside) - ndimage.distance_transform_edt(~inside)) * cell
-        self._lo, self._cell, self._pad = lo, cell, pad
+        return (ndimage.distance_transform_edt(inside) - ndimage.distance_transform_edt(~inside)) * cell, lo
 
     def exact_raster(self, cell: float = RASTER_CELL, pad: float = RASTER_PAD, band: float = RASTER_BAND):
         """The signed distance [mm] on a raster of ``cell`` over the outline's box grown by ``pad``: exact at every
@@ -112,11 +118,12 @@ class Outline:
 
     def distance(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         """Signed distance to the polygon [mm] (+ inside) to within a raster cell; -pad beyond the raster."""
-        i = np.rint((np.asarray(x) - self._lo[0]) / self._cell).astype(np.int64)
-        j = np.rint((np.asarray(y) - self._lo[1]) / self._cell).astype(np.int64)
-        ok = (i >= 0) & (j >= 0) & (i < self._sdf.shape[0]) & (j < self._sdf.shape[1])
+        sdf, lo = self._raster
+        i = np.rint((np.asarray(x) - lo[0]) / self._cell).astype(np.int64)
+        j = np.rint((np.asarray(y) - lo[1]) / self._cell).astype(np.int64)
+        ok = (i >= 0) & (j >= 0) & (i < sdf.shape[0]) & (j < sdf.shape[1])
         out = np.full(np.shape(i), -self._pad)
-        out[ok] = self._sdf[i[ok], j[ok]]
+        out[ok] = sdf[i[ok], j[ok]]
         return out
 
 
@@ -174,7 +181,7 @@ class PassTable:
         t0, t1, angle = np.atleast_1d(t0).astype(float), np.atleast_1d(t1).astype(float), np.atleast_1d(angle)
         n = len(t0)
         t = t0[:, None] + np.linspace(0.0, 1.0, SAMPLES)[None, :] * (t1 - t0)[:, None]
-        rot, origin = motion.pose(t.ravel())
+        rot, origin = pose_table(motion, t.ravel()) or motion.pose(t.ravel())
         rot = (rot.reshape(n, SAMPLES, 3, 3) @ _rot_z(angle)[:, None]).copy()
         origin = origin.reshape(n, SAMPLES, 3)
         # balls and boxes from the outline simplified to 20 um; the margin covers that and the bulge between samples

@@ -5,6 +5,9 @@ baseline.
 A phase error of the work that drifts with the carriage tilts the helix: a drift de/ds of the synchronisation
 error (arc on the reference circle) per mm of carriage over the face changes the helix slope deviation by
 de/ds L_beta cos(alpha_t) (the arc turned into the base tangent), with opposite signs on the two flanks.
+
+Every gear is measured on the exact swept surface of the motion the machine made (no chord error), so the
+signatures are held to 5 % of theory (or 0.1-0.25 um where a signature is only a few micrometres).
 """
 
 from __future__ import annotations
@@ -16,8 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cutting.ideal_cut import cut_ideal, to_trimesh
-from metrology.datum import check_mesh
+from cutting.edge import make_edge
+from cutting.exact_sweep import SweptVolumes
+from cutting.sampled_motion import sampled_passes
+from cutting.trajectory import ideal_passes
 from metrology.measure import measure_gear
 from virtual_machine.cosim import cosimulate
 from virtual_machine.job import load_job
@@ -29,19 +34,21 @@ SIDES = ("left", "right")
 
 @functools.cache
 def scenario(name: str):
-    """Run one scenario job as skive run does: (job, co-simulation, measurement). Cached: several tests share."""
+    """Run one scenario job as skive run does: (job, co-simulation, measurement of the exact swept surface of the
+    motion the machine made). Cached: several tests share."""
     job = load_job(SCENARIOS / f"{name}.toml")
     sim = cosimulate(job, workers=2)
-    return job, sim, measure_gear(check_mesh(to_trimesh(sim.cut.gear)), job.gear)
+    exact = SweptVolumes(job.gear, sim.edge, sampled_passes(job.skiving, sim.record.passes))
+    return job, sim, measure_gear(exact, job.gear)
 
 
 @functools.cache
 def ideal_cut_of_baseline():
-    """The baseline job cut with the ideal kinematics (exact ratios, no machine), measured the same way."""
+    """The baseline job cut with the ideal kinematics (exact ratios, no machine): the exact swept surface of the
+    ideal passes, measured the same way."""
     job = load_job(SCENARIOS / "helical_mechatronic.toml")
-    p = job.process
-    cut = cut_ideal(job.skiving, job.cutter_options["edge"], p["sweep_error"], p["roughing_sweep_error"], workers=2)
-    return measure_gear(check_mesh(to_trimesh(cut.result.gear)), job.gear)
+    exact = SweptVolumes(job.gear, make_edge(job.skiving, job.cutter_options["edge"]), ideal_passes(job.skiving))
+    return measure_gear(exact, job.gear)
 
 
 @pytest.fixture(scope="module")
@@ -99,14 +106,14 @@ def test_lead_screw_pitch_error_tilts_the_helix(helical) -> None:
     assert 8.0 < expected < 10.0
     change = helix_change(bad, base)
     assert change["left"] * change["right"] < 0, change
-    for s in SIDES:
-        assert abs(change[s]) == pytest.approx(expected, rel=0.15), change
-    # the same from the recorded drift: r2 |dphi2/ds| eps = 2.7 um per mm of carriage
-    assert abs(predicted_helix_change(bad_job, bad, sim, base_sim)) == pytest.approx(expected, rel=0.15)
-    # the pitch does not care (within the runs' scatter); the profile slope moves too, by the same amount on both
-    # flanks (measured -4.7 um each: in skiving root and tip of a flank are generated at different carriage
+    for s in SIDES:  # measured -8.77 / +8.82 um against 9.03 um
+        assert abs(change[s]) == pytest.approx(expected, rel=0.05), change
+    # the same from the recorded drift: r2 |dphi2/ds| eps = 2.7 um per mm of carriage (measured 8.81 um)
+    assert abs(predicted_helix_change(bad_job, bad, sim, base_sim)) == pytest.approx(expected, rel=0.05)
+    # the pitch does not care (measured +0.08 um); the profile slope moves too, by the same amount on both
+    # flanks (measured -4.7 / -4.8 um: in skiving root and tip of a flank are generated at different carriage
     # positions, mirrored between the flanks, and the phase drifts with the carriage), less than the helix
-    assert abs(bad["iso1328"]["measured"]["F_p"] - base["iso1328"]["measured"]["F_p"]) < 3.0
+    assert abs(bad["iso1328"]["measured"]["F_p"] - base["iso1328"]["measured"]["F_p"]) < 0.5
     profile = [bad["profile"][s]["f_Halpha_mean"] - base["profile"][s]["f_Halpha_mean"] for s in SIDES]
     assert profile[0] * profile[1] > 0 and max(map(abs, profile)) < expected
 
@@ -120,10 +127,13 @@ def test_adaptive_correction_holds_the_phase_under_the_cutting_load(helical) -> 
     assert without > 5 * with_, (with_, without)
     change = helix_change(free, base)
     assert change["left"] * change["right"] < 0, change
-    predicted = abs(predicted_helix_change(job, free, sim, base_sim))
-    assert predicted > 10.0  # a real effect, not scatter
-    for s in SIDES:
-        assert abs(change[s]) == pytest.approx(predicted, rel=0.2), (change, predicted)
+    predicted = predicted_helix_change(job, free, sim, base_sim)
+    assert abs(predicted) > 10.0  # a real effect, not scatter
+    # the helix angle part (measured 47.4 um against 46.8 predicted); the part alike on the flanks (+2.5 um, a taper
+    # of the tooth thickness) is the depth axis giving way to a radial force that the phase error changes
+    opposite, alike = helix_parts(free, base)
+    assert opposite == pytest.approx(predicted, rel=0.05), (change, predicted)
+    assert abs(alike) < 3.0, alike
     assert free["iso1328"]["class"]["overall"] is None or free["iso1328"]["class"]["overall"] > 9
 
 
@@ -131,11 +141,13 @@ def test_ideal_stiff_machine_cuts_the_ideal_kinematics_gear() -> None:
     """Every stage and the nut rigid, no backlash or friction, a 10x stiffer depth axis, fine pulses and encoders:
     the machine turns the exact setup ratios (mean sync error ~0), so it cuts the gear of the ideal kinematics.
     What remains is the servo loops' lag under the cutting load, which changes while the cutter crosses the face:
-    the helix tilts by exactly that recorded drift (3 um here), opposite on the flanks. Tolerances: 0.5 um on the
-    helix parts, 1.5 um on the profile form, 2 um on pitch and runout, a class no worse. Pitch and runout carry the
-    20 um sweep and feed marks: every space is cut f/z2 further along the face than the one before, so the marks
-    meet the measuring plane at a phase that turns once per revolution (the ideal cut's own F_r is 4-5 um of them);
-    the machine's small phase differences move that pattern (measured: F_p -1.4, F_r -1.1 um)."""
+    the helix tilts by exactly that recorded drift (3.0 um predicted, 3.16 measured), opposite on the flanks.
+    Tolerances: 0.25 um on the helix parts, 0.5 um on pitch and runout (measured within 0.12 um), 1 um on the
+    profile form (0.48), a class no worse. The ideal cut's own pitch and runout (F_p 1.7, F_r 1.2 um) are its feed
+    marks: every space is cut f/z2 further along the face than the one before, so the marks meet the measuring
+    plane at a phase that turns once per revolution; they fall with the feed squared (test_cut_measurement.py).
+    The drift also tilts both profiles alike (+2.8 / +1.9 um of f_Halpha here, as the lead screw's drift does):
+    F_alpha is not compared."""
     job, sim, doc = scenario("ideal_machine")
     ideal = ideal_cut_of_baseline()
     stats = sim.record.sync_stats("cut")
@@ -143,21 +155,18 @@ def test_ideal_stiff_machine_cuts_the_ideal_kinematics_gear() -> None:
     drift = drift_um_per_mm(sim, job.gear.face_width)
     assert abs(drift) < 1.5, drift  # the servos alone hold the load: a small lag, no ratio error
     opposite, alike = helix_parts(doc, ideal)
-    assert opposite == pytest.approx(-drift * base_tangent_length(job, doc), abs=0.5), (opposite, drift)
-    assert abs(alike) < 0.5, alike
+    assert opposite == pytest.approx(-drift * base_tangent_length(job, doc), abs=0.25), (opposite, drift)
+    assert abs(alike) < 0.3, alike
     for name in ("F_p", "f_p", "F_r"):
-        assert abs(measured_change(doc, ideal, name)) < 2.0, name
-    for name in ("F_alpha", "f_falpha"):
-        assert abs(measured_change(doc, ideal, name)) < 1.5, name
-    # no worse than the ideal cut: at this sweep error the class is set by the marks, whose phase per space the
-    # machine's small motion differences move (a class better than the ideal cut's has been seen)
+        assert abs(measured_change(doc, ideal, name)) < 0.5, name
+    assert abs(measured_change(doc, ideal, "f_falpha")) < 1.0
     assert doc["iso1328"]["class"]["overall"] <= ideal["iso1328"]["class"]["overall"]
 
 
 def test_mechanical_change_gear_error_tilts_the_helix_by_the_sheets_amount() -> None:
     """S1 without a 17-tooth change gear realises ix = 1.7 as 65/41 * 89/83 (eps = -1.73e-5): the work lags
     eps pi d2 = 1.12 um of arc per work turn, -5.6 um per mm of carriage, and the helix tilts by that drift over
-    L_beta, opposite on the flanks (18.9 um here); the load barely adds to it. Tolerance 10 % (1.9 um)."""
+    L_beta, opposite on the flanks (18.9 um here; measured 19.2); the load barely adds to it. Tolerance 5 %."""
     job, sim, doc = scenario("mechanical_change_gears")
     ideal = ideal_cut_of_baseline()
     ix = setup_sheet(job, "mechanical").settings["ix"]
@@ -165,11 +174,11 @@ def test_mechanical_change_gear_error_tilts_the_helix_by_the_sheets_amount() -> 
         -1.73e-5, rel=0.01
     )
     predicted = ix.effect["pitch_um_per_work_rev"] / job.process["axial_feed"]  # um of arc per mm of carriage
-    assert drift_um_per_mm(sim, job.gear.face_width) == pytest.approx(predicted, rel=0.1)
+    assert drift_um_per_mm(sim, job.gear.face_width) == pytest.approx(predicted, rel=0.05)
     opposite, alike = helix_parts(doc, ideal)
-    assert opposite == pytest.approx(-predicted * base_tangent_length(job, doc), rel=0.1), (opposite, predicted)
-    assert abs(alike) < 3.0  # the realistic depth axis under the radial force (2 um, as on the baseline)
-    assert abs(measured_change(doc, ideal, "F_p")) < 1.5  # every tooth is cut in the same carriage band
+    assert opposite == pytest.approx(-predicted * base_tangent_length(job, doc), rel=0.05), (opposite, predicted)
+    assert abs(alike) < 2.5  # the realistic depth axis under the radial force (1.8 um, as on the baseline)
+    assert abs(measured_change(doc, ideal, "F_p")) < 0.5  # every tooth is cut in the same carriage band
     assert doc["iso1328"]["class"]["overall"] is None or doc["iso1328"]["class"]["overall"] > 9
 
 
@@ -195,8 +204,9 @@ def test_hydraulic_shaft_without_differential_tilts_the_helix_by_its_divider_err
 
 def test_hydraulic_shaft_with_differential_keeps_the_helix() -> None:
     """S2 adds the helix through the differential from the feed (ky, -4.9e-6 off) and leaves kx = z0/z2 exact:
-    no ratio drift, so the helix stays within what the load's lag makes on any machine (2.5 um here, against
-    70 um without the differential) and the gear grades like the ideal cut."""
+    no ratio drift, so the helix stays within what the load's lag makes on any machine (1.8 um here, against
+    70 um without the differential; the recorded drift predicts it within 0.1 um) and the gear grades like the
+    ideal cut."""
     job, sim, doc = scenario("hydraulic_differential")
     ideal = ideal_cut_of_baseline()
     sheet = setup_sheet(job, "hydraulic-differential").settings
@@ -204,11 +214,10 @@ def test_hydraulic_shaft_with_differential_keeps_the_helix() -> None:
     drift = drift_um_per_mm(sim, job.gear.face_width)
     assert abs(drift) < 1.5, drift
     opposite, _ = helix_parts(doc, ideal)
-    assert abs(opposite) < 2.5 and opposite == pytest.approx(-drift * base_tangent_length(job, doc), abs=0.5)
-    # the class is the profile form's, set by the 20 um sweep marks: as the ideal machine's, within 1.5 um of the
-    # ideal cut's; it sits on the class 8/9 boundary (seen on either side), so the class may differ by one
-    assert abs(measured_change(doc, ideal, "f_falpha")) < 1.5
-    assert doc["iso1328"]["class"]["overall"] <= ideal["iso1328"]["class"]["overall"] + 1
+    assert abs(opposite) < 2.5 and opposite == pytest.approx(-drift * base_tangent_length(job, doc), abs=0.1)
+    # the profile form is the feed marks': as the ideal machine's, within 1 um of the ideal cut's (measured 0.41)
+    assert abs(measured_change(doc, ideal, "f_falpha")) < 1.0
+    assert doc["iso1328"]["class"]["overall"] <= ideal["iso1328"]["class"]["overall"]
 
 
 def test_work_drive_backlash_stays_out_of_the_gear() -> None:
@@ -232,7 +241,7 @@ def test_soft_tool_spindle_twists_inside_the_correction_loop() -> None:
     micrometres at the cutter, but the encoder sits on the spindle B1, so the correction holds the mean phase
     (the mean sync error stays within 0.3 um). What it cannot hold is the dynamics: the load's changes ring the
     softer stage, the sync error's peak-to-peak grows by more than a third, and the helix moves by the change of
-    the recorded drift (within 0.5 um)."""
+    the recorded drift (0.89 um predicted, 0.93 measured; within 0.1 um)."""
     job, sim, doc = scenario("soft_tool_spindle")
     _, base_sim, base = scenario("helical_mechatronic")
     rec = sim.record
@@ -244,4 +253,4 @@ def test_soft_tool_spindle_twists_inside_the_correction_loop() -> None:
     assert abs(stats["mean_um"] - base_stats["mean_um"]) < 0.3
     assert stats["peak_to_peak_um"] > 1.33 * base_stats["peak_to_peak_um"], (stats, base_stats)
     opposite, _ = helix_parts(doc, base)
-    assert opposite == pytest.approx(predicted_helix_change(job, doc, sim, base_sim), abs=0.5)
+    assert opposite == pytest.approx(predicted_helix_change(job, doc, sim, base_sim), abs=0.1)
