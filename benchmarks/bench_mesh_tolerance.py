@@ -5,12 +5,14 @@
     python benchmarks/bench_mesh_tolerance.py --passes 4            # the finishing pass alone, on the blank
     python benchmarks/bench_mesh_tolerance.py --roughing 10         # roughing held at 10 um, finishing varied
     options: --job JOB (a job of assets/jobs, or a path to a .toml), --workers N (default: one per core),
+             --stl-tolerance UM (gear.stl's simplification),
              --keep DIR (keep each case's gear.stl in DIR instead of a temporary directory)
 
 Every case cuts the job's passes with the ideal motion, every pass at the same tolerance (or the roughing passes
 at ``--roughing``); the finest tolerance is the reference, cut first and kept in memory. Per case it prints wall
-and CPU time and their ratio to the machine time, the gear's triangles, genus and loose pieces, the size of the
-binary STL it writes (and whether the file reads back watertight), the peak memory (resident, this process and its
+and CPU time and their ratio to the machine time, the solid's triangles, genus and loose pieces, the gear.stl it
+writes as `skive cut` does (simplified within ``--stl-tolerance`` UM, default process.stl_tolerance; its triangles,
+size, and whether it reads back watertight), the peak memory (resident, this process and its
 workers, sampled) and, against the reference, per pass: the total chip volume's relative error, the 95th percentile
 and maximum of the chips' relative errors (chips above 1 % of the pass's largest reference chip: the tiny chips at
 the ends of the stroke carry no force) and the volume-weighted mean absolute relative error. Chips are matched by
@@ -35,10 +37,11 @@ import trimesh
 
 from cutting.edge import make_edge
 from cutting.engine import cut_passes
-from cutting.ideal_cut import default_workers, to_trimesh
+from cutting.gear_file import write_gear_stl
+from cutting.ideal_cut import default_workers
 from cutting.removal import Chip, expected_genus
 from cutting.trajectory import ideal_passes
-from virtual_machine.job import load_job
+from virtual_machine.job import PROCESS_KEYS, load_job
 from virtual_machine.progress import Progress
 
 #: the requirement (issue): chip volumes within 2 % of a 1 um reference, a gear.stl a user can open
@@ -105,9 +108,10 @@ class Case:
     cpu: float
     pass_seconds: list[float]
     triangles: int
-    stl_mb: float
+    stl_mb: float  # the written gear.stl: the solid simplified within --stl-tolerance, welded in float32
+    stl_triangles: int
     stl_watertight: bool
-    collapsed: int  # vertices that float32 (the STL's precision) puts onto another one
+    collapsed: int  # vertices that float32 (the STL's precision) folds onto another one (welded in the file)
     genus: int
     loose_pieces: int
     loose_volume: float
@@ -134,7 +138,15 @@ def chip_key(chip: Chip) -> ChipKey:
     return chip.pass_index, chip.cutter_tooth, round(chip.time, 9)
 
 
-def cut_case(job_path: str, pass_numbers: list[int], tols: list[float], tol_um: float, workers: int, keep: str | None):
+def cut_case(
+    job_path: str,
+    pass_numbers: list[int],
+    tols: list[float],
+    tol_um: float,
+    workers: int,
+    keep: str | None,
+    stl_tol: float,
+):
     """Cut the passes at ``tols`` [mm]; their timings, the gear's figures and the chips."""
     job = load_job(job_path)
     setup = job.skiving
@@ -183,17 +195,16 @@ def cut_case(job_path: str, pass_numbers: list[int], tols: list[float], tol_um: 
     )
     with tempfile.TemporaryDirectory(prefix="skive-bench-tol-") as tmp:
         path = os.path.join(keep or tmp, f"gear_{tol_um:g}um.stl")
-        to_trimesh(res.gear).export(path)
+        t1 = time.perf_counter()
+        written = write_gear_stl(res.gear, path, stl_tol)  # as skive cut / run write it
+        t_write = time.perf_counter() - t1
         size = os.path.getsize(path)
-        if size != 84 + 50 * triangles:
-            print(f"  note: the STL has {size} bytes, not 84 + 50 x {triangles}", flush=True)
         back = trimesh.load(path)  # what a user's viewer reads: float32 vertices, merged by position
         watertight = bool(back.is_watertight)
-    verts = res.gear.to_mesh64().vert_properties
-    collapsed = len(verts) - len(np.unique(np.asarray(verts, dtype=np.float32)[:, :3], axis=0))
     print(
-        f"  {tol_um:g} um: gear.stl {size / 1e6:.1f} MB, read back watertight: {watertight} "
-        f"({collapsed} vertices fall onto another one in float32)",
+        f"  {tol_um:g} um: the solid {84 + 50 * triangles:,} bytes as STL; gear.stl simplified within "
+        f"{stl_tol * 1e3:g} um: {len(written.mesh.faces):,} triangles, {size / 1e6:.1f} MB in {t_write:.1f} s, "
+        f"read back watertight: {watertight} ({written.welded_edges} vertices folded by float32, welded)",
         flush=True,
     )
     chips: dict[ChipKey, float] = {}
@@ -210,8 +221,9 @@ def cut_case(job_path: str, pass_numbers: list[int], tols: list[float], tol_um: 
         list(run.pass_seconds),
         triangles,
         size / 1e6,
+        len(written.mesh.faces),
         watertight,
-        collapsed,
+        written.welded_edges,
         genus,
         res.loose_pieces,
         res.loose_volume,
@@ -254,11 +266,11 @@ def meets(stats: PassStats) -> bool:
 def print_row(case: Case, ref: Case, indices: list[int], machine: float) -> None:
     tols = "/".join(sorted({f"{t * 1e3:g}" for t in case.tols}, key=float))
     bounds = ", ".join(f"{case.bound_um[i]:.2f}" for i in indices if i in case.bound_um)
-    opens = "" if case.stl_watertight else f" NOT watertight ({case.collapsed} f32 merges)"
+    opens = "" if case.stl_watertight else " NOT watertight"
     print(
         f"{case.tol_um:6g} | {tols:>5s} um | wall {case.wall:7.1f} s x{case.wall / machine:5.1f} | "
         f"CPU {case.cpu:7.1f} s x{case.cpu / machine:5.1f} | {case.triangles:>10,} tris | "
-        f"STL {case.stl_mb:6.1f} MB{opens} | genus {case.genus} | "
+        f"gear.stl {case.stl_triangles:>10,} tris {case.stl_mb:6.1f} MB{opens} | genus {case.genus} | "
         f"loose {case.loose_pieces} ({case.loose_volume:.4f} mm^3) | RSS {case.rss_sampled:6.0f} MiB "
         f"(peak so far {case.rss_peak:.0f}) | bound [um] {bounds}",
         flush=True,
@@ -309,6 +321,12 @@ def main() -> None:
     ap.add_argument("--roughing", type=float, help="hold the roughing passes at this tolerance [um] in every case")
     ap.add_argument("--workers", type=int, default=default_workers())
     ap.add_argument("--keep", help="keep each case's gear.stl in this directory")
+    ap.add_argument(
+        "--stl-tolerance",
+        type=float,
+        default=PROCESS_KEYS["stl_tolerance"].default * 1e3,
+        help="um: the simplification of gear.stl (default: the job schema's process.stl_tolerance)",
+    )
     a = ap.parse_args()
     job_path = a.job if a.job.endswith(".toml") else f"assets/jobs/{a.job}.toml"
     setup = load_job(job_path).skiving
@@ -330,14 +348,17 @@ def main() -> None:
         return [(a.roughing if a.roughing and i != finishing else um) * 1e-3 for i in indices]
 
     header = (
-        "tol um | passes | wall, ratio to machine time | CPU | gear triangles | binary STL | genus | loose pieces | "
+        "tol um | passes | wall, ratio to machine time | CPU | solid triangles | gear.stl (simplified) | genus | "
+        "loose pieces | "
         "peak RSS of the case | chord bound per pass"
     )
+    if a.keep:
+        os.makedirs(a.keep, exist_ok=True)
     t_start = time.perf_counter()
     cases: list[Case] = []
     for um in order:  # the reference first: every later row is printed against it as soon as it is cut
         print(f"case {um:g} um (load {os.getloadavg()[0]:.2f}) ...", flush=True)
-        case = cut_case(job_path, pass_numbers, tolerances(um), um, a.workers, a.keep)
+        case = cut_case(job_path, pass_numbers, tolerances(um), um, a.workers, a.keep, a.stl_tolerance * 1e-3)
         if case.duplicates:
             print(f"  note: {case.duplicates} chips share (pass, tooth, time) with another (volumes summed)")
         cases.append(case)

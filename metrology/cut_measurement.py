@@ -32,16 +32,18 @@ def measure_cut(
     opt: MeasureOptions,
     sweep_bound: float,
     mesh_name: str = "gear.stl",
+    simplification: float = 0.0,
 ) -> tuple[dict[str, Any], dict[str, Any] | None]:
     """The measurement of the exact swept surface of ``motions`` (the document ``skive cut``/``run`` write), with a
     ``mesh`` block comparing it to the measurement of ``mesh`` (None: not measured); and that mesh measurement.
-    ``sweep_bound`` [mm]: the mesh's reported sweep error in the passes that shape the flanks."""
+    ``sweep_bound`` [mm]: the mesh's reported sweep error in the passes that shape the flanks; ``simplification``
+    [mm]: how far the file's simplification may have moved its surface besides (``cutting/gear_file.py``)."""
     exact = SweptVolumes(gear, edge, motions)
     doc = measure_gear(exact, gear, opt, exact.name)
     if mesh is None:
         return doc, None
     mesh_doc = measure_gear(mesh, gear, opt, mesh_name)
-    doc["mesh"] = compare(doc, mesh_doc, gear, sweep_bound, mesh_name, len(mesh.faces))
+    doc["mesh"] = compare(doc, mesh_doc, gear, sweep_bound, mesh_name, len(mesh.faces), simplification)
     return doc, mesh_doc
 
 
@@ -58,21 +60,29 @@ def trace_difference(exact: dict[str, Any], mesh: dict[str, Any]) -> float:
 
 
 def compare(
-    exact: dict[str, Any], mesh: dict[str, Any], gear: Gear, sweep_bound: float, name: str, triangles: int
+    exact: dict[str, Any],
+    mesh: dict[str, Any],
+    gear: Gear,
+    sweep_bound: float,
+    name: str,
+    triangles: int,
+    simplification: float = 0.0,
 ) -> dict[str, Any]:
     """The mesh's measurement beside the exact one: every ISO 1328 value and the size, the differences (exact -
-    mesh, um), and the largest pointwise difference of the traces against the mesh's bound (transverse)."""
+    mesh, um), and the largest pointwise difference of the traces against the mesh's bound (transverse): its sweep
+    error plus its simplification, both along the surface normal."""
     measured = mesh["iso1328"]["measured"]
     ex = exact["iso1328"]["measured"]
     size = {"M_dK_um": (exact["thickness"]["over_balls"]["M_dK_mm"] - mesh["thickness"]["over_balls"]["M_dK_mm"]) * UM}
     if exact["thickness"]["span"].get("W_k_mm") is not None:
         size["W_k_um"] = (exact["thickness"]["span"]["W_k_mm"] - mesh["thickness"]["span"]["W_k_mm"]) * UM
     worst = trace_difference(exact, mesh) * UM
-    bound = sweep_bound * UM / math.cos(gear.base_helix_angle)  # the bound holds along the normal
+    bound = (sweep_bound + simplification) * UM / math.cos(gear.base_helix_angle)  # the bound holds along the normal
     return {
         "name": name,
         "triangles": triangles,
         "sweep_bound_um": sweep_bound * UM,
+        "simplification_um": simplification * UM,
         "measured": measured,
         "class": (mesh["iso1328"].get("class") or {}).get("overall"),
         "difference_um": {k: ex[k] - measured[k] for k in ex},

@@ -10,14 +10,15 @@ from pathlib import Path
 import click
 
 from cutting.errors import InputError, Problem
-from virtual_machine.formatting import format_measurement, format_sheet
+from virtual_machine.formatting import format_gear_stl, format_measurement, format_sheet
 from virtual_machine.job import STRUCTURES, default_job_path, load_job
 from virtual_machine.progress import Progress, stage
 from virtual_machine.setup_sheet import setup_sheet
 
 MESH_TOLERANCE_HELP = (
-    "Sweep error of the finishing pass's manifold solid [um] (default: the job's process.sweep_error). The gear is "
-    "measured on its exact swept surface either way; a finer mesh costs time and a larger gear.stl."
+    "Sweep error of the finishing pass's manifold solid [um] (default: the job's process.sweep_error), and the most "
+    "gear.stl's simplification may add (process.stl_tolerance, if larger). The gear is measured on its exact swept "
+    "surface either way; a finer mesh costs time and a larger gear.stl."
 )
 
 
@@ -108,7 +109,8 @@ def cut(
     trajectory: Path | None,
     mesh_tolerance: float | None,
 ) -> None:
-    from cutting.ideal_cut import cut_ideal, default_workers, to_trimesh
+    from cutting.gear_file import write_gear_stl
+    from cutting.ideal_cut import cut_ideal, default_workers
     from cutting.trajectory import ideal_passes
     from metrology.charts import finite, write_charts
     from metrology.cut_measurement import measure_cut
@@ -149,13 +151,14 @@ def cut(
         b.close()
     stage("measurement: the exact swept surface and the mesh")
     out.mkdir(parents=True, exist_ok=True)
-    mesh = to_trimesh(report.result.gear)
-    mesh.export(out / "gear.stl")
+    stl = write_gear_stl(report.result.gear, out / "gear.stl", j.process["stl_tolerance"])
+    mesh = stl.mesh
     opts = MeasureOptions(**{k: v for k, v in (j.measurement or {}).items() if v is not None})
     last = len(st.passes) - 1
     bound = report.result.pass_sweep_error.get(last, report.result.sweep_error)
+    motions = motions or ideal_passes(st)
     result, _ = measure_cut(
-        j.gear, report.edge, motions or ideal_passes(st), check_mesh(mesh), opts, bound, str(out / "gear.stl")
+        j.gear, report.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"), stl.simplification
     )
     r = report.result
     result["cut"] = {
@@ -166,7 +169,8 @@ def cut(
         "sweeps": r.sweeps,
         "subtractions": r.subtractions,
         "passages": len(r.chips),
-        "triangles": len(mesh.faces),
+        "triangles": stl.solid_triangles,
+        "gear_stl": stl.summary(),
         "workers": workers or default_workers(),
         "seconds": report.seconds,
         "pass_seconds": report.pass_seconds,
@@ -186,6 +190,7 @@ def cut(
         f"{r.pass_sweep_error.get(len(st.passes) - 1, 0.0) * 1e3:.2f} um in the finishing pass, "
         f"{report.seconds:.1f} s wall for {sum(st.pass_times):.1f} s of machine time"
     )
+    click.echo(format_gear_stl(result["cut"]["gear_stl"]))
 
 
 def _finite(obj: object) -> object:
@@ -284,6 +289,7 @@ def format_run(run: dict, out: Path, rrd: Path | None) -> str:
         f"  {run['cut']['passages']} engagements, {run['cut']['chip_volume_mm3']:.1f} mm^3 of chips, peak force "
         f"{f['peak_force_N']:.0f} N, cutting energy {f['chip_energy_J']:.0f} J ({f['material']})"
     )
+    lines.append("  " + format_gear_stl(run["cut"]["gear_stl"]))
     files = ["gear.stl", "measurement.json", "report.html", "charts/"]
     lines.append(f"  files: {', '.join(str(out / x) for x in files)}" + (f", {rrd}" if rrd else ""))
     return "\n".join(lines)

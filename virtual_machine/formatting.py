@@ -107,8 +107,20 @@ def format_measurement(doc: dict, source: str) -> str:
     if mesh:
         verdict = "within" if mesh["within_bound"] else "OUTSIDE"
         lines.append(
-            f"the mesh ({mesh['triangles']} triangles, sweep error <= {mesh['sweep_bound_um']:.2f} um) measures class "
+            f"the mesh ({mesh['triangles']} triangles, sweep error <= {mesh['sweep_bound_um']:.2f} um, "
+            f"simplified within {mesh.get('simplification_um', 0.0):.2f} um) measures class "
             f"{mesh['class']}; along the traces it differs from the exact surface by at most "
             f"{mesh['trace_difference_um']:.2f} um, {verdict} its bound ({mesh['trace_bound_um']:.2f} um)"
         )
     return "\n".join(lines)
+
+
+def format_gear_stl(stl: dict) -> str:
+    """One line on the gear.stl written: its size, its simplification, whether it closes."""
+    line = (
+        f"gear.stl: {stl['triangles']:,} triangles, {stl['megabytes']:.1f} MB (the cut solid's "
+        f"{stl['solid_triangles']:,} simplified within {stl['simplification_um']:.1f} um)"
+    )
+    if not stl["watertight"]:
+        line += "; NOT watertight after writing in float32: report it with the job (the mesh measurement may fail)"
+    return line

@@ -126,8 +126,12 @@ PROCESS_KEYS: dict[str, Key] = {
     "feed_direction": Key(str, "down", "", "'down' (towards -z) or 'up'", _one_of("down", "up")),
     "material": Key(str, "16MnCr5", "", "workpiece material (cutting forces, later issues)"),
     "clearance": Key(float, 1.0, "mm", "axial approach and overrun added to the engagement zone", _at_least(0.0)),
-    "sweep_error": Key(float, 0.001, "mm", "chord error allowed in the swept volumes of the finishing pass", _positive),
-    "roughing_sweep_error": Key(float, 0.010, "mm", "chord error allowed in the roughing passes", _positive),
+    # defaults from benchmarks/bench_mesh_tolerance.py (README "The manifold solid's tolerance")
+    "sweep_error": Key(float, 0.010, "mm", "chord error allowed in the swept volumes of the finishing pass", _positive),
+    "roughing_sweep_error": Key(float, 0.020, "mm", "chord error allowed in the roughing passes", _positive),
+    "stl_tolerance": Key(
+        float, 0.010, "mm", "how far simplifying gear.stl may move its surface (0: the solid as cut)", _at_least(0.0)
+    ),
 }
 
 THREAD_KEYS: dict[str, Key] = {

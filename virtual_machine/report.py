@@ -172,7 +172,8 @@ def _mesh_rows(mesh: dict | None) -> list[str]:
     verdict = "within" if mesh["within_bound"] else "outside"
     note = (
         f"<p>The manifold mesh <code>{html.escape(str(mesh['name']))}</code> ({mesh['triangles']} triangles, sweep "
-        f"error &le; {mesh['sweep_bound_um']:.2f} um) measured the same way: class {mesh['class']}. Along the "
+        f"error &le; {mesh['sweep_bound_um']:.2f} um, simplified within {mesh.get('simplification_um', 0.0):.2f} um) "
+        f"measured the same way: class {mesh['class']}. Along the "
         f"profile and helix traces it differs from the exact surface by at most {mesh['trace_difference_um']:.2f} um, "
         f"{verdict} its bound of {mesh['trace_bound_um']:.2f} um.</p>"
     )

@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 
 from cutting.errors import InputError, Problem
-from cutting.ideal_cut import default_workers, to_trimesh
+from cutting.gear_file import GearFile, write_gear_stl
+from cutting.ideal_cut import default_workers
 from cutting.sampled_motion import sampled_passes
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut
@@ -71,13 +72,15 @@ def run_job(
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
-    mesh = to_trimesh(sim.cut.gear)
-    mesh.export(out / "gear.stl")
+    stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process["stl_tolerance"])
+    mesh = stl.mesh
     opts = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None})
     # the truth: the exact swept surface of the motion the machine made; the mesh measured beside it
     motions = sampled_passes(job.skiving, sim.record.passes)
     bound = sim.cut.pass_sweep_error.get(len(job.skiving.passes) - 1, sim.cut.sweep_error)
-    measurement, _ = measure_cut(job.gear, sim.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"))
+    measurement, _ = measure_cut(
+        job.gear, sim.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"), stl.simplification
+    )
     durations["measurement"] = time.perf_counter() - t0
     announce("report")
     t0 = time.perf_counter()
@@ -91,7 +94,7 @@ def run_job(
         _record(rrd, job, sim, mesh, measurement, [*charts, run_png])
         durations["recording"] = time.perf_counter() - t0
     doc = finite(measurement)
-    doc["run"] = run_metadata(job, Path(path), sim, durations, len(mesh.faces))
+    doc["run"] = run_metadata(job, Path(path), sim, durations, stl)
     (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
     sheet = format_sheet(setup_sheet(job), str(path))
     title = f"skive run: {Path(path).name}"
@@ -100,15 +103,17 @@ def run_job(
 
 
 def with_mesh_tolerance(job: Job, tolerance: float | None) -> Job:
-    """The job with the finishing pass's sweep error set to ``tolerance`` [mm] (None: as the job says)."""
+    """The job with the finishing pass's sweep error set to ``tolerance`` [mm] and gear.stl's simplification held
+    to it as well (None: as the job says)."""
     if tolerance is None:
         return job
     if not tolerance > 0:
         raise InputError(Problem("--mesh-tolerance", tolerance * 1e3, "must be positive", "give micrometres > 0"))
-    return dataclasses.replace(job, process={**job.process, "sweep_error": tolerance})
+    stl = min(job.process["stl_tolerance"], tolerance)
+    return dataclasses.replace(job, process={**job.process, "sweep_error": tolerance, "stl_tolerance": stl})
 
 
-def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, float], triangles: int) -> dict:
+def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, float], stl: GearFile) -> dict:
     """What the run was and what it saw, beside the metrology schema."""
     rec, cut, mat = sim.record, sim.cut, sim.material
     loads = sim.loads
@@ -144,7 +149,8 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             "sweeps": cut.sweeps,
             "subtractions": cut.subtractions,
             "pass_sweep_error_um": [cut.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(job.skiving.passes))],
-            "triangles": triangles,
+            "triangles": stl.solid_triangles,
+            "gear_stl": stl.summary(),
         },
     }
 
