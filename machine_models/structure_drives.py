@@ -134,3 +134,14 @@ DRIVES: dict[str, Callable[..., Drives]] = {
     "hydraulic-differential": hydraulic_differential,
     "hydraulic-shaft": hydraulic_shaft,
 }
+
+#: the [machine.model] parameter that sets each motor's peak torque, per structure (for the CNC's alarm text)
+MOTOR_TORQUE_KEYS: dict[str, dict[str, str]] = {
+    "mechatronic": {"M1": "tool_motor_torque", "M2": "work_motor_torque", "M3": "feed_motor_torque"},
+    "mechanical": {"M1": "main_motor_torque", "M2": "traverse_motor_torque"},
+    "hydraulic-differential": {
+        "M1": "main_motor_torque",
+        **{m: "hydraulic_torque_limit" for m in ("GShD1", "GShD2", "GShD3")},
+    },
+    "hydraulic-shaft": {"M1": "main_motor_torque", "GShD": "hydraulic_torque_limit"},
+}

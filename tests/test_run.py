@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from small_jobs import small_job
 from virtual_machine.cli import main
 from virtual_machine.job import load_job
 from virtual_machine.program import ProgramSettings, program_duration
-from virtual_machine.simulate import LostSynchronismError, simulate
+from virtual_machine.simulate import LostSynchronismError, MachineRun, simulate
 
 SMALL_JOB = small_job(sweep_error=0.02)
 
@@ -153,3 +154,17 @@ def test_check_verdicts_on_known_documents() -> None:
     assert class_verdict({"iso1328": {"error": "b = 2.0 is outside"}}, gear, 11)["failures"][0]["reason"]
     with pytest.raises(ValueError):
         class_verdict(doc, gear, 12)
+
+
+def test_the_jobs_motor_torques_are_the_amplifiers_current_limits(tmp_path) -> None:
+    # [machine.model] tool_motor_torque etc. set the motors' peak torques: the MuJoCo actuators' range and the
+    # current limits of amplifiers 3, 11 and 18 alike (a limit left in the controller made the override idle)
+    text = Path("assets/jobs/default.toml").read_text()
+    path = tmp_path / "strong.toml"
+    path.write_text(text + "\n[machine.model]\ntool_motor_torque = 55.0\nwork_motor_torque = 70.0\n")
+    run = MachineRun(load_job(path))
+    model = run.phys.model
+    for axis, name, peak in ((run.machine.tool, "M1", 55.0), (run.machine.work, "M2", 70.0)):
+        assert axis.amplifier.limit * axis.motor.torque_constant == pytest.approx(peak)
+        assert axis.motor.current_limit * axis.motor.torque_constant == pytest.approx(peak)
+        assert model.actuator(name).ctrlrange[1] == pytest.approx(peak)

@@ -13,10 +13,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import mujoco
 import numpy as np
 
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.skiving_machine import MM, build_spec
+from machine_models.structure_drives import MOTOR_TORQUE_KEYS
 from virtual_machine.chains import chain_ratios
 from virtual_machine.controllers import InductionMotor
 from virtual_machine.job import Job, flatten_model
@@ -25,7 +27,7 @@ from virtual_machine.program import ProgramSettings, program
 from virtual_machine.setup_sheet import setup_sheet
 from virtual_machine.structures.hydraulic import HydraulicS2, HydraulicS3
 from virtual_machine.structures.mechanical import MechanicalS1
-from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4MasterSlave
+from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4MasterSlave, S4Tuning
 
 SEGMENTS = ("runup", "settle", "infeed", "feed", "retract", "return")
 
@@ -122,6 +124,13 @@ def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics
     )
     ky = st["ky"].realisation.get("integer")
     adaptive = m["adaptive_correction"] if adaptive is None else adaptive
+    # the amplifiers' current limits are the motors' peak torques of the machine (amplifiers 3, 11, 18)
+    base = S4Tuning()
+    tuning = S4Tuning(
+        dataclasses.replace(base.tool, peak_torque=params.tool_motor_torque),
+        dataclasses.replace(base.work, peak_torque=params.work_motor_torque),
+        dataclasses.replace(base.feed, peak_torque=params.feed_motor_torque),
+    )
     angle0 = (phys.q("B1"), phys.q("B2"), phys.q("TV"))
     if m["synchronization"] == "master-slave":
         feed_dir = -1 if setup.feed_direction == "down" else 1
@@ -138,6 +147,7 @@ def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics
             inertias=(j_tool, j_work, j_feed),
             adaptive=adaptive,
             angle0=angle0,
+            tuning=tuning,
         )
     return MechatronicS4(
         f_ref=m["reference_frequency"],
@@ -153,6 +163,7 @@ def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics
         inertias=(j_tool, j_work, j_feed),
         adaptive=adaptive,
         angle0=angle0,
+        tuning=tuning,
     )
 
 
@@ -310,14 +321,28 @@ class MachineRun:
         torques = np.abs(np.array([r[3 + n_ax :] for r in rows])).max(axis=0)
         last = rows[-1]
         seg = SEGMENTS[int(last[1 + n_ax])]
-        peaks = ", ".join(f"{a} {v:.1f} N m" for a, v in zip(self.machine.actuators, torques, strict=True))
+        model = self.phys.model
+        keys = MOTOR_TORQUE_KEYS.get(self.job.machine["structure"], {})
+        peaks, saturated = [], []
+        for name, value in zip(self.machine.actuators, torques, strict=True):
+            limit = float(model.actuator_ctrlrange[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, name), 1])
+            at_limit = value >= 0.98 * limit
+            peaks.append(f"{name} {value:.1f} N m" + (f" (its limit, machine.model.{keys[name]})" if at_limit else ""))
+            if at_limit and name in keys:
+                saturated.append(f"machine.model.{keys[name]}")
         um = delta * self.setup.gear.reference_radius * 1e3
+        more = f"give the motor at its limit more torque ({', '.join(saturated)})" if saturated else ""
+        if seg == "feed" and saturated:  # cutting: the chips' torque is what the motor cannot hold
+            remedy = f"{more}, or take less per pass (process.passes) or a smaller process.axial_feed"
+        else:
+            remedy = f"lower process.tool_speed (work spindle {abs(self.setup.work_speed):.0f} rpm), or " + (
+                more or "give the work drive more torque or less inertia ([machine.model])"
+            )
         return (
             f"the machine lost synchronism at t = {last[0]:.3f} s ({seg}): the work spindle is {um:+.0f} um of arc "
             f"on the reference circle off the position the tool spindle and carriage imply (the CNC's following-error "
-            f"limit is {self.following_limit:.0f} um). Peak motor torques over the last 0.2 s: {peaks}; a motor at its "
-            f"peak torque cannot follow. Lower process.tool_speed (work spindle {abs(self.setup.work_speed):.0f} rpm), "
-            "or give the work drive more torque or less inertia ([machine.model])"
+            f"limit is {self.following_limit:.0f} um). Peak motor torques over the last 0.2 s: {', '.join(peaks)}. "
+            f"{remedy[0].upper()}{remedy[1:]}"
         )
 
     def record(self) -> MotionRecord:
