@@ -168,3 +168,25 @@ def test_the_jobs_motor_torques_are_the_amplifiers_current_limits(tmp_path) -> N
         assert axis.amplifier.limit * axis.motor.torque_constant == pytest.approx(peak)
         assert axis.motor.current_limit * axis.motor.torque_constant == pytest.approx(peak)
         assert model.actuator(name).ctrlrange[1] == pytest.approx(peak)
+
+
+def test_a_gear_that_cannot_be_measured_keeps_the_run_and_says_why(tmp_path, monkeypatch) -> None:
+    # the measuring machine refuses a damaged gear (as a ball that cannot seat in a gouged space): the run keeps
+    # gear.stl and its facts, and the error says what the machine did while it cut
+    import virtual_machine.run as run_module
+
+    def refuse(*args, **kwargs):
+        raise RuntimeError("the ball of 1.750 mm does not seat in space 7 near r = 9.5 mm")
+
+    monkeypatch.setattr(run_module, "measure_cut", refuse)
+    path = tmp_path / "small.toml"
+    path.write_text(SMALL_JOB)
+    out = tmp_path / "out"
+    with pytest.raises(run_module.UnmeasurableGearError) as err:
+        run_module.run_job(path, out)
+    text = str(err.value)
+    assert "cannot be measured: the ball of 1.750 mm does not seat in space 7" in text
+    assert "synchronisation error while cutting was" in text and "process.passes" in text
+    doc = json.loads((out / "measurement.json").read_text())
+    assert doc["error"].startswith("the ball") and doc["run"]["cut"]["passages"] > 0
+    assert (out / "gear.stl").stat().st_size > 0

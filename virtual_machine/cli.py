@@ -238,12 +238,13 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
             stage(name)
 
     from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.run import UnmeasurableGearError
     from virtual_machine.simulate import LostSynchronismError
 
     try:
         tol = None if mesh_tolerance is None else mesh_tolerance * 1e-3
         doc = run_job(path, out, rrd, progress, announce, workers, tol)
-    except (InputError, SimulationDivergedError, LostSynchronismError) as exc:
+    except (InputError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError) as exc:
         bar.close()
         _fail(exc)
     click.echo(format_measurement(doc, str(out / "gear.stl")))
@@ -258,12 +259,15 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
 def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
     from virtual_machine.check import class_verdict, format_verdict
     from virtual_machine.physics import SimulationDivergedError
-    from virtual_machine.run import run_job
+    from virtual_machine.run import UnmeasurableGearError, run_job
     from virtual_machine.simulate import LostSynchronismError
 
     try:
         j = load_job(job)
         doc = run_job(job, out)
+    except UnmeasurableGearError as exc:  # a gear that cannot be measured fails any class
+        click.echo(f"FAIL {job}: {exc}", err=True)
+        sys.exit(1)
     except (InputError, ValueError, SimulationDivergedError, LostSynchronismError) as exc:
         _fail(exc)
     verdict = class_verdict(doc, j.gear, max_class)

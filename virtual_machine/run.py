@@ -78,9 +78,13 @@ def run_job(
     # the truth: the exact swept surface of the motion the machine made; the mesh measured beside it
     motions = sampled_passes(job.skiving, sim.record.passes)
     bound = sim.cut.pass_sweep_error.get(len(job.skiving.passes) - 1, sim.cut.sweep_error)
-    measurement, _ = measure_cut(
-        job.gear, sim.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"), stl.simplification
-    )
+    try:
+        measurement, _ = measure_cut(
+            job.gear, sim.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"), stl.simplification
+        )
+    except (ValueError, RuntimeError) as exc:
+        durations["measurement"] = time.perf_counter() - t0
+        raise _unmeasurable(exc, job, Path(path), out, sim, durations, stl) from exc
     durations["measurement"] = time.perf_counter() - t0
     announce("report")
     t0 = time.perf_counter()
@@ -100,6 +104,33 @@ def run_job(
     title = f"skive run: {Path(path).name}"
     write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
     return doc
+
+
+class UnmeasurableGearError(RuntimeError):
+    """The machine cut a gear the measuring machine cannot measure (a tooth damaged or missing)."""
+
+
+def _unmeasurable(
+    exc: Exception, job: Job, path: Path, out: Path, sim: CoSimulation, durations: dict[str, float], stl: GearFile
+) -> UnmeasurableGearError:
+    """Keep what the run made (gear.stl, and measurement.json with the run's facts and the error) and say why the
+    gear could not be measured, with the machine's synchronisation while it cut: what an engineer looks at first."""
+    run = run_metadata(job, path, sim, durations, stl)
+    (out / "measurement.json").write_text(json.dumps(finite({"error": str(exc), "run": run}), indent=2))
+    sync = run["synchronisation"]["sync_error_in_cut"] or {}
+    machine = (
+        f"the synchronisation error while cutting was {sync['rms_um']:.1f} um RMS, {sync['peak_to_peak_um']:.0f} um "
+        "peak to peak"
+        if sync
+        else "the machine recorded no cutting"
+    )
+    peak = run["forces"]["peak_force_N"]
+    return UnmeasurableGearError(
+        f"the gear the machine cut cannot be measured: {exc}. {machine[0].upper()}{machine[1:]}, peak cutting force "
+        f"{peak:.0f} N: a tooth is likely damaged. Look at {out / 'gear.stl'} and the run's facts in "
+        f"{out / 'measurement.json'}; take less per pass (process.passes), a smaller process.axial_feed, or a stiffer "
+        "and stronger machine ([machine.model])"
+    )
 
 
 def with_mesh_tolerance(job: Job, tolerance: float | None) -> Job:
