@@ -10,7 +10,7 @@ and joints (seed 001 notation):
 - ``spindle_motor`` hinge ``M1``, torque actuator ``M1`` (every form);
 - ``screw_motor`` hinge ``M2``, torque actuator ``M2`` (electronic forms only).
 
-Three forms (:func:`thread_form`):
+Three forms (``virtual_machine.thread_layout.thread_form``):
 
 - ``mechanical`` (fig. 1): M1 -> 8 -> R2 -> iv -> 5 -> spindle (stage ``spindle_drive``, ratio c3 iv), and the
   internal link 5 -> ix -> R1 -> 6 -> TV (stage ``gear_chain``, ratio hand * ix * i01 screw rad per spindle
@@ -39,7 +39,6 @@ from machine_models.parts import (
     BLUE,
     DARK,
     GREY,
-    MM,
     ORANGE,
     STEEL,
     STEELC,
@@ -143,75 +142,13 @@ class ThreadLayout:
     diameter: float  # thread major diameter [m]
 
 
-def thread_form(job) -> str:
-    """``mechanical``, ``master-slave`` or ``equal-coordinates`` from the job's [machine] structure/synchronization."""
-    m = job.machine
-    if m["structure"] == "mechanical":
-        return "mechanical"
-    if m["structure"] == "mechatronic":
-        return m["synchronization"]
-    raise ValueError(
-        f"machine.structure = {m['structure']!r}: the thread group of seed 001 exists as 'mechanical' or "
-        "'mechatronic' (with machine.synchronization 'master-slave' or 'equal-coordinates')"
-    )
-
-
-def thread_layout(job, params: ThreadLatheParams, sheet=None) -> ThreadLayout:
-    """The layout of ``job`` (a thread job) from its setting sheet (computed if not given)."""
-    from virtual_machine.setup_sheet import thread_sheet
-
-    if job.kind != "thread":
-        raise ValueError(f"{job.source} is a gear job; the thread lathe needs a [thread] job")
-    form = thread_form(job)
-    sheet = sheet or thread_sheet(job, "mechanical" if form == "mechanical" else "mechatronic")
-    t, m = job.thread, job.machine
-    st = sheet.settings
-    hand = -1 if t["hand"] == "right" else 1
-    n_sp = sheet.geometry["spindle_speed_rpm"] * 2 * math.pi / 60
-    chain = feed = None
-    if form == "mechanical":
-        spindle_ratio = m["c3"] * st["iv"].realised
-        chain = hand * st["ix"].realised * m["i01"]
-        motor = m["motor_speed"] * 2 * math.pi / 60
-        speed = motor * spindle_ratio
-    else:
-        spindle_ratio = params.spindle_drive.ratio
-        feed = m["i0"] if form == "master-slave" else m["i01"]
-        if form == "master-slave":
-            speed = n_sp  # the master is a speed drive: no setting rounds its speed
-        else:
-            speed = (
-                2 * math.pi * m["reference_frequency"] / (st["kv"].realisation["integer"] * m["command_pulses_per_rev"])
-            )
-        motor = speed / spindle_ratio
-    length = t["length"] * MM
-    lead = t["lead"] * MM
-    approach = lead * speed / (2 * math.pi) * params.runup_time / 2 + params.clearance
-    start = length + 2 * approach if hand < 0 else 0.0
-    return ThreadLayout(
-        form,
-        hand,
-        lead,
-        m["lead_screw_pitch"] * MM / (2 * math.pi),
-        spindle_ratio,
-        chain,
-        feed,
-        speed,
-        motor,
-        length,
-        approach,
-        start,
-        t["diameter"] * MM,
-    )
-
-
-def build_thread_lathe_spec(job, params: ThreadLatheParams | None = None) -> mujoco.MjSpec:
-    """The MJCF model of the thread lathe for ``job`` in the form of its [machine] structure/synchronization."""
+def build_thread_lathe_spec(lay: ThreadLayout, params: ThreadLatheParams | None = None) -> mujoco.MjSpec:
+    """The MJCF model of the thread lathe laid out by ``lay`` (``virtual_machine.thread_layout.thread_layout``: the
+    job's form and its setting sheet's ratios)."""
     params = params or ThreadLatheParams()
     problems = params.problems()
     if problems:
         raise ValueError("invalid lathe parameters: " + "; ".join(problems))
-    lay = thread_layout(job, params)
     spec = mujoco.MjSpec()
     spec.modelname = f"thread_lathe_{lay.form}"
     spec.compiler.degree = False
@@ -292,5 +229,5 @@ def _home_qpos(spec: mujoco.MjSpec, lay: ThreadLayout) -> list[float]:
     return q.tolist()
 
 
-def build_thread_lathe(job, params: ThreadLatheParams | None = None) -> mujoco.MjModel:
-    return build_thread_lathe_spec(job, params).compile()
+def build_thread_lathe(lay: ThreadLayout, params: ThreadLatheParams | None = None) -> mujoco.MjModel:
+    return build_thread_lathe_spec(lay, params).compile()

@@ -11,10 +11,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec, thread_layout
+from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
 from virtual_machine.job import Job, load_job
 from virtual_machine.setup_sheet import thread_sheet
 from virtual_machine.simulate_thread import simulate_thread
+from virtual_machine.thread_layout import thread_layout
 
 FORMS = {
     "mechanical": ("mechanical", "master-slave"),
@@ -43,7 +44,7 @@ def test_every_form_compiles_steps_and_loads_from_xml(form: str, stiff: bool) ->
     """0.2 s with constant motor torques (M1 20 N m, M2 0.5 N m): no MuJoCo warning, finite state; the home
     keyframe has every stage relaxed (tendon lengths < 1e-12); the XML text loads with the same structure."""
     params = ThreadLatheParams().stiff() if stiff else ThreadLatheParams()
-    spec = build_thread_lathe_spec(_job(form), params)
+    spec = build_thread_lathe_spec(thread_layout(_job(form), params), params)
     m = spec.compile()
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, m.key("home").id)
@@ -138,7 +139,7 @@ def test_mechanical_change_gear_error_drifts_the_lead() -> None:
 def test_invalid_parameters_and_forms_are_named() -> None:
     bad = dataclasses.replace(ThreadLatheParams(), carriage_mass=0.0, nut_stiffness=None)
     with pytest.raises(ValueError, match=r"carriage_mass.*nut_backlash"):
-        build_thread_lathe_spec(_job("mechanical"), bad)
+        build_thread_lathe_spec(thread_layout(_job("mechanical"), bad), bad)
     job = _job("mechanical", structure="hydraulic-shaft")
     with pytest.raises(ValueError, match="thread group of seed 001"):
-        build_thread_lathe_spec(job)
+        thread_layout(job, ThreadLatheParams())

@@ -411,6 +411,7 @@ def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: 
     from virtual_machine.physics import SimulationDivergedError
     from virtual_machine.simulate import LostSynchronismError
     from virtual_machine.simulate_thread import simulate_thread
+    from virtual_machine.thread_layout import thread_layout
 
     t0 = time.perf_counter()
     try:
@@ -419,7 +420,8 @@ def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: 
         _fail(exc)
     wall = time.perf_counter() - t0
     out.mkdir(parents=True, exist_ok=True)
-    motion_io.write_model(build_thread_lathe_spec(j, ThreadLatheParams()).to_xml(), out)
+    params = ThreadLatheParams()
+    motion_io.write_model(build_thread_lathe_spec(thread_layout(j, params), params).to_xml(), out)
     np.savez_compressed(
         out / "thread_motion.npz",
         t=rec.t,

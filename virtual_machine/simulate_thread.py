@@ -23,7 +23,7 @@ import numpy as np
 
 from machine_models.parameters import override
 from machine_models.skiving_machine import MM
-from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec, thread_layout
+from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
 from virtual_machine.job import Job, flatten_model
 from virtual_machine.physics import SimulationDivergedError
 from virtual_machine.setup_sheet import thread_sheet
@@ -35,6 +35,7 @@ from virtual_machine.structures.thread_group import (
     ThreadMechanical,
     ThreadTuning,
 )
+from virtual_machine.thread_layout import thread_layout
 
 
 @dataclass
@@ -136,7 +137,7 @@ def simulate_thread(
     Raises :class:`SimulationDivergedError` when MuJoCo reports bad accelerations."""
     params = params or override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
     lay = thread_layout(job, params)
-    model = build_thread_lathe_spec(job, params).compile()
+    model = build_thread_lathe_spec(lay, params).compile()
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
     mujoco.mj_forward(model, data)
