@@ -204,7 +204,7 @@ def cut_case(
     print(
         f"  {tol_um:g} um: the solid {84 + 50 * triangles:,} bytes as STL; gear.stl simplified within "
         f"{stl_tol * 1e3:g} um: {len(written.mesh.faces):,} triangles, {size / 1e6:.1f} MB in {t_write:.1f} s, "
-        f"read back watertight: {watertight} ({written.welded_edges} vertices folded by float32, welded)",
+        f"read back watertight: {watertight} ({written.welded_vertices} vertices folded by float32, welded)",
         flush=True,
     )
     chips: dict[ChipKey, float] = {}
@@ -223,7 +223,7 @@ def cut_case(
         size / 1e6,
         len(written.mesh.faces),
         watertight,
-        written.welded_edges,
+        written.welded_vertices,
         genus,
         res.loose_pieces,
         res.loose_volume,

@@ -17,11 +17,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from cutting.ideal_cut import cut_ideal, default_workers, to_trimesh
-from metrology.datum import check_mesh
-from metrology.measure import measure_gear
+from cutting.gear_file import write_gear_stl
+from cutting.ideal_cut import cut_ideal, default_workers
+from cutting.trajectory import ideal_passes
 from virtual_machine.job import default_job_path, load_job
-from virtual_machine.run import run_job
+from virtual_machine.run import measure_written_cut, run_job
 
 
 def main() -> None:
@@ -63,7 +63,9 @@ def main() -> None:
         job.process["roughing_sweep_error"],
         workers=a.workers,
     )
-    measure_gear(check_mesh(to_trimesh(report.result.gear)), job.gear)
+    with tempfile.TemporaryDirectory() as tmp:  # as `skive cut` does: gear.stl, the exact surface, the mesh beside
+        stl = write_gear_stl(report.result.gear, Path(tmp) / "gear.stl", job.process["stl_tolerance"])
+        measure_written_cut(job, report.edge, ideal_passes(job.skiving), report.result, stl, Path(tmp) / "gear.stl")
     alone = time.perf_counter() - t0
     print(
         f"cut alone (ideal motion, {a.workers} workers, with its measurement): {alone:.1f} s; "

@@ -26,7 +26,7 @@ class GearFile:
     mesh: trimesh.Trimesh  # the file's triangles (float32 vertices, welded)
     simplification: float  # the tolerance the simplification was allowed [mm] (0: none)
     solid_triangles: int  # triangles of the cut solid before simplification
-    welded_edges: int  # vertices float32 folds onto another (their edges collapsed in the file)
+    welded_vertices: int  # vertices float32 folds onto another (their edges collapsed in the file)
     watertight: bool  # the file read as a closed, consistently oriented surface
 
     @property
@@ -40,7 +40,7 @@ class GearFile:
             "megabytes": round(self.bytes / 1e6, 3),
             "simplification_um": self.simplification * 1e3,
             "solid_triangles": self.solid_triangles,
-            "welded_vertices": self.welded_edges,
+            "welded_vertices": self.welded_vertices,
             "watertight": self.watertight,
         }
 

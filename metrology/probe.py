@@ -17,7 +17,7 @@ from scipy.optimize import brentq, minimize
 from cutting.flank import SIDES, flank_points, side_sign
 from cutting.gear import Gear
 from metrology.datum import Datum
-from metrology.workpiece import Workpiece, flank_surface
+from metrology.workpiece import UnmeasurableError, Workpiece, flank_surface
 
 #: half size of the scanned patch around the nominal contact [mm] and points across it; refinement grid
 PATCH_HALF = 0.12
@@ -143,7 +143,7 @@ def _seat(
 ) -> np.ndarray:
     """Ball seat between the scanned flank points on either side of the space centre line phi0."""
     if len(s_ccw) == 0 or len(s_cw) == 0:
-        raise RuntimeError(f"the ball of {diameter:.3f} mm finds no flank on one side of space {j}")
+        raise UnmeasurableError(f"the ball of {diameter:.3f} mm finds no flank on one side of space {j}")
 
     def point(rho: float, phi: float) -> np.ndarray:
         return np.array([rho * math.cos(phi0 + phi), rho * math.sin(phi0 + phi), z_mid])
@@ -166,6 +166,6 @@ def _seat(
         rho = brentq(lambda rr: centred(rr)[1] - radius, lo, hi, xtol=1e-10)
     except ValueError as exc:
         msg = f"the ball of {diameter:.3f} mm does not seat in space {j} near r = {centre_radius:.3f} mm"
-        raise RuntimeError(msg) from exc
+        raise UnmeasurableError(msg) from exc
     phi, _ = centred(rho)
     return point(rho, phi)

@@ -43,7 +43,7 @@ def test_a_sub_float32_edge_is_collapsed_so_the_file_reads_back_watertight(tmp_p
     written = write_gear_stl(solid, tmp_path / "gear.stl", 0.0)
     back = trimesh.load(tmp_path / "gear.stl")
     assert written.watertight and back.is_watertight
-    assert written.welded_edges == 1 and len(back.faces) == 12
+    assert written.welded_vertices == 1 and len(back.faces) == 12
     assert back.volume == pytest.approx(8.0, abs=1e-9)
     assert os.path.getsize(tmp_path / "gear.stl") == written.bytes == 84 + 50 * 12
 

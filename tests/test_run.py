@@ -174,9 +174,10 @@ def test_a_gear_that_cannot_be_measured_keeps_the_run_and_says_why(tmp_path, mon
     # the measuring machine refuses a damaged gear (as a ball that cannot seat in a gouged space): the run keeps
     # gear.stl and its facts, and the error says what the machine did while it cut
     import virtual_machine.run as run_module
+    from metrology.workpiece import UnmeasurableError
 
     def refuse(*args, **kwargs):
-        raise RuntimeError("the ball of 1.750 mm does not seat in space 7 near r = 9.5 mm")
+        raise UnmeasurableError("the ball of 1.750 mm does not seat in space 7 near r = 9.5 mm")
 
     monkeypatch.setattr(run_module, "measure_cut", refuse)
     path = tmp_path / "small.toml"

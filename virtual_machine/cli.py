@@ -113,10 +113,7 @@ def cut(
     from cutting.ideal_cut import cut_ideal, default_workers
     from cutting.trajectory import ideal_passes
     from metrology.charts import finite, write_charts
-    from metrology.cut_measurement import measure_cut
-    from metrology.datum import check_mesh
-    from metrology.measure import MeasureOptions
-    from virtual_machine.run import with_mesh_tolerance
+    from virtual_machine.run import measure_written_cut, with_mesh_tolerance
 
     path = job or default_job_path()
     try:
@@ -152,14 +149,7 @@ def cut(
     stage("measurement: the exact swept surface and the mesh")
     out.mkdir(parents=True, exist_ok=True)
     stl = write_gear_stl(report.result.gear, out / "gear.stl", j.process["stl_tolerance"])
-    mesh = stl.mesh
-    opts = MeasureOptions(**{k: v for k, v in (j.measurement or {}).items() if v is not None})
-    last = len(st.passes) - 1
-    bound = report.result.pass_sweep_error.get(last, report.result.sweep_error)
-    motions = motions or ideal_passes(st)
-    result, _ = measure_cut(
-        j.gear, report.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"), stl.simplification
-    )
+    result = measure_written_cut(j, report.edge, motions or ideal_passes(st), report.result, stl, out / "gear.stl")
     r = report.result
     result["cut"] = {
         "edge": kind,

@@ -12,21 +12,25 @@ import hashlib
 import json
 import platform
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from cutting.edge import CuttingEdge
 from cutting.errors import InputError, Problem
 from cutting.gear_file import GearFile, write_gear_stl
 from cutting.ideal_cut import default_workers
+from cutting.removal import CutResult
 from cutting.sampled_motion import sampled_passes
+from cutting.trajectory import PassMotion
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions
+from metrology.workpiece import UnmeasurableError
 from virtual_machine.cosim import CoSimulation, cosimulate, max_lag
 from virtual_machine.formatting import format_sheet
 from virtual_machine.job import Job, load_job
@@ -74,15 +78,11 @@ def run_job(
     t0 = time.perf_counter()
     stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process["stl_tolerance"])
     mesh = stl.mesh
-    opts = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None})
     # the truth: the exact swept surface of the motion the machine made; the mesh measured beside it
     motions = sampled_passes(job.skiving, sim.record.passes)
-    bound = sim.cut.pass_sweep_error.get(len(job.skiving.passes) - 1, sim.cut.sweep_error)
-    try:
-        measurement, _ = measure_cut(
-            job.gear, sim.edge, motions, check_mesh(mesh), opts, bound, str(out / "gear.stl"), stl.simplification
-        )
-    except (ValueError, RuntimeError) as exc:
+    try:  # a workpiece the measuring machine cannot take (its datum or a ball seat fails) is the cut's fault
+        measurement = measure_written_cut(job, sim.edge, motions, sim.cut, stl, out / "gear.stl")
+    except (UnmeasurableError, InputError) as exc:
         durations["measurement"] = time.perf_counter() - t0
         raise _unmeasurable(exc, job, Path(path), out, sim, durations, stl) from exc
     durations["measurement"] = time.perf_counter() - t0
@@ -104,6 +104,18 @@ def run_job(
     title = f"skive run: {Path(path).name}"
     write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
     return doc
+
+
+def measure_written_cut(
+    job: Job, edge: CuttingEdge, motions: Sequence[PassMotion], cut: CutResult, stl: GearFile, stl_path: Path
+) -> dict[str, Any]:
+    """What `skive cut` and `skive run` measure: the exact swept surface of ``motions``, and beside it the written
+    gear.stl held to the finishing pass's sweep error plus the file's simplification."""
+    opts = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None})
+    bound = cut.pass_sweep_error.get(len(job.skiving.passes) - 1, cut.sweep_error)
+    mesh = check_mesh(stl.mesh)
+    measurement, _ = measure_cut(job.gear, edge, motions, mesh, opts, bound, str(stl_path), stl.simplification)
+    return measurement
 
 
 class UnmeasurableGearError(RuntimeError):
