@@ -241,6 +241,73 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
     click.echo(format_run(doc["run"], out, rrd))
 
 
+@main.command(
+    help="Run the cases of STUDY (a study file) on Dask and write results.csv, the error budget and report.html."
+)
+@click.argument("study_file", metavar="STUDY", type=click.Path(path_type=Path))
+@click.option("--out", type=click.Path(path_type=Path), required=True, help="Study directory (resumed if it exists).")
+@click.option("--workers", type=click.IntRange(1, 256), help="Local Dask workers (default: one per core).")
+@click.option(
+    "--scheduler", metavar="ADDRESS", help="An existing Dask scheduler, e.g. tcp://host:8786 (no local cluster)."
+)
+@click.option(
+    "--target-class",
+    "target",
+    type=click.IntRange(1, 11),
+    help="Say what limits ISO 1328-1 class N and what to tighten.",
+)
+def study(study_file: Path, out: Path, workers: int | None, scheduler: str | None, target: int | None) -> None:
+    from virtual_machine.study import pipeline
+    from virtual_machine.study.design import cases
+    from virtual_machine.study.runner import finished
+    from virtual_machine.study.spec import load_study
+
+    try:  # every check before any case runs
+        todo = sum(finished(out, c) is None for c in cases(load_study(study_file)))
+    except (InputError, ValueError) as exc:
+        _fail(exc)
+    bar = Progress("study", max(todo, 1), "cases", step=1 / todo if 0 < todo <= 100 else 0.01, value_format="{:.0f}")
+
+    def progress(done: int, failed: int, total: int, left: float | None) -> None:
+        info: dict[str, object] = {"failed": failed}
+        if left is not None:
+            info["left"] = f"~{left / 60:.1f} min"
+        bar.update_to(done, **info)
+
+    try:
+        outcome = pipeline.run(study_file, out, workers, scheduler, target, progress)
+    except (InputError, ValueError, OSError) as exc:
+        bar.close()
+        _fail(exc)
+    bar.close()
+    click.echo(format_study(outcome, out))
+
+
+def format_study(outcome, out: Path) -> str:
+    """The end-of-study lines: cases, the limiting part, the files."""
+    run, budget = outcome.run, outcome.budget
+    failed = sum(r["status"] != "ok" for r in run.results.values())
+    lines = [
+        "",
+        f"STUDY  {outcome.study.path}  ({outcome.study.method}, {outcome.total_cases} cases: "
+        f"{len(run.results) - failed} ok, {failed} failed; {len(run.ran)} run now on {run.workers} workers in "
+        f"{run.wall_s:.0f} s, {len(run.skipped)} already done)",
+    ]
+    worst = budget.limiting()
+    if budget.iso_error:
+        lines.append(f"  no ISO 1328-1 classes: {budget.iso_error}")
+    elif worst is not None:
+        p, part = worst
+        cls = f"class {p.stacked_class}" if p.stacked_class else "worse than class 11"
+        by = f"; largest contribution: {part.label} {part.contribution:.2f} um" if part else ""
+        lines.append(f"  limiting: {p.name} {p.stacked:.2f} um ({cls}){by}")
+    for p in budget.parameters:
+        if p.answer is not None and not p.answer.meets:
+            lines.append(f"  class {p.answer.target} {p.name} (<= {p.answer.tolerance:g} um): {p.answer.note}")
+    lines.append(f"  files: {out / 'results.csv'}, {out / 'budget.json'}, {outcome.report}, {out / 'cases'}/")
+    return "\n".join(lines)
+
+
 @main.command(help="Run JOB and fail (exit 1) when its gear is worse than ISO 1328-1 class N, naming the parameters.")
 @click.argument("job", type=click.Path(path_type=Path))
 @click.option("--max-class", "max_class", type=click.IntRange(1, 11), required=True, help="Worst class accepted.")

@@ -1,0 +1,319 @@
+"""skive study: study files checked before anything runs, the designs, the error budget on cases with a known
+answer, and studies run on Dask (a LocalCluster started here) against the scenarios' theory."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from cutting.errors import InputError
+from metrology import tolerances as iso
+from virtual_machine.cli import main
+from virtual_machine.job import load_job
+from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.study import pipeline
+from virtual_machine.study.budget import column_sensitivity, error_budget
+from virtual_machine.study.design import cases, design
+from virtual_machine.study.spec import load_study
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ROOT / "assets" / "jobs" / "scenarios"
+DEFAULT = ROOT / "assets" / "jobs" / "default.toml"
+
+
+def study_file(tmp: Path, text: str, base: Path = DEFAULT, name: str = "study.toml") -> Path:
+    path = tmp / name
+    path.write_text(f'base = "{base}"\n' + text)
+    return path
+
+
+# ---- study files: every problem before any case runs ------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("text", "key", "words"),
+    [
+        (
+            '[[vary]]\nkey = "machine.model.work_drive.backlsh"\nvalues = [1e-4]\n',
+            "machine.model.work_drive.backlsh",
+            "unknown drive stage field",
+        ),
+        ('[[vary]]\nkey = "machine.encoder_line"\nvalues = [1000]\n', "machine.encoder_line", "machine.encoder_lines"),
+        (
+            '[[vary]]\nkey = "machine.model.tool_drive.stiffness"\nrange = [4e4, 1e4]\nsteps = 3\n',
+            "machine.model.tool_drive.stiffness.range",
+            "empty range",
+        ),
+        (
+            '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = []\n',
+            "machine.model.lead_screw_pitch_error.values",
+            "empty",
+        ),
+        ('[[vary]]\nkey = "machine.encoder_lines"\nvalues = [1000, 0]\n', "machine.encoder_lines", "case c002"),
+        ('[[vary]]\nkey = "machine.model.work_drive.backlash"\nvalues = [-1e-4]\n', "machine.model", "backlash"),
+        ('method = "latin"\n[[vary]]\nkey = "machine.encoder_lines"\nvalues = [1000]\n', "method", "unknown method"),
+        (
+            '[[vary]]\nkey = "machine.encoder_lines"\ndistribution = "normal"\nstd = 10\n',
+            "machine.encoder_lines.distribution",
+            "only a Monte-Carlo study draws",
+        ),
+        (
+            'method = "monte-carlo"\nsamples = 4\n[[vary]]\nkey = "machine.encoder_lines"\ndistribution = "normal"\n',
+            "machine.encoder_lines.std",
+            "std > 0",
+        ),
+        ("", "vary", "varies nothing"),
+    ],
+)
+def test_bad_study_files_fail_before_any_case_runs(tmp_path, text, key, words) -> None:
+    path = study_file(tmp_path, text)
+    with pytest.raises(InputError) as err:
+        cases(load_study(path))
+    assert key in err.value.keys, err.value
+    assert words in str(err.value)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["study", str(path), "--out", str(out)])
+    assert res.exit_code == 2 and key in res.output, res.output
+    assert not out.exists()  # nothing ran, nothing was written
+
+
+def test_designs(tmp_path) -> None:
+    """One-at-a-time: the base, then each part's values (the base value not twice); grid: every combination;
+    Monte Carlo: the seed fixes the draws, integers stay integers."""
+    oat = load_study(
+        study_file(
+            tmp_path,
+            (
+                '[[vary]]\nkey = "machine.encoder_lines"\nvalues = [1000, 5000, 2500]\n'
+                '[[vary]]\nkey = "machine.adaptive_correction"\nvalues = [false]\n'
+            ),
+        )
+    )
+    rows = design(oat)
+    assert rows[0] == {"machine.encoder_lines": 5000, "machine.adaptive_correction": True}
+    assert [r["machine.encoder_lines"] for r in rows] == [5000, 1000, 2500, 5000]
+    assert [c.id for c in cases(oat)] == ["c000", "c001", "c002", "c003"]
+    grid = load_study(
+        study_file(
+            tmp_path,
+            (
+                'method = "grid"\n[[vary]]\nkey = "machine.encoder_lines"\nrange = [1000, 3000]\nsteps = 3\n'
+                '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [0.0, 1e-4]\n'
+            ),
+        )
+    )
+    assert len(design(grid)) == 6 and design(grid)[1] == {
+        "machine.encoder_lines": 1000,
+        "machine.model.lead_screw_pitch_error": 1e-4,
+    }
+    mc = 'method = "monte-carlo"\nsamples = 5\nseed = {}\n[[vary]]\nkey = "machine.encoder_lines"\n' + (
+        'distribution = "uniform"\nlo = 1000\nhi = 5000\n'
+    )
+    a, b, c = (
+        design(load_study(study_file(tmp_path, mc.format(s), name=f"mc{s}{n}.toml"))) for n, s in enumerate((1, 1, 2))
+    )
+    assert a == b and a != c
+    assert all(isinstance(r["machine.encoder_lines"], int) for r in a)
+    assert [x.job_hash for x in cases(load_study(study_file(tmp_path, mc.format(1), name="m.toml")))] == [
+        x.job_hash for x in cases(load_study(study_file(tmp_path, mc.format(1), name="n.toml")))
+    ]
+
+
+# ---- the budget on cases with a known answer --------------------------------------------------------------------
+
+GEAR = (20, 1.0, 4.0, 0.0, 3)  # the default job's gear: z, mn, b, beta, k
+
+
+def record(cid: str, values: dict, helix: float, pitch: float, status: str = "ok") -> dict:
+    measured = {
+        f"{n}_{s}": 0.1 for n in ("F_alpha", "f_falpha", "F_beta", "f_fbeta", "f_p", "F_pk") for s in ("left", "right")
+    }
+    measured.update(
+        {
+            "f_Hbeta_left": -helix,
+            "f_Hbeta_right": helix,
+            "F_p_left": pitch,
+            "F_p_right": pitch - 1,
+            "f_Halpha_left": 0.1,
+            "f_Halpha_right": -0.1,
+            "F_r": 0.1,
+        }
+    )
+    return {"id": cid, "values": values, "status": status, "measured": measured, "error": "", "wall_s": 1.0}
+
+
+def test_one_at_a_time_budget_and_the_tightening_that_reaches_a_class(tmp_path) -> None:
+    """f_Hbeta = 2 + 1e4 eps (um) and F_p = 3 + 0.02 (c - 100) over two parts with stated tolerances: the
+    sensitivities, the worst-case stack and the tolerance that reaches the target class follow exactly."""
+    study = load_study(
+        study_file(
+            tmp_path,
+            (
+                '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [-2e-4, 2e-4]\ntolerance = 8e-4\n'
+                'label = "screw"\n'
+                '[[vary]]\nkey = "machine.model.tool_drive.stiffness"\nvalues = [1e4, 4e4]\ntolerance = 5e3\n'
+            ),
+        )
+    )
+    records = {}
+    for c in cases(study):
+        eps = c.values["machine.model.lead_screw_pitch_error"]
+        k = c.values["machine.model.tool_drive.stiffness"]
+        records[c.id] = record(c.id, c.values, 2.0 + 1e4 * abs(eps) * np.sign(eps + 1e-12), 3.0 + 1e-4 * (k - 2e4))
+    records["c099"] = record("c099", {}, 0, 0, status="failed")
+    budget = error_budget(study, records, GEAR, target=4)
+    assert budget.cases_ok == 5 and budget.cases_failed == 1
+    helix = next(p for p in budget.parameters if p.name == "f_Hbeta")
+    screw = next(e for e in helix.parts if e.key.endswith("pitch_error"))
+    assert screw.sensitivity == pytest.approx(1e4) and screw.contribution == pytest.approx(8.0)
+    assert helix.base == pytest.approx(2.0) and helix.stacked == pytest.approx(10.0)
+    tol = iso.tolerances(4, *GEAR)["f_Hbeta"]
+    assert helix.answer.tolerance == tol and not helix.answer.meets and helix.answer.limiting == "screw"
+    assert helix.answer.required == pytest.approx((tol - 2.0) / 1e4)
+    pitch = next(p for p in budget.parameters if p.name == "F_p")
+    stiff = next(e for e in pitch.parts if e.key.endswith("stiffness"))
+    assert stiff.sensitivity == pytest.approx(1e-4) and stiff.contribution == pytest.approx(0.5)
+    assert stiff.low == (1e4, pytest.approx(2.0)) and stiff.high == (4e4, pytest.approx(5.0))
+    assert pitch.answer.meets
+    signed = column_sensitivity(study, records, "f_Hbeta_left")
+    assert signed["machine.model.lead_screw_pitch_error"] == pytest.approx(-1e4)
+
+
+def test_monte_carlo_variance_shares(tmp_path) -> None:
+    """F_p = 20 + 3e3 eps + 2e-4 (k - 2e4), eps and k drawn: the fit recovers both sensitivities, the variance
+    shares b_i cov(x_i, F_p) / var(F_p) sum to 1 (no residual) and are b_i^2 var(x_i) / var(F_p) up to the
+    sample's chance correlation of the draws, and the 95th percentile is the cases'."""
+    study = load_study(
+        study_file(
+            tmp_path,
+            (
+                'method = "monte-carlo"\nsamples = 40\nseed = 3\n'
+                '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\n'
+                'distribution = "normal"\nmean = 0.0\nstd = 1e-3\n'
+                '[[vary]]\nkey = "machine.model.tool_drive.stiffness"\n'
+                'distribution = "uniform"\nlo = 1.5e4\nhi = 2.5e4\n'
+            ),
+        )
+    )
+    rows = design(study)
+    eps = np.array([r["machine.model.lead_screw_pitch_error"] for r in rows])
+    k = np.array([r["machine.model.tool_drive.stiffness"] for r in rows])
+    fp = 20 + 3e3 * eps + 2e-4 * (k - 2e4)
+    records = {f"c{i:03d}": record(f"c{i:03d}", r, 0.5, float(fp[i])) for i, r in enumerate(rows)}
+    pitch = next(p for p in error_budget(study, records, GEAR, target=5).parameters if p.name == "F_p")
+    by = {e.key: e for e in pitch.parts}
+    assert by["machine.model.lead_screw_pitch_error"].sensitivity == pytest.approx(3e3)
+    assert by["machine.model.tool_drive.stiffness"].sensitivity == pytest.approx(2e-4)
+    share = 9e6 * np.var(eps, ddof=1) / np.var(fp, ddof=1)
+    assert by["machine.model.lead_screw_pitch_error"].share == pytest.approx(share, abs=0.02)
+    assert sum(e.share for e in pitch.parts) == pytest.approx(1.0) and pitch.residual_share == pytest.approx(
+        0, abs=1e-9
+    )
+    assert pitch.stacked == pytest.approx(np.percentile(fp, 95)) and pitch.base == pytest.approx(fp.mean())
+
+
+# ---- studies on Dask ----------------------------------------------------------------------------------------------
+
+
+class StudyStoppedError(Exception):
+    pass
+
+
+def rows(path: Path) -> list[dict]:
+    """results.csv without the wall time (the one column that depends on the machine's load)."""
+    with path.open() as fh:
+        return [{k: v for k, v in r.items() if k != "wall_s"} for r in csv.DictReader(fh)]
+
+
+@pytest.fixture(scope="module")
+def lead_screw_study(tmp_path_factory):
+    """The helical scenario baseline with a 1 % long lead screw, and a tool motor too weak to hold the cut (that
+    case fails), once on one worker straight through, once on two workers interrupted after its first case and
+    resumed."""
+    tmp = tmp_path_factory.mktemp("study")
+    path = study_file(
+        tmp,
+        (
+            '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [0.01]\ntolerance = 8e-5\n'
+            '[[vary]]\nkey = "machine.model.tool_motor_torque"\nvalues = [0.5]\n'
+        ),
+        base=SCENARIOS / "helical_mechatronic.toml",
+    )
+    one = pipeline.run(path, tmp / "one", workers=1, target=5)
+
+    def stop(case_id, record, done, failed, total):
+        raise StudyStoppedError(case_id)
+
+    with pytest.raises(StudyStoppedError):
+        pipeline.run(path, tmp / "two", workers=2, on_case=stop)
+    first = rows(tmp / "two" / "results.csv")
+    two = pipeline.run(path, tmp / "two", workers=2, target=5)
+    return path, one, first, two
+
+
+def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(lead_screw_study) -> None:
+    _, one, first, two = lead_screw_study
+    assert len(first) == 1  # the interrupted study kept its finished case
+    assert two.run.skipped == [first[0]["case"]] and len(two.run.ran) == 2 and two.run.workers == 2
+    assert rows(one.run.csv) == rows(two.run.csv)
+    table = rows(one.run.csv)
+    assert [r["case"] for r in table] == ["c000", "c001", "c002"]
+    assert [r["status"] for r in table] == ["ok", "ok", "failed"]
+    assert "LostSynchronismError" in table[2]["error"] and "M1" in table[2]["error"]
+    assert table[0]["class"] and float(table[0]["sync_rms_um"]) < 10
+    for name in ("report.html", "budget.json", "cases/c001/measurement.json", "cases/c002/result.json"):
+        assert (one.run.csv.parent / name).is_file(), name
+
+
+def test_a_studys_lead_screw_sensitivity_is_the_theory(lead_screw_study) -> None:
+    """eps L_beta tan(beta_b) per unit of eps, opposite on the flanks (the scenario test's theory), within 5 %."""
+    _, one, _, _ = lead_screw_study
+    job = load_job(SCENARIOS / "helical_mechatronic.toml")
+    g = job.gear
+    doc = (one.run.csv.parent / "cases" / "c001" / "measurement.json").read_text()
+    z0, z1 = json.loads(doc)["evaluation"]["helix_z_mm"]
+    tan_beta_b = math.tan(g.beta) * math.cos(math.atan(math.tan(g.alpha_n) / math.cos(g.beta)))
+    theory = (z1 - z0) * tan_beta_b * 1e3  # um per unit of eps
+    study = one.study
+    for side, sign in (("left", -1), ("right", 1)):
+        s = column_sensitivity(study, one.run.results, f"f_Hbeta_mean_{side}")
+        assert s["machine.model.lead_screw_pitch_error"] == pytest.approx(sign * theory, rel=0.05), (side, s)
+    helix = next(p for p in one.budget.parameters if p.name == "f_Hbeta")
+    screw = next(e for e in helix.parts if e.key.endswith("pitch_error"))
+    assert screw.contribution == pytest.approx(abs(screw.sensitivity) * 8e-5)
+    page = one.report.read_text()
+    assert "lead_screw_pitch_error" in page and "data:image/png;base64," in page
+
+
+def test_a_studys_change_gear_error_is_the_setting_sheets_drift(tmp_path) -> None:
+    """S1 without a 17-tooth change gear (the scenario) against the same machine with one: the helix tilt between
+    the two cases is the drift the setting sheet predicts for the realised ix, over L_beta, within 5 %."""
+    base = SCENARIOS / "mechanical_change_gears.toml"
+    job = load_job(base)
+    with_17 = sorted([*job.machine["change_gears"], 17])
+    path = study_file(tmp_path, f'[[vary]]\nkey = "machine.change_gears"\nvalues = [{with_17}]\n', base=base)
+    outcome = pipeline.run(path, tmp_path / "out", workers=2)
+    res = outcome.run.results
+    assert [res[c]["status"] for c in ("c000", "c001")] == ["ok", "ok"]
+    drift = []  # um of arc per mm of carriage, from each case's own setting sheet
+    for case in ("c000", "c001"):
+        ix = setup_sheet(load_job(tmp_path / "out" / "cases" / case / "job.toml"), "mechanical").settings["ix"]
+        drift.append(ix.effect["pitch_um_per_work_rev"] / job.process["axial_feed"])
+    assert abs(drift[0]) > 5.0 and abs(drift[1]) < 0.05 * abs(drift[0])  # the set with 17 makes ix (almost) exact
+
+    doc = json.loads((tmp_path / "out" / "cases" / "c000" / "measurement.json").read_text())
+    z0, z1 = doc["evaluation"]["helix_z_mm"]
+    g = job.gear
+    predicted = -(drift[0] - drift[1]) * (z1 - z0) * math.cos(math.atan(math.tan(g.alpha_n) / math.cos(g.beta)))
+    change = {
+        s: res["c000"]["measured"][f"f_Hbeta_mean_{s}"] - res["c001"]["measured"][f"f_Hbeta_mean_{s}"]
+        for s in ("left", "right")
+    }
+    opposite = (change["left"] - change["right"]) / 2
+    assert opposite == pytest.approx(predicted, rel=0.05), (change, predicted)

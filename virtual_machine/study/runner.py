@@ -1,0 +1,253 @@
+"""Running a study on Dask distributed: every case an independent task that runs the job as `skive run` does
+(machine, cutting forces, cut, exact measurement) and returns its measurement.
+
+The engine is a Dask LocalCluster (one single-threaded worker process per core, or ``workers``) or an existing
+cluster (``scheduler``, e.g. ``tcp://host:port``). A task runs its case in a scratch directory of its worker and
+returns the measurement document, so workers need no shared file system; this process writes
+``cases/<id>/job.toml``, ``cases/<id>/measurement.json`` and ``cases/<id>/result.json`` as each case finishes,
+and rewrites ``results.csv`` (every finished case, in case order). A study that is interrupted resumes: a case
+whose result.json holds its job hash is not run again. A case that fails (the machine loses synchronism, the
+gear cannot be measured, anything else) is recorded with its error; the others go on.
+
+Each case cuts with one removal process (the Dask worker is the unit of parallelism), so its result does not
+depend on how many workers the study has: the same study gives the same table with 1 or N workers.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import logging
+import math
+import tempfile
+import time
+import traceback
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from virtual_machine.study.design import Case
+from virtual_machine.study.spec import Study
+
+SIDES = ("left", "right")
+#: measured columns of results.csv per flank: (block of measurement.json, name), in um
+FLANK_COLUMNS = (
+    ("profile", "F_alpha"),
+    ("profile", "f_Halpha"),
+    ("profile", "f_Halpha_mean"),
+    ("profile", "f_falpha"),
+    ("helix", "F_beta"),
+    ("helix", "f_Hbeta"),
+    ("helix", "f_Hbeta_mean"),
+    ("helix", "f_fbeta"),
+    ("pitch", "f_p"),
+    ("pitch", "F_p"),
+    ("pitch", "F_pk"),
+)
+MEASURED = (*(f"{name}_{side}" for _, name in FLANK_COLUMNS for side in SIDES), "F_r", "class", "sync_rms_um")
+
+#: on_case(case_id, result, done, failed, total): called after each case is written
+CaseHook = Callable[[str, dict[str, Any], int, int, int], None]
+
+
+def run_case(case_id: str, job_text: str) -> dict[str, Any]:
+    """One case on a worker: the job run as `skive run` runs it (one removal process), in a scratch directory.
+    Returns status, error, wall time and the measurement document (or, for a gear that could not be measured,
+    the run's facts), never raises for a failing case."""
+    from virtual_machine.run import run_job
+
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix=f"skive-{case_id}-") as tmp:
+        job = Path(tmp) / "job.toml"
+        job.write_text(job_text)
+        out = Path(tmp) / "out"
+        try:
+            doc = run_job(job, out, workers=1)
+            status, error = "ok", ""
+        except Exception as exc:  # a failing case is a result of the study, not the end of it
+            status, error = "failed", f"{type(exc).__name__}: {exc}"
+            kept = out / "measurement.json"  # an unmeasurable gear keeps the run's facts
+            doc = json.loads(kept.read_text()) if kept.is_file() else {}
+            if not isinstance(exc, expected_failures()):  # a defect, not the machine: keep where it happened
+                error += "\n" + traceback.format_exc(limit=6)
+    return {"id": case_id, "status": status, "error": error, "wall_s": time.perf_counter() - t0, "measurement": doc}
+
+
+def expected_failures() -> tuple[type[Exception], ...]:
+    """What a machine or a job can do to a case: bad input, a diverged simulation, lost synchronism, a gear the
+    measuring machine cannot measure."""
+    from cutting.errors import InputError
+    from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.run import UnmeasurableGearError
+    from virtual_machine.simulate import LostSynchronismError
+
+    return (InputError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError)
+
+
+def measured_row(doc: dict[str, Any]) -> dict[str, Any]:
+    """The results.csv columns of one measurement document (missing parts left empty)."""
+    row: dict[str, Any] = {}
+    for block, name in FLANK_COLUMNS:
+        for side in SIDES:
+            row[f"{name}_{side}"] = doc.get(block, {}).get(side, {}).get(name)
+    row["F_r"] = doc.get("runout", {}).get("F_r")
+    iso = doc.get("iso1328") or {}
+    row["class"] = (iso.get("class") or {}).get("overall")
+    sync = (doc.get("run") or {}).get("synchronisation", {}).get("sync_error_in_cut") or {}
+    row["sync_rms_um"] = sync.get("rms_um")
+    return row
+
+
+@dataclass
+class StudyRun:
+    """What a study run leaves: every finished case's result (id -> result.json), the cases it ran now, the
+    wall time, and the paths written."""
+
+    results: dict[str, dict[str, Any]]
+    ran: list[str]
+    skipped: list[str]
+    wall_s: float
+    workers: int
+    csv: Path
+
+
+def run_study(
+    study: Study,
+    cases: Sequence[Case],
+    out: Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    on_case: CaseHook | None = None,
+) -> StudyRun:
+    """Run every case not finished yet on Dask; write the case files and results.csv as each case finishes."""
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    out.mkdir(parents=True, exist_ok=True)
+    results = {c.id: r for c in cases if (r := finished(out, c)) is not None}
+    pending = [c for c in cases if c.id not in results]
+    for c in pending:
+        (out / "cases" / c.id).mkdir(parents=True, exist_ok=True)
+        (out / "cases" / c.id / "job.toml").write_text(c.job_text)
+    path = write_csv(out, study, cases, results)
+    t0 = time.perf_counter()
+    ran: list[str] = []
+    if not pending:
+        return StudyRun(results, ran, sorted(results), 0.0, 0, path)
+    by_id = {c.id: c for c in cases}
+    cluster = None
+    if scheduler:
+        client = Client(scheduler)
+    else:
+        n = workers or default_study_workers()
+        cluster = LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
+        )
+        client = Client(cluster)
+    try:
+        n_workers = len(client.scheduler_info(n_workers=-1)["workers"]) or 1
+        futures = {
+            client.submit(run_case, c.id, c.job_text, key=f"skive-case-{c.id}-{c.job_hash[:16]}"): c.id for c in pending
+        }
+        failed = 0
+        for future in as_completed(futures):
+            case_id = futures[future]
+            try:
+                result = future.result()
+            except Exception as exc:  # the worker itself died (memory, a crash): the case failed, the study goes on
+                result = {
+                    "id": case_id,
+                    "status": "failed",
+                    "error": f"{type(exc).__name__}: {exc}",
+                    "wall_s": math.nan,
+                    "measurement": {},
+                }
+            record = write_case(out, by_id[case_id], result)
+            results[case_id] = record
+            ran.append(case_id)
+            failed += record["status"] != "ok"
+            write_csv(out, study, cases, results)
+            if on_case is not None:
+                on_case(case_id, record, len(ran), failed, len(pending))
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    skipped = sorted(set(results) - set(ran))
+    return StudyRun(results, ran, skipped, time.perf_counter() - t0, n_workers, path)
+
+
+def default_study_workers() -> int:
+    from cutting.ideal_cut import default_workers
+
+    return default_workers()
+
+
+def finished(out: Path, case: Case) -> dict[str, Any] | None:
+    """The stored result of ``case`` if it ran with this very job (same hash), else None."""
+    path = out / "cases" / case.id / "result.json"
+    if not path.is_file():
+        return None
+    try:
+        record = json.loads(path.read_text())
+    except json.JSONDecodeError:  # cut short while written: run it again
+        return None
+    return record if record.get("job_hash") == case.job_hash else None
+
+
+def write_case(out: Path, case: Case, result: dict[str, Any]) -> dict[str, Any]:
+    """cases/<id>/measurement.json and result.json (written last, atomically: a resumed study trusts it)."""
+    folder = out / "cases" / case.id
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "job.toml").write_text(case.job_text)
+    doc = result["measurement"]
+    if doc:
+        (folder / "measurement.json").write_text(json.dumps(doc, indent=2))
+    record = {
+        "id": case.id,
+        "job_hash": case.job_hash,
+        "values": case.values,
+        "status": result["status"],
+        "error": result["error"],
+        "wall_s": result["wall_s"],
+        "measured": measured_row(doc),
+    }
+    tmp = folder / "result.json.tmp"
+    tmp.write_text(json.dumps(record, indent=2))
+    tmp.replace(folder / "result.json")
+    return record
+
+
+def csv_columns(study: Study) -> list[str]:
+    return ["case", "job_hash", *(v.key for v in study.varies), *MEASURED, "wall_s", "status", "error"]
+
+
+def write_csv(out: Path, study: Study, cases: Sequence[Case], results: dict[str, dict[str, Any]]) -> Path:
+    """results.csv: one row per finished case, in case order (the same file whatever order they finished in)."""
+    path = out / "results.csv"
+    tmp = out / "results.csv.tmp"
+    with tmp.open("w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(csv_columns(study))
+        for c in cases:
+            r = results.get(c.id)
+            if r is None:
+                continue
+            values = [_cell(r["values"].get(v.key)) for v in study.varies]
+            measured = [_cell(r["measured"].get(m)) for m in MEASURED]
+            error = r["error"].splitlines()[0] if r["error"] else ""
+            writer.writerow([c.id, c.job_hash, *values, *measured, _cell(r["wall_s"]), r["status"], error])
+    tmp.replace(path)
+    return path
+
+
+def _cell(v: Any) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return ""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return repr(v)
+    if isinstance(v, list):
+        return json.dumps(v)
+    return str(v)
