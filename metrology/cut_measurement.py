@@ -15,11 +15,13 @@ from typing import Any
 import numpy as np
 
 from cutting.edge import CuttingEdge
+from cutting.errors import InputError
 from cutting.exact_sweep import SweptVolumes
 from cutting.gear import Gear
 from cutting.trajectory import PassMotion
 from metrology.measure import MeasureOptions, measure_gear
 from metrology.sections import MeshData
+from metrology.workpiece import UnmeasurableError
 
 UM = 1e3
 
@@ -42,9 +44,19 @@ def measure_cut(
     doc = measure_gear(exact, gear, opt, exact.name)
     if mesh is None:
         return doc, None
-    mesh_doc = measure_gear(mesh, gear, opt, mesh_name)
+    try:
+        mesh_doc = measure_gear(mesh, gear, opt, mesh_name)
+    except (UnmeasurableError, InputError) as exc:  # the file failed, not the gear: the exact measurement stands
+        doc["mesh"] = unmeasured_mesh(mesh_name, str(exc), len(mesh.faces))
+        return doc, None
     doc["mesh"] = compare(doc, mesh_doc, gear, sweep_bound, mesh_name, len(mesh.faces), simplification)
     return doc, mesh_doc
+
+
+def unmeasured_mesh(name: str, error: str, triangles: int | None = None) -> dict[str, Any]:
+    """The ``mesh`` block of a mesh the measuring machine could not take (not closed, a ball that cannot seat on
+    its facets): why, beside the exact measurement, which does not depend on it."""
+    return {"name": name, "triangles": triangles, "error": error}
 
 
 def trace_difference(exact: dict[str, Any], mesh: dict[str, Any]) -> float:

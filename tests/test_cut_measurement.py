@@ -4,6 +4,7 @@ the same cut (within the mesh's bound) and against the direct feed-mark probe of
 import functools
 import math
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -114,3 +115,20 @@ def test_ideal_kinematics_leave_only_physics(edge):
     else:
         assert worst["f_falpha"] > 0.5  # the involute edge's own bow
         assert worst["F_beta"] <= 0.3 and worst["f_pt"] <= 0.3  # the helix and the pitch are still clean
+
+
+def test_a_gear_file_that_does_not_close_leaves_the_exact_measurement_standing(tmp_path):
+    """gear.stl with a hole cannot be measured; the exact swept surface does not need it: the measurement stands,
+    and its mesh block says why the file was not measured."""
+    from cutting.gear_file import GearFile
+    from virtual_machine.run import measure_written_cut
+
+    st, report, doc, _ = small_cut()
+    job = SimpleNamespace(gear=st.gear, skiving=st, measurement=None)  # what measure_written_cut reads of a job
+    mesh = to_trimesh(report.result.gear)
+    holed = type(mesh)(mesh.vertices, mesh.faces[1:], process=False)
+    stl = GearFile(holed, 0.0, len(mesh.faces), 0, False)
+    measured = measure_written_cut(job, report.edge, ideal_passes(st), report.result, stl, tmp_path / "gear.stl")
+    assert "not watertight" in measured["mesh"]["error"] and measured["mesh"]["triangles"] == len(mesh.faces) - 1
+    assert measured["iso1328"]["measured"] == doc["iso1328"]["measured"]
+    assert measured["workpiece"]["kind"] == "exact swept surface"

@@ -77,3 +77,29 @@ def test_a_negative_tolerance_is_refused(tmp_path):
     with pytest.raises(ValueError, match=r"simplification of gear\.stl must be >= 0"):
         write_gear_stl(mf.Manifold.cube((1.0, 1.0, 1.0)), tmp_path / "gear.stl", -0.001)
     assert not (tmp_path / "gear.stl").exists()
+
+
+@pytest.mark.parametrize("kind", ["material", "air"])
+def test_a_pinch_is_opened_so_the_file_reads_back_watertight(tmp_path, kind):
+    """Two cubes of material (or two cavities in a block) touching along an edge: manifold keeps the two sheets
+    apart by topology, a file by position only. The writer moves the copies a few float32 steps apart, each to its
+    own side, so the file closes and nothing overlaps: volume within 1e-5 mm^3, copies 1e-7..1e-4 mm apart."""
+    cube = mf.Manifold.cube((1.0, 1.0, 1.0))
+    if kind == "material":
+        solid = cube + cube.translate((1.0, 1.0, 0.0))
+    else:
+        block = mf.Manifold.cube((4.0, 4.0, 2.0)).translate((-2.0, -2.0, -1.0))
+        solid = block - cube.translate((-1.0, -1.0, -0.5)) - cube.translate((0.0, 0.0, -0.5))
+    written = write_gear_stl(solid, tmp_path / "gear.stl", 0.0)
+    back = trimesh.load(tmp_path / "gear.stl")
+    assert written.watertight and back.is_watertight and back.is_winding_consistent
+    assert back.volume == pytest.approx(solid.volume(), abs=1e-5)
+    # the file is a valid solid for manifold too (no face crosses another): as many bodies as the solid had
+    again = mf.Manifold(
+        mf.Mesh(vert_properties=np.asarray(back.vertices, np.float32), tri_verts=np.asarray(back.faces, np.uint32))
+    )
+    assert again.status() == mf.Error.NoError and len(again.decompose()) == len(solid.decompose())
+    corner = np.array([1.0, 1.0] if kind == "material" else [0.0, 0.0])  # the line x, y = corner holds the pinch
+    v = back.vertices[np.linalg.norm(back.vertices[:, :2] - corner, axis=1) < 1e-3]
+    v = v[np.abs(v[:, 2] - v[0, 2]) < 1e-3]  # the copies of one end of that line
+    assert len(v) == 2 and 1e-7 < np.linalg.norm(v[0] - v[1]) < 1e-4

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from dask.distributed import LocalCluster
 
 from cutting.errors import InputError
 from metrology import tolerances as iso
@@ -250,15 +251,17 @@ def lead_screw_study(tmp_path_factory):
     def stop(case_id, record, done, failed, total):
         raise StudyStoppedError(case_id)
 
-    with pytest.raises(StudyStoppedError):
-        pipeline.run(path, tmp / "two", workers=2, on_case=stop)
-    first = rows(tmp / "two" / "results.csv")
-    two = pipeline.run(path, tmp / "two", workers=2, target=5)
+    # two workers of a cluster that runs on its own, reached by its scheduler's address as on a real cluster
+    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=None) as cluster:
+        with pytest.raises(StudyStoppedError):
+            pipeline.run(path, tmp / "two", scheduler=cluster.scheduler_address, on_case=stop)
+        first = rows(tmp / "two" / "results.csv")
+        two = pipeline.run(path, tmp / "two", scheduler=cluster.scheduler_address, target=5)
     return path, one, first, two
 
 
 def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(lead_screw_study) -> None:
-    _, one, first, two = lead_screw_study
+    path, one, first, two = lead_screw_study
     assert len(first) == 1  # the interrupted study kept its finished case
     assert two.run.skipped == [first[0]["case"]] and len(two.run.ran) == 2 and two.run.workers == 2
     assert rows(one.run.csv) == rows(two.run.csv)
@@ -269,6 +272,10 @@ def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(lead_screw_
     assert table[0]["class"] and float(table[0]["sync_rms_um"]) < 10
     for name in ("report.html", "budget.json", "cases/c001/measurement.json", "cases/c002/result.json"):
         assert (one.run.csv.parent / name).is_file(), name
+    # the command line on the finished study: nothing runs again, the budget and the report are written anew
+    res = CliRunner().invoke(main, ["study", str(path), "--out", str(one.run.csv.parent), "--target-class", "5"])
+    assert res.exit_code == 0, res.output
+    assert "0 run now" in res.output and "3 already done" in res.output and "limiting:" in res.output
 
 
 def test_a_studys_lead_screw_sensitivity_is_the_theory(lead_screw_study) -> None:

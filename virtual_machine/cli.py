@@ -256,14 +256,17 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
     type=click.IntRange(1, 11),
     help="Say what limits ISO 1328-1 class N and what to tighten.",
 )
-def study(study_file: Path, out: Path, workers: int | None, scheduler: str | None, target: int | None) -> None:
+@click.option("--retry-failed", is_flag=True, help="Run the cases that failed before again (finished ones are kept).")
+def study(
+    study_file: Path, out: Path, workers: int | None, scheduler: str | None, target: int | None, retry_failed: bool
+) -> None:
     from virtual_machine.study import pipeline
     from virtual_machine.study.design import cases
     from virtual_machine.study.runner import finished
     from virtual_machine.study.spec import load_study
 
     try:  # every check before any case runs
-        todo = sum(finished(out, c) is None for c in cases(load_study(study_file)))
+        todo = sum(finished(out, c, retry_failed) is None for c in cases(load_study(study_file)))
     except (InputError, ValueError) as exc:
         _fail(exc)
     bar = Progress("study", max(todo, 1), "cases", step=1 / todo if 0 < todo <= 100 else 0.01, value_format="{:.0f}")
@@ -275,7 +278,7 @@ def study(study_file: Path, out: Path, workers: int | None, scheduler: str | Non
         bar.update_to(done, **info)
 
     try:
-        outcome = pipeline.run(study_file, out, workers, scheduler, target, progress)
+        outcome = pipeline.run(study_file, out, workers, scheduler, target, progress, retry_failed=retry_failed)
     except (InputError, ValueError, OSError) as exc:
         bar.close()
         _fail(exc)
@@ -287,11 +290,11 @@ def format_study(outcome, out: Path) -> str:
     """The end-of-study lines: cases, the limiting part, the files."""
     run, budget = outcome.run, outcome.budget
     failed = sum(r["status"] != "ok" for r in run.results.values())
+    now = f"{len(run.ran)} run now on {run.workers} workers in {run.wall_s:.0f} s" if run.ran else "0 run now"
     lines = [
         "",
         f"STUDY  {outcome.study.path}  ({outcome.study.method}, {outcome.total_cases} cases: "
-        f"{len(run.results) - failed} ok, {failed} failed; {len(run.ran)} run now on {run.workers} workers in "
-        f"{run.wall_s:.0f} s, {len(run.skipped)} already done)",
+        f"{len(run.results) - failed} ok, {failed} failed; {now}, {len(run.skipped)} already done)",
     ]
     worst = budget.limiting()
     if budget.iso_error:

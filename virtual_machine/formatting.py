@@ -104,7 +104,9 @@ def format_measurement(doc: dict, source: str) -> str:
         lines.append(f"span W_{sp['k']} = {sp['W_k_mm']:.4f} mm (nominal {sp['W_k_nominal_mm']:.4f})")
     lines.append(f"tip diameter {th['tip_diameter_mm']:.4f} mm, root diameter {th['root_diameter_mm']:.4f} mm")
     mesh = doc.get("mesh")
-    if mesh:
+    if mesh and mesh.get("error"):
+        lines.append(f"the mesh could not be measured (the exact measurement above does not need it): {mesh['error']}")
+    elif mesh:
         verdict = "within" if mesh["within_bound"] else "OUTSIDE"
         lines.append(
             f"the mesh ({mesh['triangles']} triangles, sweep error <= {mesh['sweep_bound_um']:.2f} um, "

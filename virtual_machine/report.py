@@ -167,6 +167,12 @@ def _mesh_rows(mesh: dict | None) -> list[str]:
     """The mesh's measurement beside the exact one: its values, the differences, the bound they must keep."""
     if not mesh:
         return []
+    if mesh.get("error"):
+        return [
+            "<h2>The mesh beside it</h2>",
+            f"<p>The manifold mesh <code>{html.escape(str(mesh['name']))}</code> could not be measured (the exact "
+            f"measurement above does not need it): {html.escape(mesh['error'])}</p>",
+        ]
     rows = [[k, mesh["measured"][k], mesh["difference_um"][k]] for k in mesh["measured"]]
     rows += [[k.replace("_um", ""), None, v] for k, v in mesh["size_difference_um"].items()]
     verdict = "within" if mesh["within_bound"] else "outside"

@@ -27,7 +27,7 @@ from cutting.removal import CutResult
 from cutting.sampled_motion import sampled_passes
 from cutting.trajectory import PassMotion
 from metrology.charts import finite, write_charts
-from metrology.cut_measurement import measure_cut
+from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions
 from metrology.workpiece import UnmeasurableError
@@ -113,7 +113,12 @@ def measure_written_cut(
     gear.stl held to the finishing pass's sweep error plus the file's simplification."""
     opts = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None})
     bound = cut.pass_sweep_error.get(len(job.skiving.passes) - 1, cut.sweep_error)
-    mesh = check_mesh(stl.mesh)
+    try:
+        mesh = check_mesh(stl.mesh, str(stl_path))
+    except InputError as exc:  # the file does not close: say so beside the exact measurement, which stands
+        measurement, _ = measure_cut(job.gear, edge, motions, None, opts, bound)
+        measurement["mesh"] = unmeasured_mesh(str(stl_path), str(exc), len(stl.mesh.faces))
+        return measurement
     measurement, _ = measure_cut(job.gear, edge, motions, mesh, opts, bound, str(stl_path), stl.simplification)
     return measurement
 

@@ -45,6 +45,7 @@ def run(
     target: int | None = None,
     progress: StudyProgress | None = None,
     on_case=None,
+    retry_failed: bool = False,
 ) -> StudyOutcome:
     """Every check first (InputError before any case runs), then the cases, then the budget and the report."""
     from virtual_machine.study.report import write_study_report
@@ -60,7 +61,7 @@ def run(
         if on_case is not None:
             on_case(case_id, record, done, failed, total)
 
-    result = run_study(study, cases, out, workers, scheduler, hook)
+    result = run_study(study, cases, out, workers, scheduler, hook, retry_failed)
     budget = error_budget(study, result.results, gear_data(study), target)
     (out / "budget.json").write_text(json.dumps(budget_json(budget), indent=2))
     report = write_study_report(

@@ -119,12 +119,14 @@ def run_study(
     workers: int | None = None,
     scheduler: str | None = None,
     on_case: CaseHook | None = None,
+    retry_failed: bool = False,
 ) -> StudyRun:
-    """Run every case not finished yet on Dask; write the case files and results.csv as each case finishes."""
+    """Run every case not finished yet on Dask (``retry_failed``: and those that failed before); write the case
+    files and results.csv as each case finishes."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     out.mkdir(parents=True, exist_ok=True)
-    results = {c.id: r for c in cases if (r := finished(out, c)) is not None}
+    results = {c.id: r for c in cases if (r := finished(out, c, retry_failed)) is not None}
     pending = [c for c in cases if c.id not in results]
     for c in pending:
         (out / "cases" / c.id).mkdir(parents=True, exist_ok=True)
@@ -183,8 +185,9 @@ def default_study_workers() -> int:
     return default_workers()
 
 
-def finished(out: Path, case: Case) -> dict[str, Any] | None:
-    """The stored result of ``case`` if it ran with this very job (same hash), else None."""
+def finished(out: Path, case: Case, retry_failed: bool = False) -> dict[str, Any] | None:
+    """The stored result of ``case`` if it ran with this very job (same hash), else None (also for a failed case
+    when ``retry_failed``: after a fix, or a worker that died)."""
     path = out / "cases" / case.id / "result.json"
     if not path.is_file():
         return None
@@ -192,7 +195,9 @@ def finished(out: Path, case: Case) -> dict[str, Any] | None:
         record = json.loads(path.read_text())
     except json.JSONDecodeError:  # cut short while written: run it again
         return None
-    return record if record.get("job_hash") == case.job_hash else None
+    if record.get("job_hash") != case.job_hash or (retry_failed and record.get("status") != "ok"):
+        return None
+    return record
 
 
 def write_case(out: Path, case: Case, result: dict[str, Any]) -> dict[str, Any]:
