@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 from dask.distributed import LocalCluster
+from small_jobs import small_job
 
 from cutting.errors import InputError
 from metrology import tolerances as iso
@@ -186,6 +187,31 @@ def test_one_at_a_time_budget_and_the_tightening_that_reaches_a_class(tmp_path) 
     assert signed["machine.model.lead_screw_pitch_error"] == pytest.approx(-1e4)
 
 
+def test_grid_budget_fits_every_case_at_once(tmp_path) -> None:
+    """F_p = 3 + 2e3 eps + 1e-4 (k - 2e4) on a 3 x 2 grid that does not hold the base: the fit gives both
+    sensitivities and the value at the base; the worst case stacks the stated tolerances on it."""
+    study = load_study(
+        study_file(
+            tmp_path,
+            (
+                'method = "grid"\n[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [1e-4, 2e-4, 3e-4]\n'
+                "tolerance = 1e-4\n"
+                '[[vary]]\nkey = "machine.model.tool_drive.stiffness"\nvalues = [1e4, 3e4]\ntolerance = 2e3\n'
+            ),
+        )
+    )
+    records = {}
+    for c in cases(study):
+        eps, k = c.values["machine.model.lead_screw_pitch_error"], c.values["machine.model.tool_drive.stiffness"]
+        records[c.id] = record(c.id, c.values, 0.5, 3.0 + 2e3 * eps + 1e-4 * (k - 2e4))
+    assert len(records) == 6
+    pitch = next(p for p in error_budget(study, records, GEAR).parameters if p.name == "F_p")
+    by = {e.key: e for e in pitch.parts}
+    assert by["machine.model.lead_screw_pitch_error"].sensitivity == pytest.approx(2e3)
+    assert by["machine.model.tool_drive.stiffness"].sensitivity == pytest.approx(1e-4)
+    assert pitch.base == pytest.approx(3.0) and pitch.stacked == pytest.approx(3.0 + 0.2 + 0.2)
+
+
 def test_monte_carlo_variance_shares(tmp_path) -> None:
     """F_p = 20 + 3e3 eps + 2e-4 (k - 2e4), eps and k drawn: the fit recovers both sensitivities, the variance
     shares b_i cov(x_i, F_p) / var(F_p) sum to 1 (no residual) and are b_i^2 var(x_i) / var(F_p) up to the
@@ -233,18 +259,19 @@ def rows(path: Path) -> list[dict]:
 
 
 @pytest.fixture(scope="module")
-def lead_screw_study(tmp_path_factory):
-    """The helical scenario baseline with a 1 % long lead screw, and a tool motor too weak to hold the cut (that
-    case fails), once on one worker straight through, once on two workers interrupted after its first case and
-    resumed."""
+def small_study(tmp_path_factory):
+    """The tests' small job (z 18, b 2 mm: below ISO 1328-1's range, so no classes) with a long lead screw, and a
+    tool motor too weak to hold the cut (that case fails), once on one worker straight through, once on two
+    workers interrupted after its first case and resumed."""
     tmp = tmp_path_factory.mktemp("study")
+    (tmp / "small.toml").write_text(small_job(sweep_error=0.02))
     path = study_file(
         tmp,
         (
-            '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [0.01]\ntolerance = 8e-5\n'
+            '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [0.01]\n'
             '[[vary]]\nkey = "machine.model.tool_motor_torque"\nvalues = [0.5]\n'
         ),
-        base=SCENARIOS / "helical_mechatronic.toml",
+        base=tmp / "small.toml",
     )
     one = pipeline.run(path, tmp / "one", workers=1, target=5)
 
@@ -260,8 +287,8 @@ def lead_screw_study(tmp_path_factory):
     return path, one, first, two
 
 
-def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(lead_screw_study) -> None:
-    path, one, first, two = lead_screw_study
+def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(small_study) -> None:
+    path, one, first, two = small_study
     assert len(first) == 1  # the interrupted study kept its finished case
     assert two.run.skipped == [first[0]["case"]] and len(two.run.ran) == 2 and two.run.workers == 2
     assert rows(one.run.csv) == rows(two.run.csv)
@@ -269,27 +296,35 @@ def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(lead_screw_
     assert [r["case"] for r in table] == ["c000", "c001", "c002"]
     assert [r["status"] for r in table] == ["ok", "ok", "failed"]
     assert "LostSynchronismError" in table[2]["error"] and "M1" in table[2]["error"]
-    assert table[0]["class"] and float(table[0]["sync_rms_um"]) < 10
+    assert float(table[0]["sync_rms_um"]) < 10 and float(table[0]["F_alpha_left"]) > 0
+    assert table[0]["class"] == "" and "ISO 1328-1" in one.budget.iso_error  # b = 2 mm: no classes, said so
     for name in ("report.html", "budget.json", "cases/c001/measurement.json", "cases/c002/result.json"):
         assert (one.run.csv.parent / name).is_file(), name
+    assert "outside ISO 1328-1" in one.report.read_text()
     # the command line on the finished study: nothing runs again, the budget and the report are written anew
     res = CliRunner().invoke(main, ["study", str(path), "--out", str(one.run.csv.parent), "--target-class", "5"])
     assert res.exit_code == 0, res.output
-    assert "0 run now" in res.output and "3 already done" in res.output and "limiting:" in res.output
+    assert "0 run now" in res.output and "3 already done" in res.output and "no ISO 1328-1 classes" in res.output
 
 
-def test_a_studys_lead_screw_sensitivity_is_the_theory(lead_screw_study) -> None:
-    """eps L_beta tan(beta_b) per unit of eps, opposite on the flanks (the scenario test's theory), within 5 %."""
-    _, one, _, _ = lead_screw_study
+def test_a_studys_lead_screw_sensitivity_is_the_theory(tmp_path) -> None:
+    """The helical scenario baseline and a 1 % long lead screw: the study's sensitivity of f_Hbeta is
+    L_beta tan(beta_b) per unit of eps, opposite on the flanks (the scenario test's theory), within 5 %; the
+    budget's contribution is that sensitivity times the stated tolerance."""
+    path = study_file(
+        tmp_path,
+        '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [0.01]\ntolerance = 8e-5\n',
+        base=SCENARIOS / "helical_mechatronic.toml",
+    )
+    one = pipeline.run(path, tmp_path / "out", workers=2, target=5)
     job = load_job(SCENARIOS / "helical_mechatronic.toml")
     g = job.gear
-    doc = (one.run.csv.parent / "cases" / "c001" / "measurement.json").read_text()
+    doc = (tmp_path / "out" / "cases" / "c001" / "measurement.json").read_text()
     z0, z1 = json.loads(doc)["evaluation"]["helix_z_mm"]
     tan_beta_b = math.tan(g.beta) * math.cos(math.atan(math.tan(g.alpha_n) / math.cos(g.beta)))
     theory = (z1 - z0) * tan_beta_b * 1e3  # um per unit of eps
-    study = one.study
     for side, sign in (("left", -1), ("right", 1)):
-        s = column_sensitivity(study, one.run.results, f"f_Hbeta_mean_{side}")
+        s = column_sensitivity(one.study, one.run.results, f"f_Hbeta_mean_{side}")
         assert s["machine.model.lead_screw_pitch_error"] == pytest.approx(sign * theory, rel=0.05), (side, s)
     helix = next(p for p in one.budget.parameters if p.name == "f_Hbeta")
     screw = next(e for e in helix.parts if e.key.endswith("pitch_error"))

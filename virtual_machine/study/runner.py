@@ -71,6 +71,11 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
             doc = json.loads(kept.read_text()) if kept.is_file() else {}
             if not isinstance(exc, expected_failures()):  # a defect, not the machine: keep where it happened
                 error += "\n" + traceback.format_exc(limit=6)
+            if str(out) in error:  # the scratch directory is gone: name what the study keeps instead
+                error = error.replace(str(out) + "/", "") + (
+                    f" (the study keeps cases/{case_id}/measurement.json; `skive run cases/{case_id}/job.toml` "
+                    "writes the case's gear.stl again)"
+                )
     return {"id": case_id, "status": status, "error": error, "wall_s": time.perf_counter() - t0, "measurement": doc}
 
 
