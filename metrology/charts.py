@@ -86,7 +86,7 @@ def pitch_chart(path: Path, result: dict[str, Any]) -> None:
 
 
 def write_charts(out: Path, result: dict[str, Any]) -> list[Path]:
-    """profile.png, helix.png and pitch.png in ``out``; returns the paths."""
+    """profile.png, helix.png, pitch.png and topography.png in ``out``; returns the paths."""
     out.mkdir(parents=True, exist_ok=True)
     tr = result["_traces"]
     order = tr["order"]  # nominal tooth index of tooth numbers 1..z
@@ -120,6 +120,8 @@ def write_charts(out: Path, result: dict[str, Any]) -> list[Path]:
         f"F_beta {label}",
     )
     pitch_chart(paths[2], result)
+    if result.get("topography"):
+        paths.append(topography_chart(out / "topography.png", result["topography"]))
     return paths
 
 
@@ -134,3 +136,28 @@ def finite(obj: Any) -> Any:
     if isinstance(obj, float) and not math.isfinite(obj):
         return None
     return obj
+
+
+def topography_chart(path: Path, topo: dict[str, Any]) -> Path:
+    """The flank topography as a colour map per flank (deviation over roll length x face, mean of the scanned
+    teeth, um); with a design, a second row shows the deviation from it."""
+    L, z = np.asarray(topo["L_mm"]), np.asarray(topo["z_mm"])
+    designed = any(np.any(np.asarray(topo[s]["design_um"], dtype=float) != 0) for s in SIDES)
+    rows = [("deviation_um", "measured")] + ([("against_design_um", "against the design")] if designed else [])
+    fig, axes = plt.subplots(len(rows), 2, figsize=(10, 3.6 * len(rows)), squeeze=False)
+    for i, (key, what) in enumerate(rows):
+        grids = [np.asarray(topo[s][key], dtype=float) for s in SIDES]
+        lim = max(float(np.nanmax(np.abs(g))) if np.isfinite(g).any() else 0.0 for g in grids) or 1.0
+        for j, (side, grid) in enumerate(zip(SIDES, grids, strict=True)):
+            ax = axes[i][j]
+            mesh = ax.pcolormesh(z, L, grid, cmap="RdBu", vmin=-lim, vmax=lim, shading="nearest")
+            ax.set_title(f"{side} flank, {what}")
+            ax.set_xlabel("z [mm]")
+            ax.set_ylabel("roll length [mm]")
+            fig.colorbar(mesh, ax=ax, label="um (excess material > 0)")
+    teeth = ", ".join(str(t) for t in topo["teeth"])
+    fig.suptitle(f"Flank topography, mean of teeth {teeth}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path

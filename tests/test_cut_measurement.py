@@ -124,7 +124,7 @@ def test_a_gear_file_that_does_not_close_leaves_the_exact_measurement_standing(t
     from virtual_machine.run import measure_written_cut
 
     st, report, doc, _ = small_cut()
-    job = SimpleNamespace(gear=st.gear, skiving=st, measurement=None)  # what measure_written_cut reads of a job
+    job = SimpleNamespace(gear=st.gear, skiving=st, measurement=None, modification=None)  # what it reads of a job
     mesh = to_trimesh(report.result.gear)
     holed = type(mesh)(mesh.vertices, mesh.faces[1:], process=False)
     stl = GearFile(holed, 0.0, len(mesh.faces), 0, False)

@@ -62,7 +62,7 @@ def test_measure_writes_json_and_charts(tmp_path, slope_mesh):
     res = CliRunner().invoke(main, ["measure", str(path), "--job", str(JOBS / "spur_external.toml"), "--out", str(out)])
     assert res.exit_code == 0, res.output
     assert "ISO 1328-1:2013 class of the gear" in res.output
-    for name in ("measurement.json", "profile.png", "helix.png", "pitch.png"):
+    for name in ("measurement.json", "profile.png", "helix.png", "pitch.png", "topography.png"):
         assert (out / name).stat().st_size > 1000
     doc = json.loads((out / "measurement.json").read_text())
     # f_Halpha = 3 um is class 4 for this gear (fHaT class 4 = 3.5 um, class 3 = 2.5 um)

@@ -112,8 +112,9 @@ def test_entities_and_timeline(run):
     reader = RrdReader(run["path"])
     (blueprint,) = reader.blueprints()
     views = {c.entity_path for c in reader.stream(store=blueprint).to_chunks() if c.entity_path.count("/") == 2}
-    # 3D machine and gear; sync, torques, spindles, slides, program, 1 extra; 3 charts, 2 documents, events
-    assert sum(v.startswith("/view/") for v in views) == 2 + 6 + 6
+    # 3D machine and gear; sync, torques, spindles, slides, program, 1 extra; 4 charts (profile, helix, pitch,
+    # topography), 2 documents, events
+    assert sum(v.startswith("/view/") for v in views) == 2 + 6 + 7
 
 
 def test_row_counts(run):

@@ -36,7 +36,14 @@ def runs(tmp_path_factory):
 
 def test_run_writes_every_file(runs) -> None:
     _, ((out, text), _) = runs
-    for name in ("gear.stl", "measurement.json", "report.html", "charts/profile.png", "charts/run.png"):
+    for name in (
+        "gear.stl",
+        "measurement.json",
+        "report.html",
+        "charts/profile.png",
+        "charts/topography.png",
+        "charts/run.png",
+    ):
         assert (out / name).stat().st_size > 1000, name
     assert "RUN" in text and "machine and cut" in text and "engagements" in text
     doc = json.loads((out / "measurement.json").read_text())
@@ -51,7 +58,7 @@ def test_run_writes_every_file(runs) -> None:
     assert -f["load_work_J"] == pytest.approx(f["chip_energy_J"], rel=0.08)
     assert run["synchronisation"]["sync_error_in_cut"]["rms_um"] < 20.0
     page = (out / "report.html").read_text()
-    assert page.count("data:image/png;base64,") == 4  # profile, helix, pitch, run
+    assert page.count("data:image/png;base64,") == 5  # profile, helix, pitch, topography, run
     for text_part in ("ISO 1328-1", "Setting sheet", "kx", "teeth = 18", "peak cutting force"):
         assert text_part in page
 

@@ -130,6 +130,13 @@ def cut(
 
     kind = edge or j.cutter_options["edge"]
     motions = None
+    plan = None
+    if j.modification is not None and trajectory is None:
+        from virtual_machine.modification_path import plan_path
+
+        stage("path for the flank modification (seed 003: radial and tangential corrections, accuracy check)")
+        plan = plan_path(j)
+        motions = plan.motions
     if trajectory is not None:
         from cutting.sampled_motion import sampled_passes
         from virtual_machine.motion_io import load_trajectory
@@ -153,7 +160,9 @@ def cut(
     r = report.result
     result["cut"] = {
         "edge": kind,
-        "motion": "ideal" if trajectory is None else str(trajectory),
+        "motion": ("ideal" if plan is None else "ideal, finishing pass along the modification's path")
+        if trajectory is None
+        else str(trajectory),
         "sweep_error_um": r.sweep_error * 1e3,
         "pass_sweep_error_um": [r.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(st.passes))],
         "sweeps": r.sweeps,
@@ -171,16 +180,46 @@ def cut(
             for c in r.chips
         ],
     }
+    if plan is not None:
+        from virtual_machine.modification_path import path_summary
+
+        result["modification_path"] = path_summary(plan)
     doc = finite(result)
     (out / "measurement.json").write_text(json.dumps(doc, indent=2, allow_nan=False))
     write_charts(out, result)
     click.echo(format_measurement(doc, str(out / "gear.stl")))
+    if plan is not None:
+        click.echo(format_path(doc["modification_path"]))
     click.echo(
         f"\ncut: {len(r.chips)} tooth passages, {r.sweeps} sweeps, {r.subtractions} subtractions, sweep error <= "
         f"{r.pass_sweep_error.get(len(st.passes) - 1, 0.0) * 1e3:.2f} um in the finishing pass, "
         f"{report.seconds:.1f} s wall for {sum(st.pass_times):.1f} s of machine time"
     )
     click.echo(format_gear_stl(result["cut"]["gear_stl"]))
+
+
+def format_path(path: dict) -> str:
+    """The accuracy check's iterations and what the path cannot make."""
+    lines = ["", "PATH  the finishing pass's radial and tangential corrections (seed 003's accuracy check)"]
+    for where, rows, converged in (
+        ("ideal machine", path["iterations"], path["converged"]),
+        ("simulated machine", path.get("machine_iterations"), path.get("machine_converged")),
+    ):
+        if rows is None:
+            continue
+        for it in rows:
+            r, c = it["residual_um"], it["C_beta_um"]
+            lines.append(
+                f"  {where}, iteration {it['iteration']}: largest residual left {r['left']:.2f} um, right "
+                f"{r['right']:.2f} um; C_beta {c['left']:.2f} / {c['right']:.2f} um"
+            )
+        lines.append(f"  {where}: " + ("converged" if converged else "NOT converged: the residual stopped falling"))
+    for side, um in path["beyond_path_um"].items():
+        if um > 0.05:
+            lines.append(
+                f"  {side} flank: {um:.2f} um of the design vary over the profile: a modified cutter makes them"
+            )
+    return "\n".join(lines)
 
 
 def _finite(obj: object) -> object:
@@ -238,6 +277,8 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
         bar.close()
         _fail(exc)
     click.echo(format_measurement(doc, str(out / "gear.stl")))
+    if doc.get("modification_path"):
+        click.echo(format_path(doc["modification_path"]))
     click.echo(format_run(doc["run"], out, rrd))
 
 
@@ -354,6 +395,8 @@ def format_run(run: dict, out: Path, rrd: Path | None) -> str:
         f"{f['peak_force_N']:.0f} N, cutting energy {f['chip_energy_J']:.0f} J ({f['material']})"
     )
     lines.append("  " + format_gear_stl(run["cut"]["gear_stl"]))
+    if run.get("modification"):
+        lines.append(f"  modification: {run['modification']}")
     files = ["gear.stl", "measurement.json", "report.html", "charts/"]
     lines.append(f"  files: {', '.join(str(out / x) for x in files)}" + (f", {rrd}" if rrd else ""))
     return "\n".join(lines)

@@ -27,6 +27,7 @@ from cutting.edge import CuttingEdge, make_edge
 from cutting.forces import EngagementLoad, engagement_load
 from cutting.holder import check_holder_side
 from cutting.materials import Material, material
+from cutting.path_correction import PathCorrection
 from cutting.removal import (
     Chip,
     CutResult,
@@ -145,12 +146,14 @@ def cosimulate(
     progress: Callable[[float, int], None] | None = None,
     snapshots_per_pass: int = 0,
     workers: int = 1,
+    correction: PathCorrection | None = None,
 ) -> CoSimulation:
     """Run the job's machine and cut its gear from the motion it really makes, with the chips' forces acting on
     the machine (``forces=False``: the cut follows the machine, no force acts back). ``progress(machine_time,
     passages)`` is called as passages finish. ``snapshots_per_pass``: meshes of the stock taken evenly through
     each pass (the last at its end), for the recording. ``workers`` > 1 cuts in that many processes; the machine
-    then runs at most :func:`max_lag` passages ahead of the finished chips."""
+    then runs at most :func:`max_lag` passages ahead of the finished chips. ``correction``: the finishing pass's
+    path corrections of a flank modification (virtual_machine/modification_path.py), made by the CNC."""
     setup = job.skiving
     kind = edge_kind or job.cutter_options["edge"]
     edge = make_edge(setup, kind)
@@ -161,7 +164,7 @@ def cosimulate(
         job.process["sweep_error"] if i == n_pass - 1 else job.process["roughing_sweep_error"] for i in range(n_pass)
     ]
     mat = material(job.process["material"])
-    run = MachineRun(job, params, servo_substeps)
+    run = MachineRun(job, params, servo_substeps, correction=correction)
     lag = max_lag(workers)
     predictor = ForcePredictor(lag)
     run.load = predictor if forces else (lambda t, dt: ())  # no force, but the work accounting runs alike

@@ -93,6 +93,24 @@ def format_measurement(doc: dict, source: str) -> str:
         lines.append(f"ISO 1328-1: {iso['error']}")
     else:
         lines.append(f"ISO 1328-1:2013 class of the gear: {cls.get('overall')}")
+    prof, helix = doc["profile"], doc["helix"]
+    if "C_alpha" in prof["left"]:
+        designed = any(
+            abs(blk[s].get(f"C_{k}_design", 0.0)) > 0
+            for k, blk in (("alpha", prof), ("beta", helix))
+            for s in ("left", "right")
+        )
+        lines.append(
+            "crowning (mean over the teeth"
+            + (", deviations above are against the job's [modification]" if designed else "")
+            + "): "
+            + ", ".join(
+                f"C_{k} {s} {blk[s][f'C_{k}']:.2f} um"
+                + (f" (design {blk[s][f'C_{k}_design']:.2f})" if designed else "")
+                for k, blk in (("alpha", prof), ("beta", helix))
+                for s in ("left", "right")
+            )
+        )
     th = doc["thickness"]
     ob = th["over_balls"]
     lines.append(

@@ -7,6 +7,7 @@ Units: mm, degrees, rpm, Hz; helix angles signed, right hand positive.
 
 from __future__ import annotations
 
+import difflib
 import math
 import tomllib
 from collections.abc import Callable
@@ -16,11 +17,13 @@ from typing import Any
 
 from cutting.errors import InputError, Problem
 from cutting.gear import Gear, check_gear
+from cutting.modification import FlankDesign, Modification, design_problems
 from cutting.skiving import SkivingSetup, check_setup
 
 REQUIRED = object()
 STRUCTURES = ("mechanical", "hydraulic-differential", "hydraulic-shaft", "mechatronic")
 SYNCHRONIZATIONS = ("equal-coordinates", "master-slave")
+SIDES = ("left", "right")
 MAX_HELIX = 45.0
 
 
@@ -209,6 +212,21 @@ MEASUREMENT_KEYS: dict[str, Key] = {
     "ball_diameter": Key(float, None, "mm", "ball for over-balls and runout (default DIN 3977 size)", _positive),
 }
 
+MODIFICATION_KEYS: dict[str, Key] = {
+    "lead_crowning": Key(float, 0.0, "mm", "lead crowning C_beta: the face ends this much below mid face"),
+    "end_relief": Key(float, 0.0, "mm", "end relief C_I at each end face", _at_least(0.0)),
+    "end_relief_length": Key(float, 0.0, "mm", "length of the end relief from each end face", _at_least(0.0)),
+    "profile_crowning": Key(float, 0.0, "mm", "profile crowning C_alpha over the active profile"),
+    "tip_relief": Key(float, 0.0, "mm", "tip relief C_a at the tip", _at_least(0.0)),
+    "tip_relief_diameter": Key(float, None, "mm", "where the tip relief starts, d_Ca", _positive),
+    "helix_angle_modification": Key(float, 0.0, "mm", "helix slope f_Hbeta over the face width (+: more towards +z)"),
+    "twist": Key(float, 0.0, "mm", "twist S_beta: helix slope at the tip minus at the root"),
+}
+FLANK_MODIFICATION_KEYS: dict[str, Key] = {
+    **{k: Key(key.kind, None, key.unit, key.doc, key.check) for k, key in MODIFICATION_KEYS.items()},
+    "patch": Key(list, None, "mm", "bicubic Bezier patch: 4 x 4 control points [roll length L, z, deviation e]"),
+}
+
 #: c2 default per structure (see MACHINE_KEYS["c2"]).
 C2_DEFAULT = {"mechanical": 1 / 24, "hydraulic-differential": 1 / 24, "hydraulic-shaft": 1 / 24, "mechatronic": 1.0}
 
@@ -222,7 +240,7 @@ def machine_constants(machine: dict[str, Any], structure: str) -> dict[str, Any]
 
 
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
-OPTIONAL_SECTIONS = {"measurement": MEASUREMENT_KEYS}
+OPTIONAL_SECTIONS = {"measurement": MEASUREMENT_KEYS, "modification": MODIFICATION_KEYS}
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
 
 
@@ -294,7 +312,7 @@ def parse_section(name: str, table: Any, keys: dict[str, Key], problems: list[Pr
         if k not in keys:
             close = [
                 c for c in keys if c.replace("_", "") in k.replace("_", "") or k.replace("_", "") in c.replace("_", "")
-            ]
+            ] or difflib.get_close_matches(k, list(keys), n=1, cutoff=0.8)  # a letter left out, swapped, doubled
             hint = f"did you mean {close[0]!r}? " if close else ""
             problems.append(Problem(f"{name}.{k}", table[k], "unknown key", hint + "valid keys: " + ", ".join(keys)))
     for k, key in keys.items():
@@ -324,6 +342,47 @@ def parse_section(name: str, table: Any, keys: dict[str, Key], problems: list[Pr
     return out
 
 
+def parse_modification(table: Any, problems: list[Problem]) -> Modification | None:
+    """[modification]: shortcuts for both flanks, and [modification.left] / [modification.right] for one flank
+    (its own values replace the shared ones; only there a ``patch``). None when the job has no such section."""
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        problems.append(Problem("modification", table, "must be a table", "write it as [modification]"))
+        return None
+    shared = parse_section(
+        "modification", {k: v for k, v in table.items() if k not in SIDES}, MODIFICATION_KEYS, problems
+    )
+    flanks = {}
+    for side in SIDES:
+        own = parse_section(f"modification.{side}", table.get(side, {}), FLANK_MODIFICATION_KEYS, problems)
+        values = {**shared, **{k: v for k, v in own.items() if v is not None}}
+        patch = values.pop("patch", None)
+        if patch is not None:
+            patch = _patch(patch, f"modification.{side}.patch", problems)
+        flanks[side] = FlankDesign(**values, patch=patch)
+    return Modification(**flanks)
+
+
+def _patch(raw: list, key: str, problems: list[Problem]):
+    """4 x 4 control points [L, z, e] as nested tuples, or a problem."""
+    try:
+        rows = tuple(tuple(tuple(float(c) for c in point) for point in row) for row in raw)
+    except (TypeError, ValueError):
+        rows = ()
+    if len(rows) != 4 or any(len(r) != 4 or any(len(p) != 3 for p in r) for r in rows):
+        problems.append(
+            Problem(
+                key,
+                "...",
+                "must be 4 rows of 4 control points [L, z, e] in mm",
+                "e.g. patch = [[[L, z, e], ...4], ...4], L along the rows",
+            )
+        )
+        return None
+    return rows
+
+
 @dataclass(frozen=True)
 class Job:
     """A parsed, validated job. ``kind`` is "gear" or "thread"; unused sections are None."""
@@ -337,6 +396,7 @@ class Job:
     cutter_options: dict[str, Any] | None = None
     thread: dict[str, Any] | None = None
     measurement: dict[str, Any] | None = None
+    modification: Modification | None = None  # the designed flank topography ([modification])
 
     @property
     def skiving(self) -> SkivingSetup:
@@ -393,6 +453,7 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
             )
     parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
     measurement = parse_section("measurement", data.get("measurement", {}), MEASUREMENT_KEYS, problems)
+    modification = parse_modification(data.get("modification"), problems)
     machine = parsed["machine"]
     problems += model_problems(machine.get("model"), "thread" if is_thread else "gear")
     if is_thread:
@@ -428,6 +489,8 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
                     "use more cutter teeth or a larger x0",
                 )
             )
+    if gear is not None and modification is not None:
+        problems += design_problems(modification, gear)
     if problems:
         raise InputError(problems, source)
     job = Job(
@@ -439,6 +502,7 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
         cutter=cutter,
         cutter_options={"edge": c["edge"], "holder_diameter": c["holder_diameter"]},
         measurement=measurement,
+        modification=modification,
     )
     problems += check_setup(job.skiving)
     if problems:
@@ -470,7 +534,8 @@ def load_job(path: str | Path) -> Job:
 
 
 def load_gear_section(path: str | Path) -> tuple[Gear, dict[str, Any]]:
-    """Only the [gear] and [measurement] sections of a job, validated: what measuring a gear needs."""
+    """Only the [gear], [measurement] and [modification] sections of a job, validated: what measuring a gear
+    needs (the measurement options, with ``design``: the designed topography or None)."""
     data = read_toml(path)
     problems: list[Problem] = []
     if "gear" not in data:
@@ -479,12 +544,15 @@ def load_gear_section(path: str | Path) -> tuple[Gear, dict[str, Any]]:
         )
     g = parse_section("gear", data["gear"], GEAR_KEYS, problems)
     measurement = parse_section("measurement", data.get("measurement", {}), MEASUREMENT_KEYS, problems)
+    modification = parse_modification(data.get("modification"), problems)
     if not problems:
         gear = _gear_from(g)
         problems += check_gear(gear, "gear")
+        if modification is not None and not problems:
+            problems += design_problems(modification, gear)
     if problems:
         raise InputError(problems, str(path))
-    return gear, measurement
+    return gear, {**measurement, "design": modification}
 
 
 def default_job_path() -> Path:

@@ -11,6 +11,7 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from cutting.path_correction import PathCorrection
 from cutting.skiving import SkivingSetup
 from virtual_machine.structures.mechatronic import CncState
 
@@ -64,10 +65,20 @@ def program_duration(setup: SkivingSetup, settings: ProgramSettings | None = Non
 
 
 def program(
-    setup: SkivingSetup, dt: float, screw_pulses_per_mm: float, machine, settings: ProgramSettings | None = None
+    setup: SkivingSetup,
+    dt: float,
+    screw_pulses_per_mm: float,
+    machine,
+    settings: ProgramSettings | None = None,
+    correction: PathCorrection | None = None,
+    work_pulses_per_rad: float = 0.0,
 ) -> Iterator[Tick]:
     """Ticks of the whole job. ``machine`` is the structure: the CNC reads the pulses it has issued
-    (``screw_pulses``, ``b4_pulses``) and its B4 pulses for a screw position (``b4_for_screw``)."""
+    (``screw_pulses``, ``b4_pulses``) and its B4 pulses for a screw position (``b4_for_screw``).
+
+    ``correction`` (a flank modification's path, seed 003): during the finishing stroke the CNC sets the radial
+    slide to the pass's centre distance plus da(s) and asks summator 9 for the extra work turn dphi2(s), in
+    ``work_pulses_per_rad`` command pulses per radian, at the carriage position s it has commanded."""
     from cutting.trajectory import ideal_passes
 
     settings = settings or ProgramSettings()
@@ -87,7 +98,16 @@ def program(
         target = round(motion.duration * abs(motion.v_s) * screw_pulses_per_mm)  # pulses of the stroke
         start_screw = machine.screw_pulses
         feed = Tick("feed", i, CncState(scale=1.0, feed=True, feed_dir=feed_dir), a[i])
+        corrected = correction is not None and i == len(passes) - 1
         while abs(machine.screw_pulses - start_screw) < target:
+            if corrected:
+                s = motion.s_start + math.copysign(abs(machine.screw_pulses - start_screw), motion.v_s) / (
+                    screw_pulses_per_mm
+                )
+                da, dphi = correction.at_point(s)
+                cnc = CncState(scale=1.0, feed=True, feed_dir=feed_dir, correction_b4=dphi * work_pulses_per_rad)
+                yield Tick("feed", i, cnc, a[i] + da * 1e-3)
+                continue
             yield feed
         if i == len(passes) - 1:
             return

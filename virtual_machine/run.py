@@ -69,10 +69,15 @@ def run_job(
     durations: dict[str, float] = {}
     job = with_mesh_tolerance(load_job(path), mesh_tolerance)
     out.mkdir(parents=True, exist_ok=True)
-    announce("machine and cut")
     t0 = time.perf_counter()
     workers = workers or default_workers()
-    sim = cosimulate(job, progress=progress, snapshots_per_pass=SNAPSHOTS_PER_PASS if rrd else 0, workers=workers)
+    snapshots = SNAPSHOTS_PER_PASS if rrd else 0
+    modification_path = None
+    if job.modification is None:
+        announce("machine and cut")
+        sim = cosimulate(job, progress=progress, snapshots_per_pass=snapshots, workers=workers)
+    else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one
+        sim, modification_path = _modification_runs(job, announce, snapshots, workers)
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
@@ -97,6 +102,8 @@ def run_job(
         t0 = time.perf_counter()
         _record(rrd, job, sim, mesh, measurement, [*charts, run_png])
         durations["recording"] = time.perf_counter() - t0
+    if modification_path is not None:
+        measurement["modification_path"] = modification_path
     doc = finite(measurement)
     doc["run"] = run_metadata(job, Path(path), sim, durations, stl)
     (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
@@ -106,12 +113,32 @@ def run_job(
     return doc
 
 
+def _modification_runs(job: Job, announce, snapshots: int, workers: int) -> tuple[CoSimulation, dict]:
+    """The path of the job's flank modification: planned on the ideal machine (J, feed-forward, accuracy check),
+    then iterated on the simulated machine, one co-simulation per iteration; the best one is the run."""
+    from virtual_machine.modification_path import iterate_on_machine, path_summary, plan_path
+
+    announce("path for the flank modification on the ideal machine (seed 003)")
+    plan = plan_path(job)
+    count = [0]
+
+    def run(correction):
+        count[0] += 1
+        announce(f"machine and cut along the path, iteration {count[0]}")
+        return cosimulate(job, snapshots_per_pass=snapshots, workers=workers, correction=correction)
+
+    made = iterate_on_machine(job, plan, run)
+    return made.sim, path_summary(plan, made)
+
+
 def measure_written_cut(
     job: Job, edge: CuttingEdge, motions: Sequence[PassMotion], cut: CutResult, stl: GearFile, stl_path: Path
 ) -> dict[str, Any]:
     """What `skive cut` and `skive run` measure: the exact swept surface of ``motions``, and beside it the written
     gear.stl held to the finishing pass's sweep error plus the file's simplification."""
-    opts = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None})
+    opts = MeasureOptions(
+        **{k: v for k, v in (job.measurement or {}).items() if v is not None}, design=job.modification
+    )
     bound = cut.pass_sweep_error.get(len(job.skiving.passes) - 1, cut.sweep_error)
     try:
         mesh = check_mesh(stl.mesh, str(stl_path))
@@ -190,6 +217,10 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             "median_chip_thickness_mm": float(np.median([a.load.thickness for a in loads])) if loads else 0.0,
             "chip_change_between_engagements": sim.chip_change(),
         },
+        "modification": None
+        if job.modification is None
+        else "the job's [modification] made by the finishing pass's path (radial and tangential corrections), "
+        "iterated on this machine; the deviations are measured against the design (modification_path)",
         "cut": {
             "edge": job.cutter_options["edge"],
             "passages": len(cut.chips),

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from cutting.errors import InputError, Problem
+from cutting.path_correction import PathCorrection
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.skiving_machine import MM, build_spec
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
@@ -200,6 +202,25 @@ def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: Machine
     )
 
 
+def check_correction(job: Job, correction: PathCorrection | None) -> None:
+    """A tangential correction needs the electronic gearbox's summator 9 (S4, equal coordinates); the radial one
+    every structure's radial slide makes."""
+    if correction is None or not np.any(correction.dphi):
+        return
+    m = job.machine
+    if m["structure"] != "mechatronic" or m["synchronization"] != "equal-coordinates":
+        raise InputError(
+            Problem(
+                "machine.structure",
+                f"{m['structure']} / {m['synchronization']}",
+                "the job's [modification] needs a tangential correction (different helices on the two flanks, or a "
+                "helix angle modification), which only the electronic gearbox's summator 9 adds to the work's turn",
+                'use structure = "mechatronic" with synchronization = "equal-coordinates", or a design the same on '
+                "both flanks (a radial correction alone)",
+            )
+        )
+
+
 class MachineRun:
     """The simulation loop as a stepper: :meth:`advance` runs the machine up to a time, so another stage (the
     cutting co-simulation) can act between calls; :meth:`record` assembles the :class:`MotionRecord`.
@@ -217,6 +238,7 @@ class MachineRun:
         settings: ProgramSettings | None = None,
         disturbance: Callable[[float], float] | None = None,
         disturbance_axis: str = "B2",
+        correction: PathCorrection | None = None,
     ):
         self.job = job
         self.params = params or machine_params(job)
@@ -231,7 +253,10 @@ class MachineRun:
         p = job.machine["command_pulses_per_rev"]
         ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
         settings = settings or ProgramSettings()
-        self._ticks = program(setup, self.dt, ppm, machine, settings)
+        check_correction(job, correction)
+        self.work_pulses_per_rad = p / (2 * math.pi)  # B4 command pulses of the work axis per radian
+        self._ticks = program(setup, self.dt, ppm, machine, settings, correction, self.work_pulses_per_rad)
+        self.corrections: list[float] = []  # the tangential correction asked for at each tick [rad]
         # the CNC of the servo structures watches the synchronisation (following error); a chain has no CNC loop
         self.following_limit = settings.following_error_limit if structure == "mechatronic" else math.inf
         self._pending = None  # a tick fetched from the program but not yet run
@@ -305,7 +330,9 @@ class MachineRun:
             t_ctrl += c1 - c0
             t_phys += c2 - c1
             rows.append((data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
-            delta = (qpos[b2] - b2_0) - ratio * (qpos[b1] - b1_0) - diff * (qpos[p3] / MM - p3_0)
+            wanted = tick.cnc.correction_b4 / self.work_pulses_per_rad  # a modification's extra turn is no error
+            self.corrections.append(wanted)
+            delta = (qpos[b2] - b2_0) - ratio * (qpos[b1] - b1_0) - diff * (qpos[p3] / MM - p3_0) - wanted
             if abs(delta) > limit:
                 raise LostSynchronismError(self._lost_synchronism(delta))
             if progress is not None:
@@ -356,7 +383,7 @@ class MachineRun:
         n_ax = len(AXES)
         q = a[:, 1 : 1 + n_ax].copy()
         b1, b2, p3 = q[:, 0], q[:, 1], q[:, 2] / MM
-        delta = (b2 - b2_0) - ratio * (b1 - b1_0) - diff * (p3 - p3_0)
+        delta = (b2 - b2_0) - ratio * (b1 - b1_0) - diff * (p3 - p3_0) - np.asarray(self.corrections)
         q[:, 2:4] /= MM  # P3, X in mm
         segment, pass_index = a[:, 1 + n_ax].astype(int), a[:, 2 + n_ax].astype(int)
         reach = np.array(

@@ -42,6 +42,9 @@ class CncState:
     rapid_screw: int = 0  # interpolated pulses this tick for the lead-screw axis (rapid moves)
     rapid_b4: int = 0  # and for the B4 input of summator 9
     reverse: bool = False  # return stroke by reversing the feed chain (S3 has no traverse drive)
+    #: the tangential correction of a flank modification (seed 003): where the CNC wants the work's extra turn,
+    #: in command pulses of the work axis (fractional), fed to summator 9 with the B4 pulses (S4 only)
+    correction_b4: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -110,6 +113,7 @@ class MechatronicS4(_ServoAxes):
         self.screw_pulses = 0
         self._last = [0.0, 0.0, 0.0, 0.0]  # fine positions of dividers 6, 21, 7, 22 at the last tick
         self._b4_per_screw = 0.0 if ky is None else dir_b4 * ks / ky
+        self._correction, self._correction_pulses = 0.0, 0  # tangential correction fed so far (fine, whole)
 
     def b4_for_screw(self, screw_pulses: int) -> int:
         """The B4 pulses that belong to a lead-screw pulse position (the CNC's return move keeps this relation)."""
@@ -149,6 +153,12 @@ class MechatronicS4(_ServoAxes):
             self.d22.update(dt)
             b4 += self.dir_b4 * cnc.feed_dir * self.d22.out
             b4_fine += self.dir_b4 * cnc.feed_dir * self._fine(self.d22, 3)
+        if cnc.correction_b4 != self._correction:  # the CNC's tangential correction joins the B4 input
+            whole = round(cnc.correction_b4) - self._correction_pulses
+            b4 += whole
+            self._correction_pulses += whole
+            b4_fine += cnc.correction_b4 - self._correction
+            self._correction = cnc.correction_b4
         self.b4_pulses += b4
         self.pa23.inp = b4_fine
         self.pa23.update(dt)
