@@ -314,14 +314,13 @@ def test_skive_cut_makes_the_modification_and_says_how(tmp_path) -> None:
     import json
 
     from click.testing import CliRunner
+    from small_jobs import small_job
 
     from virtual_machine.cli import main
 
-    job = tmp_path / "crowned.toml"
-    job.write_text(SCENARIO.read_text() + "\n[modification]\nlead_crowning = 0.010\n")
-    # a coarse solid (40 um) is enough: the measurement is the exact swept surface's
-    args = ["cut", str(job), "--out", str(tmp_path / "out"), "--workers", "1", "--mesh-tolerance", "40"]
-    res = CliRunner().invoke(main, args)
+    job = tmp_path / "crowned.toml"  # the tests' small spur gear (z 18, b 2 mm): seconds
+    job.write_text(small_job(sweep_error=0.02) + "\n[modification]\nlead_crowning = 0.010\n")
+    res = CliRunner().invoke(main, ["cut", str(job), "--out", str(tmp_path / "out"), "--workers", "1"])
     assert res.exit_code == 0, res.output
     assert "PATH" in res.output and "converged" in res.output and "crowning" in res.output
     doc = json.loads((tmp_path / "out" / "measurement.json").read_text())
