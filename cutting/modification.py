@@ -24,30 +24,13 @@ tooth than it can carry (the tip land left by both flanks below 0.2 mn), each re
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
-from typing import Any
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from cutting.errors import InputError, Problem
 from cutting.flank import SIDES
 from cutting.gear import MIN_TIP_THICKNESS, Gear, form_roll_length
-
-SHORTCUTS = (
-    "lead_crowning",
-    "end_relief",
-    "end_relief_length",
-    "profile_crowning",
-    "tip_relief",
-    "tip_relief_diameter",
-    "helix_angle_modification",
-    "twist",
-)
-
-
-def form_roll(gear: Gear) -> float:
-    """Roll length where the active profile starts [mm] (the generated involute's start)."""
-    return form_roll_length(gear)
 
 
 def roll(gear: Gear, diameter: float) -> float:
@@ -68,17 +51,11 @@ class FlankDesign:
     twist: float = 0.0
     patch: tuple[tuple[tuple[float, float, float], ...], ...] | None = None
 
-    @property
-    def is_zero(self) -> bool:
-        return self.patch is None and all(
-            not getattr(self, f.name) for f in fields(self) if f.name not in ("patch", "tip_relief_diameter")
-        )
-
     def deviation(self, gear: Gear, L, z) -> np.ndarray:
         """e [mm] at roll lengths ``L`` and face positions ``z`` (broadcast)."""
         L, z = np.broadcast_arrays(np.asarray(L, dtype=float), np.asarray(z, dtype=float))
         b = gear.face_width
-        lf, la = form_roll(gear), roll(gear, gear.tip_diameter_value)
+        lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)
         lm, span = (lf + la) / 2, la - lf
         e = np.zeros(L.shape)
         e -= self.lead_crowning * (2 * z / b) ** 2
@@ -107,19 +84,8 @@ class Modification:
     def flank(self, side: str) -> FlankDesign:
         return self.left if side == "left" else self.right
 
-    @property
-    def is_zero(self) -> bool:
-        return self.left.is_zero and self.right.is_zero
-
     def deviation(self, gear: Gear, side: str, L, z) -> np.ndarray:
         return self.flank(side).deviation(gear, L, z)
-
-    def to_json(self) -> dict[str, Any]:
-        out = {}
-        for side in SIDES:
-            d = self.flank(side)
-            out[side] = {f.name: getattr(d, f.name) for f in fields(d) if getattr(d, f.name) not in (None, 0.0)}
-        return out
 
 
 def bernstein(t: np.ndarray) -> np.ndarray:
@@ -191,7 +157,7 @@ def design_problems(mod: Modification, gear: Gear, prefix: str = "modification")
     relief that starts off the flank, negative lengths, and more taken from the tooth than it can carry."""
     out: list[Problem] = []
     b = gear.face_width
-    lf, la = form_roll(gear), roll(gear, gear.tip_diameter_value)
+    lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)
     for side in SIDES:
         d, key = mod.flank(side), f"{prefix}.{side}"
         if d.end_relief_length < 0 or d.end_relief_length > b / 2:

@@ -13,12 +13,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from metrology.modification import chart_teeth
+
 SIDES = ("left", "right")
-
-
-def chart_teeth(z: int, count: int = 4) -> list[int]:
-    """Tooth numbers a measuring machine would chart: ``count`` teeth evenly round the gear."""
-    return sorted({1 + round(i * z / count) % z for i in range(count)})
 
 
 def _trace_chart(

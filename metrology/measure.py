@@ -22,7 +22,7 @@ from metrology import thickness_nominal as nominal
 from metrology import tolerances as iso
 from metrology.datum import Datum, establish_datum, measuring_radius
 from metrology.flank_lines import evaluate_many
-from metrology.modification import crowning, crowning_many, topography
+from metrology.modification import chart_teeth, crowning, crowning_many, topography
 from metrology.probe import ball_seats
 from metrology.span import measure_span
 from metrology.traces import helix_trace, profile_trace
@@ -44,6 +44,11 @@ class MeasureOptions:
     profile_points: int = 240
     helix_points: int = 200
     design: Modification | None = None  # the designed flank topography: deviations are evaluated against it
+
+    @classmethod
+    def from_job(cls, measurement: dict[str, Any] | None, design: Modification | None = None) -> MeasureOptions:
+        """The options a job's [measurement] section sets (its None values: the standard's defaults) and its design."""
+        return cls(**{k: v for k, v in (measurement or {}).items() if v is not None}, design=design)
 
 
 def roll_length(gear: Gear, diameter: float) -> float:
@@ -160,8 +165,6 @@ def topography_block(
 ) -> dict[str, Any]:
     """The flank topography [um] over the evaluation ranges, on the charted teeth: per flank the mean of those
     teeth, the design's, and their difference (grids roll length x face)."""
-    from metrology.charts import chart_teeth
-
     numbers = chart_teeth(gear.teeth)
     index = {int(datum.number(k)): k for k in range(gear.teeth)}
     topo = topography(wp, gear, datum, roll, face, [index[n] for n in numbers])

@@ -23,6 +23,12 @@ from metrology.workpiece import Workpiece, flank_deviation
 GRID = (15, 11)
 
 
+def chart_teeth(z: int, count: int = 4) -> list[int]:
+    """Tooth numbers a measuring machine charts and scans for the topography: ``count`` teeth evenly round the
+    gear."""
+    return sorted({1 + round(i * z / count) % z for i in range(count)})
+
+
 def crowning(x: np.ndarray, e: np.ndarray) -> float:
     """C of one trace e(x) [unit of e] over the range of ``x`` (NaN samples skipped)."""
     ok = np.isfinite(e)

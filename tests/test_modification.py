@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from cutting.errors import InputError
-from cutting.gear import Gear
-from cutting.modification import BezierPatch, FlankDesign, Modification, check_design, form_roll, roll
+from cutting.gear import Gear, form_roll_length
+from cutting.modification import BezierPatch, FlankDesign, Modification, check_design, roll
 
 DEG = math.pi / 180
 GEAR = Gear(30, 2.0, 20 * DEG, 0.0, 12.0)  # b 12 mm: every shortcut has room
@@ -20,7 +20,7 @@ UM = 1e-3
 
 
 def flank_range(gear: Gear) -> tuple[float, float]:
-    return form_roll(gear), roll(gear, gear.tip_diameter_value)
+    return form_roll_length(gear), roll(gear, gear.tip_diameter_value)
 
 
 def test_shortcuts_have_their_amounts_where_the_standard_puts_them() -> None:

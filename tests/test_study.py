@@ -187,6 +187,27 @@ def test_one_at_a_time_budget_and_the_tightening_that_reaches_a_class(tmp_path) 
     assert signed["machine.model.lead_screw_pitch_error"] == pytest.approx(-1e4)
 
 
+def test_a_part_that_cannot_reach_the_class_alone_is_said_so() -> None:
+    """Base 3 um, part A 2 um and part B 4 um at their tolerances against a 6 um class tolerance: B limits, but A
+    and the base leave it 1 um, so B needs 1/4 of its tolerance; against 4.5 um nothing is left for B."""
+    from virtual_machine.study.budget import ParameterBudget, PartEffect, _answer_stack, _stack
+
+    def budget():
+        parts = [
+            PartEffect("a", "part A", 2.0, (0, 0), (1, 2), 1.0, 2.0),
+            PartEffect("b", "part B", -8.0, (0, 0), (1, -8), 0.5, 4.0),
+        ]
+        return _stack("F_p", 3.0, parts)
+
+    p: ParameterBudget = budget()
+    assert p.stacked == pytest.approx(9.0) and [e.label for e in p.parts] == ["part B", "part A"]
+    fine = _answer_stack(p, 6.0, 5, None)
+    assert fine.limiting == "part B" and fine.required == pytest.approx(1.0 / 8.0) and not fine.meets
+    stuck = _answer_stack(budget(), 4.5, 5, None)
+    assert stuck.limiting == "part B" and stuck.required is None
+    assert "base case (3.00 um) and the other parts' tolerances (2.00 um)" in stuck.note
+
+
 def test_grid_budget_fits_every_case_at_once(tmp_path) -> None:
     """F_p = 3 + 2e3 eps + 1e-4 (k - 2e4) on a 3 x 2 grid that does not hold the base: the fit gives both
     sensitivities and the value at the base; the worst case stacks the stated tolerances on it."""

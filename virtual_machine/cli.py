@@ -71,10 +71,9 @@ def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) 
 
     try:
         gear, options = load_gear_section(job_path or default_job_path())
+        design = options.pop("design")
         data = load_mesh(mesh)
-        result = measure_gear(
-            data, gear, MeasureOptions(**{k: v for k, v in options.items() if v is not None}), str(mesh)
-        )
+        result = measure_gear(data, gear, MeasureOptions.from_job(options, design), str(mesh))
     except (InputError, ValueError, RuntimeError) as exc:
         _fail(exc)
     doc = finite(result)

@@ -99,7 +99,7 @@ def plan_path(job: Job, tolerance: float = 0.2e-3, max_iterations: int = 6) -> M
     edge = make_edge(st, job.cutter_options["edge"])
     passes = ideal_passes(st)
     finishing = passes[-1]
-    opt = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None}, design=job.modification)
+    opt = MeasureOptions.from_job(job.measurement, job.modification)
     b = st.gear.face_width
     zk = np.concatenate([[-b / 2 - 2.0], np.arange(-KNOTS, KNOTS + 1) * b / (2 * KNOTS), [b / 2 + 2.0]])
     target = helix_target(job, np.clip(zk, -b / 2, b / 2))
@@ -206,7 +206,7 @@ def iterate_on_machine(
     machine's own corrections move the flanks as the ideal kinematics' do: measured within 2 %)."""
     from cutting.sampled_motion import sampled_passes
 
-    opt = MeasureOptions(**{k: v for k, v in (job.measurement or {}).items() if v is not None}, design=job.modification)
+    opt = MeasureOptions.from_job(job.measurement, job.modification)
 
     def cut(correction: PathCorrection):
         sim = run(correction)

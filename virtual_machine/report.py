@@ -60,7 +60,8 @@ def run_chart(path: Path, record, load_rows: np.ndarray, chips: list[tuple[float
     return path
 
 
-def _table(head: list[str], rows: list[list[Any]], fails: set[int] | None = None) -> str:
+def html_table(head: list[str], rows: list[list[Any]], fails: set[int] | None = None) -> str:
+    """An HTML table, every cell escaped (None as "-", floats to 2 decimals); rows in ``fails`` shaded."""
     out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
     for k, row in enumerate(rows):
         cls = ' class="fail"' if fails and k in fails else ""
@@ -139,17 +140,17 @@ def write_report(
         f"chips' cutting forces. Measured workpiece: <b>{html.escape(wp_kind)}</b>, probed along the nominal "
         "directions with the nominal gear data alone.</p>",
         f"<h2>ISO 1328-1 deviations [um] ({html.escape(tol_note)}; rows over tolerance shaded)</h2>",
-        _table(["parameter", "left", "right", "tolerance", "class"], rows, fails),
+        html_table(["parameter", "left", "right", "tolerance", "class"], rows, fails),
         *_mesh_rows(doc.get("mesh")),
         "<h2>Size</h2>",
-        _table(["", "measured", "nominal"], thickness),
+        html_table(["", "measured", "nominal"], thickness),
         "<h2>Profile, helix and pitch</h2>",
         *[_image(c) for c in charts],
         "<h2>Synchronisation error, cutting force and chips over time</h2>",
         _image(run_png),
         "<h2>Run</h2>",
-        _table(["", ""], facts),
-        _table(["stage", "wall time [s]"], stages),
+        html_table(["", ""], facts),
+        html_table(["stage", "wall time [s]"], stages),
         "<h2>Setting sheet</h2>",
         f"<pre>{html.escape(sheet_text)}</pre>",
         "<h2>Job file</h2>",
@@ -186,5 +187,5 @@ def _mesh_rows(mesh: dict | None) -> list[str]:
     return [
         "<h2>The mesh beside it</h2>",
         note,
-        _table(["parameter (worst flank)", "mesh [um]", "exact - mesh [um]"], rows),
+        html_table(["parameter (worst flank)", "mesh [um]", "exact - mesh [um]"], rows),
     ]

@@ -136,9 +136,7 @@ def measure_written_cut(
 ) -> dict[str, Any]:
     """What `skive cut` and `skive run` measure: the exact swept surface of ``motions``, and beside it the written
     gear.stl held to the finishing pass's sweep error plus the file's simplification."""
-    opts = MeasureOptions(
-        **{k: v for k, v in (job.measurement or {}).items() if v is not None}, design=job.modification
-    )
+    opts = MeasureOptions.from_job(job.measurement, job.modification)
     bound = cut.pass_sweep_error.get(len(job.skiving.passes) - 1, cut.sweep_error)
     try:
         mesh = check_mesh(stl.mesh, str(stl_path))

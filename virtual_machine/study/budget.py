@@ -220,36 +220,36 @@ def _stack(name: str, p0: float, parts: list[PartEffect]) -> ParameterBudget:
     return ParameterBudget(name, p0, abs(p0) + stated, None, parts)
 
 
+def _missed(target: int, tol: float, note: str, limiting: str | None = None, required: float | None = None):
+    """A target the stack or the cases do not meet: why, the part that limits and what it needs (if any)."""
+    return TargetAnswer(target, tol, False, limiting, required, note)
+
+
 def _answer_stack(p: ParameterBudget, tol: float, target: int, _y) -> TargetAnswer:
     if p.stacked <= tol:
         return TargetAnswer(target, tol, True)
-    if abs(p.base) > tol:
-        return TargetAnswer(
+    base = abs(p.base)
+    if base > tol:
+        return _missed(
             target,
             tol,
-            False,
-            None,
-            None,
-            f"the base case alone ({abs(p.base):.2f} um) exceeds {tol:g} um: no studied part's "
-            "tolerance causes it (the process or a part at its base value does)",
+            f"the base case alone ({base:.2f} um) exceeds {tol:g} um: no studied part's tolerance causes it (the "
+            "process or a part at its base value does)",
         )
     stated = [e for e in p.parts if e.contribution is not None]
     lim = max(stated, key=lambda e: e.contribution)
-    room = tol - abs(p.base) - sum(e.contribution for e in stated if e is not lim)
+    others = sum(e.contribution for e in stated if e is not lim)
+    room = tol - base - others
     if room <= 0 or not lim.sensitivity:
-        return TargetAnswer(
+        return _missed(
             target,
             tol,
-            False,
+            f"tightening {lim.label} alone cannot reach it: the base case ({base:.2f} um) and the other parts' "
+            f"tolerances ({others:.2f} um) take the {tol:g} um already",
             lim.label,
-            None,
-            f"tightening {lim.label} alone cannot reach it: the other parts' tolerances take "
-            f"{tol - abs(p.base):.2f} um of the {tol:g} um already",
         )
     required = room / abs(lim.sensitivity)
-    return TargetAnswer(
-        target, tol, False, lim.label, required, f"tighten {lim.label} from {lim.tolerance:.3g} to {required:.3g}"
-    )
+    return _missed(target, tol, f"tighten {lim.label} from {lim.tolerance:.3g} to {required:.3g}", lim.label, required)
 
 
 def _answer_mc(p: ParameterBudget, tol: float, target: int, y) -> TargetAnswer:
@@ -257,38 +257,20 @@ def _answer_mc(p: ParameterBudget, tol: float, target: int, y) -> TargetAnswer:
         return TargetAnswer(target, tol, True)
     mean, var_y = float(np.mean(y)), float(np.var(y, ddof=1))
     if mean >= tol:
-        return TargetAnswer(
-            target,
-            tol,
-            False,
-            None,
-            None,
-            f"the mean of the cases ({mean:.2f} um) exceeds {tol:g} um: tighter spreads cannot help",
+        return _missed(
+            target, tol, f"the mean of the cases ({mean:.2f} um) exceeds {tol:g} um: tighter spreads cannot help"
         )
     lim = max(p.parts, key=lambda e: e.share or 0.0) if p.parts else None
     if lim is None or not lim.tolerance:
-        return TargetAnswer(target, tol, False, None, None, "no varied part explains the spread")
+        return _missed(target, tol, "no varied part explains the spread")
     need = ((tol - mean) / Z95) ** 2
     own = (lim.sensitivity * lim.tolerance) ** 2
     k2 = 1.0 - (var_y - need) / own
     if k2 <= 0:
-        return TargetAnswer(
-            target,
-            tol,
-            False,
-            lim.label,
-            None,
-            f"even a perfect {lim.label} leaves the others' spread above the target",
-        )
+        return _missed(target, tol, f"even a perfect {lim.label} leaves the others' spread above the target", lim.label)
     required = math.sqrt(k2) * lim.tolerance
-    return TargetAnswer(
-        target,
-        tol,
-        False,
-        lim.label,
-        required,
-        f"narrow {lim.label} from a standard deviation of {lim.tolerance:.3g} to {required:.3g}",
-    )
+    note = f"narrow {lim.label} from a standard deviation of {lim.tolerance:.3g} to {required:.3g}"
+    return _missed(target, tol, note, lim.label, required)
 
 
 def _same(a: Any, b: Any) -> bool:

@@ -15,7 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from virtual_machine.report import STYLE
+from virtual_machine.report import STYLE, html_table
 from virtual_machine.study.budget import Budget, ParameterBudget
 from virtual_machine.study.spec import Study
 
@@ -87,7 +87,7 @@ def _varies_table(study: Study) -> str:
         ]
         for v in study.varies
     ]
-    return _table(["part", "key", "base value", "studied values or distribution", "stated tolerance"], rows)
+    return html_table(["part", "key", "base value", "studied values or distribution", "stated tolerance"], rows)
 
 
 def _limiting(study: Study, budget: Budget) -> list[str]:
@@ -159,7 +159,7 @@ def _target_table(study: Study, budget: Budget) -> list[str]:
         "required std" if mc else "required tolerance",
         "note",
     ]
-    return [head, _table(header, rows, fails)]
+    return [head, html_table(header, rows, fails)]
 
 
 def _budget_tables(study: Study, budget: Budget) -> list[str]:
@@ -200,7 +200,7 @@ def _parameter_table(mc: bool, p: ParameterBudget) -> str:
     if mc:
         rows.append([RESIDUAL, "", "", "", _percent(p.residual_share)])
     header = ["part", "sensitivity [um per unit]", "std" if mc else "tolerance", "contribution [um]", "share [%]"]
-    return _table(header, rows)
+    return html_table(header, rows)
 
 
 def _tornado_section(study: Study, budget: Budget) -> list[str]:
@@ -235,7 +235,7 @@ def _cases_table(study: Study, records: dict[str, dict[str, Any]]) -> str:
         if r.get("status") != "ok":
             fails.add(k)
     header = ["case", *(v.label for v in study.varies), "status", "class", "sync RMS [um]", "wall [s]", "error"]
-    return _table(header, rows, fails)
+    return html_table(header, rows, fails)
 
 
 # --- tornado charts ---------------------------------------------------------------------------------------------
@@ -300,15 +300,6 @@ def _tornado_axis(ax: Any, p: ParameterBudget) -> None:
 
 
 # --- formatting -------------------------------------------------------------------------------------------------
-
-
-def _table(head: list[str], rows: list[list[str]], fails: set[int] | None = None) -> str:
-    """An HTML table of already formatted cells, every text escaped; rows in ``fails`` shaded."""
-    out = ["<table><tr>" + "".join(f"<th>{_e(h)}</th>" for h in head) + "</tr>"]
-    for k, row in enumerate(rows):
-        cls = ' class="fail"' if fails and k in fails else ""
-        out.append(f"<tr{cls}>" + "".join(f"<td>{_e(str(v))}</td>" for v in row) + "</tr>")
-    return "\n".join(out) + "</table>"
 
 
 def _image(png: bytes, alt: str) -> str:
