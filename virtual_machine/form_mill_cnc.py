@@ -1,0 +1,487 @@
+"""The CNC of the form-milling machine (seed 003, the copying method) and its simulation loop.
+
+A pass mills one tooth space k with the profiled disc mill: retract X to the safe radius, rapid Z to the
+pass start and index the **indexing work axis** A to ``-2 pi k / z`` (space k then faces +x, where the mill
+is), approach X/Y to the path, settle, feed along z at the feed rate with X and Y following the path
+(the mill centre in the **profiling plane** z = const), retract X. The spindle runs at the commanded speed
+all the time (velocity loop, half-cosine run-up).
+
+Per axis (A, X, Y, Z) the servo is the usual cascade on the **motor encoder** (semi-closed loop, as a machine
+with rotary encoders): position loop (gain Kv) with velocity feed-forward -> PI velocity loop -> torque,
+plus inertia (acceleration) feed-forward, limited to the motor's peak torque with anti-windup::
+
+    e = q_cmd - q_enc        w_ref = (v_cmd + Kv e) / g        tau = J a_cmd / g + Kp (w_ref - w) + Ki int(w_ref - w)
+
+(g: axis motion per motor radian, J: inertia at the motor). Screw and nut compliance, backlash, friction and
+the Z weight therefore show in the relative motion of mill and gear but not at the encoders. Moves are
+minimum-jerk (quintic) point-to-point profiles; the feed ramps up and down with a cycloidal (jerk-limited)
+velocity ramp. The loop is the fixed one of :mod:`virtual_machine.simulate`: servo tick, physics sub-steps,
+divergence check, record.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from machine_models.form_mill import FormMillLayout, FormMillParams, build_form_mill_spec, stage_omega_h
+from machine_models.parameters import ARCSEC
+from virtual_machine.physics import SimulationDivergedError
+
+AXES = ("A", "X", "Y", "Z", "S")  # the CNC's axes; A rad, X Y Z m, S rad
+MOTORS = ("MA", "MX", "MY", "MZ", "MS")
+_A, _X, _Y, _Z, _S = range(5)
+
+
+@dataclass(frozen=True)
+class MillPass:
+    """One pass of the copying method: tooth space ``space`` (k), fed from ``z_start`` to ``z_end`` [mm, gear
+    frame]; ``path(z)`` maps z [mm, array (N,)] to the commanded mill centre [x radial, y tangential] [mm,
+    (N, 2)] in the space's frame (the gear frame turned by 2 pi k / z; for space 0 the gear frame itself)."""
+
+    space: int
+    z_start: float
+    z_end: float
+    path: Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class CncTuning:
+    """Servo gains and motion limits of the CNC (per axis in the order A, X, Y, Z[, S])."""
+
+    servo_rate: float = 2000.0  # Hz: position and velocity loops (the physics sub-steps a whole number of times)
+    velocity_bandwidth: tuple[float, ...] = (40.0, 80.0, 80.0, 80.0, 20.0)  # Hz: PI velocity loops, A X Y Z S
+    position_gain: tuple[float, ...] = (60.0, 100.0, 100.0, 100.0)  # 1/s: Kv of A X Y Z
+    rapid_speed: tuple[float, ...] = (2.0, 0.25, 0.25, 0.25)  # rad/s, m/s: peak speed of a positioning move
+    rapid_accel: tuple[float, ...] = (10.0, 2.5, 2.5, 2.5)  # rad/s^2, m/s^2: peak acceleration of a move
+    feed_ramp: float = 0.05  # s: cycloidal ramp of the feed at both ends of a pass
+    spindle_ramp: float = 0.5  # s: half-cosine run-up of the spindle
+    settle_time: float = 0.1  # s: least dwell before the feed starts
+    settle_timeout: float = 2.0  # s: the feed starts anyway after this (the record notes the dwell)
+    #: rad, m: encoder following errors of A X Y Z under which the axes count as settled
+    settle_tolerance: tuple[float, ...] = (1.0 * ARCSEC, 0.5e-6, 0.5e-6, 0.5e-6)
+    runaway: tuple[float, ...] = (0.05, 5e-3, 5e-3, 5e-3)  # rad, m: a following error beyond this stops the run
+    trace_every: int = 4  # servo ticks per sample of the whole-run traces
+
+
+@dataclass
+class PassRecord:
+    """The feed segment of one pass at the servo rate, in the gear frame (site ``blank_frame``).
+
+    ``centre`` [mm] and ``axis`` (unit vector) of the mill (site ``mill_frame``), ``commanded`` centre [mm]
+    (the path turned by the space's angle ``angle`` [rad] = 2 pi k / z), ``following_error`` at the encoders
+    (commanded - measured: A [arcsec], X, Y, Z [um]), ``steady``: the feed at constant speed (after the ramp).
+    """
+
+    space: int
+    angle: float
+    t: np.ndarray
+    centre: np.ndarray
+    axis: np.ndarray
+    commanded: np.ndarray
+    following_error: np.ndarray
+    steady: np.ndarray
+    dwell: float  # s: settling dwell before this pass's feed
+
+    def deviation(self) -> np.ndarray:
+        """Recorded - commanded centre in the space's frame (radial, tangential, axial) [um], (N, 3)."""
+        c, s = math.cos(self.angle), math.sin(self.angle)
+        d = (self.centre - self.commanded) * 1e3
+        return np.column_stack((c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], d[:, 2]))
+
+
+@dataclass
+class FormMillRecord:
+    """A form-milling run: the passes' feed records and whole-run traces (every ``trace_every`` servo ticks) of
+    time [s], axes ``trace_q`` (A [rad], X Y Z [mm], S [rad]), commands ``trace_command`` (A [rad], X Y Z [mm],
+    spindle speed [rad/s]), motor torques ``trace_torque`` [N m] (MA MX MY MZ MS) and encoder following errors
+    ``trace_error`` (A [arcsec], X Y Z [um]). Numpy only: picklable."""
+
+    teeth: int
+    feed_mm_min: float
+    spindle_rpm: float
+    passes: list[PassRecord]
+    spaces: np.ndarray
+    trace_t: np.ndarray
+    trace_q: np.ndarray
+    trace_command: np.ndarray
+    trace_torque: np.ndarray
+    trace_error: np.ndarray
+    wall_time: float = 0.0  # s
+    sim_time: float = 0.0  # s
+    axes: tuple[str, ...] = field(default=AXES)
+
+
+@dataclass
+class _Segment:
+    """Commanded A X Y Z (rad, m) with speeds and accelerations per servo tick; a settle segment holds ``pos[0]``
+    until the axes have settled; a feed segment is recorded for pass ``index``."""
+
+    kind: str  # "move", "settle", "feed"
+    pos: np.ndarray  # (n, 4)
+    vel: np.ndarray
+    acc: np.ndarray  # mean over the tick that starts at the sample (the torque is held for the tick)
+    index: int = -1
+    steady: np.ndarray | None = None
+    commanded: np.ndarray | None = None  # (n, 3) gear frame [mm] (feed only)
+
+
+def _move(q0: np.ndarray, q1: np.ndarray, dt: float, tuning: CncTuning) -> _Segment | None:
+    """Minimum-jerk point-to-point move of A X Y Z, all axes together: s = 10 u^3 - 15 u^4 + 6 u^5 (peak speed
+    1.875 D / T, peak acceleration 5.77 D / T^2)."""
+    d = q1 - q0
+    if np.abs(d).max() < 1e-12:
+        return None
+    dist = np.abs(d)
+    duration = max(
+        float(np.max(1.875 * dist / np.asarray(tuning.rapid_speed))),
+        float(np.max(np.sqrt(5.7735 * dist / np.asarray(tuning.rapid_accel)))),
+        2 * dt,
+    )
+    n = math.ceil(duration / dt)
+    duration = n * dt
+    u = np.arange(n + 1)[:, None] * dt / duration  # samples at the ticks from the start to the end
+    s = u**3 * (10 - 15 * u + 6 * u**2)
+    ds = 30 * u**2 * (1 - u) ** 2 / duration
+    dds = 60 * u * (1 - u) * (1 - 2 * u) / duration**2
+    return _Segment("move", q0 + s * d, ds * d, _held(dds * d))
+
+
+def _held(acc: np.ndarray) -> np.ndarray:
+    """Accelerations at the ticks -> their means over the following tick (the zero-order hold of the torque)."""
+    out = acc.copy()
+    out[:-1] = (acc[:-1] + acc[1:]) / 2
+    return out
+
+
+def _hold(q: np.ndarray) -> _Segment:
+    z = np.zeros((1, 4))
+    return _Segment("settle", q[None, :].copy(), z, z.copy())
+
+
+def _feed(q0: np.ndarray, p: MillPass, index: int, teeth: int, feed: float, dt: float, tuning: CncTuning):
+    """The feed of pass ``p`` along z with X, Y on its path (velocity and acceleration feed-forward from the
+    path's derivatives by central differences, dz = 1e-3 mm)."""
+    z0, z1 = p.z_start * 1e-3, p.z_end * 1e-3
+    length, sign = abs(z1 - z0), math.copysign(1.0, z1 - z0)
+    speed = feed / 60 * 1e-3  # m/s
+    ramp = min(tuning.feed_ramp, length / speed)
+    duration = length / speed + ramp
+    n = math.ceil(duration / dt) + 1
+    t = np.minimum(np.arange(n) * dt, duration)  # samples at the ticks from the start to the end
+    w = 2 * math.pi / ramp
+
+    def up(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # cycloidal ramp: travel, speed, accel
+        tau = np.minimum(tau, ramp)
+        return (
+            speed * (tau**2 / (2 * ramp) + (np.cos(w * tau) - 1) / (w**2 * ramp)),
+            speed * (tau / ramp - np.sin(w * tau) / (2 * math.pi)),
+            speed / ramp * (1 - np.cos(w * tau)),
+        )
+
+    s_up, v_up, a_up = up(t)
+    s_dn, v_dn, a_dn = up(duration - t)
+    cruise = np.clip(t - ramp, 0, duration - 2 * ramp) * speed
+    late = t > duration - ramp
+    s = np.where(late, length - s_dn, s_up + cruise)
+    v = np.where(late, v_dn, np.where(t < ramp, v_up, speed))
+    a = np.where(late, -a_dn, np.where(t < ramp, a_up, 0.0))
+    z, zd, zdd = z0 + sign * s, sign * v, sign * a
+    zmm, dz = z * 1e3, 1e-3
+    xy = _path(p, zmm)
+    xy_p, xy_m = _path(p, zmm + dz), _path(p, zmm - dz)
+    d1 = (xy_p - xy_m) / (2 * dz)  # mm/mm
+    d2 = (xy_p - 2 * xy + xy_m) / dz**2 * 1e3  # 1/m
+    pos = np.column_stack((np.full(n, q0[_A]), xy * 1e-3, z))
+    vel = np.column_stack((np.zeros(n), d1 * zd[:, None], zd))
+    acc = np.column_stack((np.zeros(n), d2 * (zd**2)[:, None] + d1 * zdd[:, None], zdd))
+    angle = 2 * math.pi * p.space / teeth
+    c, s_ = math.cos(angle), math.sin(angle)
+    commanded = np.column_stack((c * xy[:, 0] - s_ * xy[:, 1], s_ * xy[:, 0] + c * xy[:, 1], zmm))
+    steady = (t >= ramp) & (t <= duration - ramp)
+    return _Segment("feed", pos, vel, _held(acc), index, steady, commanded)
+
+
+def _path(p: MillPass, z: np.ndarray) -> np.ndarray:
+    xy = np.asarray(p.path(z), dtype=float)
+    if xy.shape != (len(z), 2) or not np.isfinite(xy).all():
+        raise ValueError(f"MillPass.path must map z (N,) to finite (N, 2) [x, y] in mm; got shape {xy.shape}")
+    return xy
+
+
+def _plan(
+    layout: FormMillLayout, passes: Sequence[MillPass], feed_mm_min: float, dt: float, tuning: CncTuning
+) -> list[_Segment]:
+    """The CNC program as servo-rate segments: per pass retract X, rapid Z with the index of A, approach X/Y,
+    settle, feed, retract X (zero-length moves left out)."""
+    q = np.array([layout.home_a, layout.home_x, layout.home_y, layout.home_z])
+    out: list[_Segment] = []
+
+    def go(q1: np.ndarray) -> np.ndarray:
+        seg = _move(q, q1, dt, tuning)
+        if seg is not None:
+            out.append(seg)
+        return q1
+
+    for i, p in enumerate(passes):
+        q = go(np.array([q[_A], layout.safe_radius, q[_Y], q[_Z]]))  # retract X
+        q = go(np.array([-2 * math.pi * p.space / layout.teeth, q[_X], q[_Y], p.z_start * 1e-3]))  # rapid Z, index
+        xy = _path(p, np.array([p.z_start]))[0] * 1e-3
+        q = go(np.array([q[_A], xy[0], xy[1], q[_Z]]))  # approach
+        out.append(_hold(q))
+        feed = _feed(q, p, i, layout.teeth, feed_mm_min, dt, tuning)
+        out.append(feed)
+        q = feed.pos[-1].copy()
+        q = go(np.array([q[_A], layout.safe_radius, q[_Y], q[_Z]]))  # retract
+    return out
+
+
+class FormMillServo:
+    """The five drives of the machine: position loops (A X Y Z) and PI velocity loops (A X Y Z S) on the motor
+    encoders, inertia feed-forward, torque limits with anti-windup. Addresses resolved once."""
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        layout: FormMillLayout,
+        params: FormMillParams,
+        tuning: CncTuning,
+    ):
+        self.model, self.data, self.tuning = model, data, tuning
+        lead = layout.screw_pitch / (2 * math.pi)
+        #: axis motion per motor radian (the CNC's nominal ratios): rad/rad, m/rad
+        self.g = np.array(
+            [
+                params.work_drive.ratio,
+                params.x_drive.ratio * lead,
+                params.y_drive.ratio * lead,
+                params.z_drive.ratio * lead,
+                params.spindle_drive.ratio,
+            ]
+        )
+        self.qm = np.array([int(model.joint(m).qposadr[0]) for m in MOTORS])
+        self.vm = np.array([int(model.joint(m).dofadr[0]) for m in MOTORS])
+        self.qa = np.array([int(model.joint(a).qposadr[0]) for a in AXES])
+        self.act = np.array([int(model.actuator(m).id) for m in MOTORS])
+        self.peak = model.actuator_ctrlrange[self.act, 1].copy()
+        mujoco.mj_forward(model, data)
+        self.qm0 = data.qpos[self.qm].copy()  # encoder zero: the home keyframe
+        self.axis0 = data.qpos[self.qa].copy()
+        # inertia at each motor with the chain rigid (g^T M g), and the static torque each motor holds at home
+        # (the Z weight less the counterbalance; the drive holds it before its brake opens)
+        self.inertia, hold = np.zeros(5), np.zeros(5)
+        chain = {
+            0: (("MA", 1.0), ("A", self.g[0])),
+            4: (("MS", 1.0), ("S", self.g[4])),
+        }
+        for i, s in enumerate("XYZ", start=1):
+            drive = getattr(params, f"{s.lower()}_drive").ratio
+            chain[i] = ((f"M{s}", 1.0), (f"T{s}", drive), (s, self.g[i]))
+        load = data.qfrc_bias - data.qfrc_gravcomp
+        for i, terms in chain.items():
+            vec = np.zeros(model.nv)
+            for joint, ratio in terms:
+                vec[model.joint(joint).dofadr[0]] = ratio
+            res = np.zeros(model.nv)
+            mujoco.mj_mulM(model, data, res, vec)
+            self.inertia[i] = vec @ res
+            hold[i] = vec @ load
+        w = 2 * math.pi * np.asarray(tuning.velocity_bandwidth, dtype=float)
+        self.kp = self.inertia * w
+        self.ki = self.kp * w / 4
+        self.kv = np.append(np.asarray(tuning.position_gain, dtype=float), 0.0)  # S: velocity loop only
+        self.integral = np.clip(hold, -self.peak, self.peak)
+        self.torque = np.zeros(5)
+        self.error = np.zeros(5)
+
+    def measured(self) -> np.ndarray:
+        """Axis positions from the motor encoders (A rad, X Y Z m, S rad)."""
+        return self.axis0 + self.g * (self.data.qpos[self.qm] - self.qm0)
+
+    def update(self, dt: float, pos: np.ndarray, vel: np.ndarray, acc: np.ndarray) -> np.ndarray:
+        """One servo tick: commanded positions, speeds, accelerations (A X Y Z S; S position ignored) -> motor
+        torques written to ``ctrl`` (held over the physics sub-steps)."""
+        d, g = self.data, self.g
+        e = pos - (self.axis0 + g * (d.qpos[self.qm] - self.qm0))
+        ew = (vel + self.kv * e) / g - d.qvel[self.vm]
+        integral = self.integral + self.ki * ew * dt
+        u = self.inertia * acc / g + self.kp * ew + integral
+        sat = np.abs(u) > self.peak
+        if sat.any():
+            u = np.clip(u, -self.peak, self.peak)
+            wind = sat & (np.sign(u) == np.sign(ew))
+            integral = np.where(wind, self.integral, integral)
+        self.integral = integral
+        self.torque = u
+        self.error = e
+        d.ctrl[self.act] = u
+        return u
+
+
+def _diagnose(layout: FormMillLayout, params: FormMillParams, t: float) -> str:
+    """Which compliant stage's local mode is too fast for the time step (see ``stage_omega_h``)."""
+    head = f"the form-milling machine diverged at t = {t:.4f} s (MuJoCo reported bad accelerations). "
+    wh = stage_omega_h(layout, params)
+    if not wh:
+        return head + f"Every stage is rigid: reduce machine.timestep (now {params.timestep:g} s)"
+    worst = max(wh, key=wh.__getitem__)
+    what = f"machine.{worst}" if worst == "nut_stiffness" else f"machine.{worst}.stiffness"
+    return head + (
+        f"Stiffest stage: {worst} with omega*h = {wh[worst]:.2f} (explicit springs need < 2, better < 0.5); lower "
+        f"{what}, raise its damping, or reduce machine.timestep (now {params.timestep:g} s)"
+    )
+
+
+def simulate_form_milling(
+    layout: FormMillLayout,
+    passes: Sequence[MillPass],
+    params: FormMillParams | None,
+    feed_mm_min: float,
+    spindle_rpm: float,
+    progress: Callable[[float], None] | None = None,
+    tuning: CncTuning | None = None,
+) -> FormMillRecord:
+    """Run the passes on the simulated machine (MuJoCo) with the CNC of this module; the spindle at
+    ``spindle_rpm`` throughout, the feed at ``feed_mm_min`` [mm/min]. ``progress(fraction)`` is called now and
+    then. Raises ValueError for bad inputs and :class:`SimulationDivergedError` when the integration blows up or
+    a servo runs away (the message names what to change)."""
+    params = params or FormMillParams()
+    tuning = tuning or CncTuning()
+    if not passes:
+        raise ValueError("no passes to mill")
+    if not (math.isfinite(feed_mm_min) and feed_mm_min > 0):
+        raise ValueError(f"feed_mm_min = {feed_mm_min}: must be > 0")
+    if not (math.isfinite(spindle_rpm) and spindle_rpm >= 0):
+        raise ValueError(f"spindle_rpm = {spindle_rpm}: must be >= 0")
+    for p in passes:
+        if not 0 <= p.space < layout.teeth or p.space != int(p.space):
+            raise ValueError(f"MillPass.space = {p.space}: must be an integer in [0, {layout.teeth})")
+        if not (math.isfinite(p.z_start) and math.isfinite(p.z_end)) or p.z_start == p.z_end:
+            raise ValueError(f"MillPass z_start = {p.z_start}, z_end = {p.z_end}: must be finite and differ")
+    model = build_form_mill_spec(layout, params).compile()
+    h = model.opt.timestep
+    substeps = round(1 / (tuning.servo_rate * h))
+    if substeps < 1 or abs(substeps * h * tuning.servo_rate - 1) > 1e-9:
+        raise ValueError(
+            f"the servo period 1/{tuning.servo_rate:g} s must be a whole multiple of machine.timestep ({h:g} s)"
+        )
+    dt = substeps * h
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    servo = FormMillServo(model, data, layout, params, tuning)
+    program = _plan(layout, passes, feed_mm_min, dt, tuning)
+    planned = sum(len(s.pos) if s.kind != "settle" else round(tuning.settle_time / dt) for s in program)
+
+    omega = spindle_rpm * 2 * math.pi / 60
+    t_ramp = tuning.spindle_ramp
+    site_b, site_m = int(model.site("blank_frame").id), int(model.site("mill_frame").id)
+    qa = servo.qa
+    bad = [data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL)]
+    runaway = np.asarray(tuning.runaway)
+    tol = np.asarray(tuning.settle_tolerance)
+    pos, vel, acc = np.zeros(5), np.zeros(5), np.zeros(5)
+    traces: list[np.ndarray] = []
+    records: list[PassRecord] = []
+    tick, wall0 = 0, time.perf_counter()
+    dwell = 0.0
+    xpos, xmat = data.site_xpos, data.site_xmat
+
+    def step() -> None:
+        nonlocal tick
+        t = data.time
+        if t < t_ramp:  # spindle run-up: half cosine of the speed
+            vel[_S] = omega * 0.5 * (1 - math.cos(math.pi * t / t_ramp))
+            acc[_S] = omega * 0.5 * math.pi / t_ramp * math.sin(math.pi * t / t_ramp)
+        else:
+            vel[_S], acc[_S] = omega, 0.0
+        servo.update(dt, pos, vel, acc)
+        if tick % tuning.trace_every == 0:
+            row = np.empty(20)
+            row[0] = t
+            row[1:6] = data.qpos[qa]
+            row[6:10], row[10] = pos[:4], vel[_S]
+            row[11:16] = servo.torque
+            row[16:20] = servo.error[:4]
+            traces.append(row)
+        mujoco.mj_step(model, data, nstep=substeps)
+        tick += 1
+        if bad[0].number or bad[1].number or not math.isfinite(data.qpos[qa[_Z]]):
+            raise SimulationDivergedError(_diagnose(layout, params, t))  # data.time: reset by MuJoCo
+        if np.any(np.abs(servo.error[:4]) > runaway):
+            axis = AXES[int(np.argmax(np.abs(servo.error[:4]) / runaway))]
+            raise SimulationDivergedError(
+                f"the {axis} servo ran away at t = {data.time:.4f} s (following error beyond {tuning.runaway}): "
+                f"lower CncTuning.velocity_bandwidth / position_gain of {axis}, check the motor's peak torque, or "
+                f"reduce machine.timestep (now {h:g} s) if the stages' omega*h is near 2 (form_mill.stage_omega_h)"
+            )
+        if progress is not None and tick % 500 == 0:
+            progress(min(tick / planned, 0.999))
+
+    for seg in program:
+        if seg.kind == "settle":
+            pos[:4], vel[:4], acc[:4] = seg.pos[0], 0.0, 0.0
+            t0 = data.time
+            while True:
+                step()
+                waited = data.time - t0
+                settled = waited >= tuning.settle_time and data.time >= t_ramp and np.all(np.abs(servo.error[:4]) < tol)
+                if settled or waited >= tuning.settle_timeout:
+                    dwell = waited
+                    break
+            continue
+        n = len(seg.pos)
+        if seg.kind == "feed":
+            rec = np.empty((n, 14))
+            for k in range(n):
+                pos[:4], vel[:4], acc[:4] = seg.pos[k], seg.vel[k], seg.acc[k]
+                # the state at this tick's time (site poses left by mj_step are one sub-step old)
+                mujoco.mj_kinematics(model, data)
+                rb = xmat[site_b].reshape(3, 3)
+                rec[k, 0] = data.time
+                rec[k, 1:4] = rb.T @ (xpos[site_m] - xpos[site_b]) * 1e3
+                rec[k, 4:7] = rb.T @ xmat[site_m].reshape(3, 3)[:, 2]
+                step()
+                rec[k, 7:11] = servo.error[:4]
+            p = passes[seg.index]
+            fe = rec[:, 7:11] * np.array([1 / ARCSEC, 1e6, 1e6, 1e6])
+            records.append(
+                PassRecord(
+                    space=int(p.space),
+                    angle=2 * math.pi * p.space / layout.teeth,
+                    t=rec[:, 0].copy(),
+                    centre=rec[:, 1:4].copy(),
+                    axis=rec[:, 4:7].copy(),
+                    commanded=seg.commanded,
+                    following_error=fe,
+                    steady=seg.steady,
+                    dwell=dwell,
+                )
+            )
+            continue
+        for k in range(n):
+            pos[:4], vel[:4], acc[:4] = seg.pos[k], seg.vel[k], seg.acc[k]
+            step()
+    if progress is not None:
+        progress(1.0)
+    tr = np.array(traces)
+    mm = np.array([1.0, 1e3, 1e3, 1e3, 1.0])
+    return FormMillRecord(
+        teeth=int(layout.teeth),
+        feed_mm_min=float(feed_mm_min),
+        spindle_rpm=float(spindle_rpm),
+        passes=records,
+        spaces=np.array([int(p.space) for p in passes]),
+        trace_t=tr[:, 0],
+        trace_q=tr[:, 1:6] * mm,
+        trace_command=tr[:, 6:11] * mm,
+        trace_torque=tr[:, 11:16],
+        trace_error=tr[:, 16:20] * np.array([1 / ARCSEC, 1e6, 1e6, 1e6]),
+        wall_time=time.perf_counter() - wall0,
+        sim_time=float(data.time),
+    )
