@@ -1,0 +1,350 @@
+"""The path of the profiled disc mill for spatially modified teeth (seed 003, fig. 1, its 15 steps).
+
+The copying method cuts a tooth space with a mill whose edge is the space's section: what it cannot copy from
+its edge (a profile that changes from section to section) it makes by its path. Each space is cut flank by
+flank: the mill is narrower than the space by a clearance c, so the *left pass* (path point shifted -c/2) makes
+the left flank with the mill's left edge and the *right pass* (+c/2) the right flank. Per pass the path carries
+the seed's two corrections at the path points z_i = i b / (2n): the tangential k_t (x, along the thickness) and
+the radial k_r (y, along the height), i.e. a level and a slope of that flank's profile per section.
+
+The steps (seed fig. 1), as :func:`plan_copying` runs them:
+
+1. initial data: the designed flank sections (:func:`cutting.form_mill.designed_section`);
+2. initial path points (eq. 1) from the design's thickness deviation at the pitch cylinder at z_i (the seed
+   takes them between the symmetry plane and the end face; a design need not be symmetric, so both halves);
+3. the profiling plane through each path point, normal to the path (the seed puts it through each segment's
+   middle; through the points with the adjacent segments' mean direction the corrections land on the points);
+4. its intersection with the designed flank (eq. 2, Newton on z per profile point);
+5. the transfer angles psi_x = atan2(-T_y, T_z), psi_y = asin(T_x) of the path tangent T (eqs. 4, 5);
+6. the section in tool coordinates, rotated by psi_x about x and psi_y about y (eq. 6);
+7./8. mean section over the path points (eq. 7) and the sections' RMS deviation from it (eq. 8); the mill edge
+   fitted to the mean section as a Bezier chain (eq. 9); the radial correction k_r (eq. 10: the edge, moved by
+   k_r along the height, meets the section's bottom and top points with one thickness offset) and the
+   tangential correction k_t (eqs. 11-15: that offset, the thickness deviation of the bottom and top points);
+9. the refined path points x = x_pr + k_t, y = y_pr + k_r, z = z_pr (eq. 16);
+10. the path fitted with cubic Bezier segments (eq. 17; a C2 spline through the points, exact on a parabola,
+    continued along its end tangents beyond the face so the mill runs in and out without a kink);
+11.-14. the profiling planes of the Bezier path, their sections and corrections again, until the path stands;
+15. the accuracy check: the flank the mill really cuts on the path (its exact swept surface, no deflections)
+    against the design at every path point; where it misses, the residual's level and slope over the profile
+    (least squares) correct the path and the check is repeated.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from cutting.flank import SIDES, Side, flank_normals, flank_points
+from cutting.form_mill import (
+    BezierChain,
+    DiscMill,
+    designed_section,
+    from_space,
+    section_normals,
+    section_rolls,
+    tip_index,
+)
+from cutting.form_sweep import MilledGear, MillPassPoses
+from cutting.gear import Gear, form_roll_length
+from cutting.modification import Modification, roll
+
+#: the geometric iteration (steps 11-14) stops when no path point moves more than this [mm]
+PATH_TOLERANCE = 1e-7
+#: the accuracy check (step 15) is met when every checked point is within this of the design [mm]
+CHECK_TOLERANCE = 1e-4
+#: ideal poses along a pass every this much feed [mm]
+POSE_STEP = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class FlankPath:
+    """One pass's path: the path point (x_tr, y_tr) [mm] in the space frame at the path points ``z`` (increasing),
+    as a C2 cubic spline of Bezier segments, continued along the end tangents beyond them."""
+
+    side: Side
+    z: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+
+    @cached_property
+    def _splines(self) -> tuple[CubicSpline, CubicSpline]:
+        return CubicSpline(self.z, self.x, bc_type="not-a-knot"), CubicSpline(self.z, self.y, bc_type="not-a-knot")
+
+    def at(self, z: np.ndarray) -> np.ndarray:
+        """(n, 2) path point [x_tr, y_tr] at face positions ``z``; linear beyond the end points."""
+        z = np.asarray(z, dtype=float)
+        out = np.empty((*z.shape, 2))
+        for k, sp in enumerate(self._splines):
+            zc = np.clip(z, self.z[0], self.z[-1])
+            out[..., k] = sp(zc) + sp(zc, 1) * (z - zc)
+        return out
+
+    def tangent(self, z: np.ndarray) -> np.ndarray:
+        """(n, 3) unit path tangents (x, y, z)."""
+        z = np.asarray(z, dtype=float)
+        zc = np.clip(z, self.z[0], self.z[-1])
+        d = np.stack([sp(zc, 1) for sp in self._splines] + [np.ones_like(zc)], axis=-1)
+        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+    def bezier(self) -> list[dict[str, list[float]]]:
+        """The path as cubic Bezier segments between the path points (what a CNC's spline interpolation takes):
+        per segment its z span and the four control values of x and y [mm]."""
+        out = []
+        for i in range(len(self.z) - 1):
+            z0, z1 = float(self.z[i]), float(self.z[i + 1])
+            h = z1 - z0
+            seg: dict[str, list[float]] = {"z": [z0, z1]}
+            for name, sp in zip(("x", "y"), self._splines, strict=True):
+                y0, y1, d0, d1 = float(sp(z0)), float(sp(z1)), float(sp(z0, 1)), float(sp(z1, 1))
+                seg[name] = [y0, y0 + h * d0 / 3, y1 - h * d1 / 3, y1]
+            out.append(seg)
+        return out
+
+
+@dataclass
+class CopyingPlan:
+    """What the 15 steps give: the mill, the two passes' paths, the corrections and the iterations."""
+
+    gear: Gear
+    design: Modification | None
+    mill: DiscMill
+    paths: dict[str, FlankPath]
+    clearance: float
+    approach: float  # feed beyond each end face while the mill still reaches the blank [mm]
+    k_r: dict[str, np.ndarray] = field(default_factory=dict)  # last radial corrections per path point [mm]
+    k_t: dict[str, np.ndarray] = field(default_factory=dict)
+    psi: dict[str, np.ndarray] = field(default_factory=dict)  # (n, 2) transfer angles psi_x, psi_y [rad]
+    section_rms: dict[str, float] = field(default_factory=dict)  # eq. 8: sections' RMS from the mean [mm]
+    iterations: list[dict] = field(default_factory=list)  # the geometric iterations and the accuracy checks
+
+    def pass_poses(self, space: int, side: Side, step: float = POSE_STEP) -> MillPassPoses:
+        """The ideal machine's poses of the ``side`` pass of ``space`` (the planned path, exactly)."""
+        half = self.gear.face_width / 2 + self.approach
+        z = np.arange(-half, half + step / 2, step)
+        return poses_on_path(self.gear, self.mill, space, side, z, self.paths[side].at(z))
+
+    def all_passes(self, step: float = POSE_STEP) -> list[MillPassPoses]:
+        return [self.pass_poses(k, s, step) for k in range(self.gear.teeth) for s in SIDES]
+
+    def summary(self) -> dict:
+        """The plan for measurement.json."""
+        return {
+            "method": "copying (seed 003): profiled disc mill, one pass per flank",
+            "mill": self.mill.summary(),
+            "clearance_mm": self.clearance,
+            "approach_mm": round(self.approach, 3),
+            "path_points_z_mm": np.round(self.paths["left"].z, 4).tolist(),
+            "k_r_um": {s: np.round(v * 1e3, 3).tolist() for s, v in self.k_r.items()},
+            "k_t_um": {s: np.round(v * 1e3, 3).tolist() for s, v in self.k_t.items()},
+            "psi_mrad": {s: np.round(v * 1e3, 4).tolist() for s, v in self.psi.items()},
+            "section_rms_um": {s: round(v * 1e3, 3) for s, v in self.section_rms.items()},
+            "path_bezier": {s: p.bezier() for s, p in self.paths.items()},
+            "iterations": self.iterations,
+        }
+
+
+def poses_on_path(gear: Gear, mill: DiscMill, space: int, side: Side, z: np.ndarray, xy: np.ndarray) -> MillPassPoses:
+    """Poses (gear frame) of the mill whose path point is ``xy`` (n, 2) in the space frame at ``z``: the centre R
+    above the path point along the space's symmetry line, the axis along the space's x (tangential)."""
+    centre = from_space(gear, space, np.stack([xy[:, 0], xy[:, 1] + mill.radius, z], axis=-1))
+    axis = from_space(gear, space, np.broadcast_to([1.0, 0.0, 0.0], (len(z), 3)))
+    return MillPassPoses(space, side, np.asarray(z, dtype=float).copy(), centre, axis)
+
+
+# ---- the steps ----------------------------------------------------------------------------------------------
+def path_points(gear: Gear, n: int) -> np.ndarray:
+    """z_i = i b / (2 n), i = -n..n (step 2) [mm]."""
+    return np.arange(-n, n + 1) * gear.face_width / (2 * n)
+
+
+def nominal_path_point(gear: Gear, side: Side, clearance: float) -> tuple[float, float]:
+    """(x^n, y^n): on the root circle, shifted -c/2 (left pass) or +c/2 (right pass) [mm]."""
+    return (-clearance / 2 if side == "left" else clearance / 2), gear.root_radius
+
+
+def initial_path(gear: Gear, design: Modification | None, side: Side, z: np.ndarray, clearance: float) -> FlankPath:
+    """Step 2, eq. 1: the path points moved by the design's thickness deviation at the pitch cylinder,
+    dx_i = e(L_p, z_i) / n_x, and no height change."""
+    xn, yn = nominal_path_point(gear, side, clearance)
+    lp = roll(gear, gear.reference_diameter)
+    e = np.zeros_like(z) if design is None else design.deviation(gear, side, lp, z)
+    nx = section_normals(gear, side, np.array(lp))[0]
+    return FlankPath(side, z, xn + e / nx, np.full_like(z, yn))
+
+
+def transfer_angles(tangent: np.ndarray) -> np.ndarray:
+    """Step 5, eqs. 4-5: psi_x = atan2(-T_y, T_z) about x, psi_y = asin(T_x) about y; (n, 2) [rad]."""
+    return np.stack([np.arctan2(-tangent[:, 1], tangent[:, 2]), np.arcsin(np.clip(tangent[:, 0], -1, 1))], axis=-1)
+
+
+def _rotation(psi_x: float, psi_y: float) -> np.ndarray:
+    """Gear (space) frame -> tool frame rotation R with R e_z = T (eq. 6 uses R^T)."""
+    cx, sx, cy, sy = math.cos(psi_x), math.sin(psi_x), math.cos(psi_y), math.sin(psi_y)
+    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    return rx @ ry
+
+
+def profiling_sections(
+    gear: Gear, design: Modification | None, path: FlankPath, L: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Steps 3-6: per path point the designed flank's section in the profiling plane (normal to the path through
+    the point), in tool coordinates relative to the path point (n, m, 2), and the transfer angles (n, 2)."""
+    z = path.z
+    pts = path.at(z)
+    tangent = path.tangent(z)
+    psi = transfer_angles(tangent)
+    out = np.empty((len(z), len(L), 2))
+    for i in range(len(z)):
+        origin = np.array([pts[i, 0], pts[i, 1], z[i]])
+        t = tangent[i]
+        zz = np.full(len(L), z[i])
+        for _ in range(4):  # eq. 2: the flank point of roll length L on the plane (p - origin) . T = 0
+            p = designed_section(gear, design, path.side, L, zz)
+            f = (p - origin) @ t
+            zz = zz - f / t[2]
+        p = designed_section(gear, design, path.side, L, zz)
+        q = (p - origin) @ _rotation(*psi[i])  # eq. 6: R^T (p - origin), as rows
+        out[i] = q[:, :2]
+    return out, psi
+
+
+def mean_section(sections: np.ndarray) -> tuple[np.ndarray, float]:
+    """Eqs. 7-8: the mean section (m, 2) over the path points and the sections' RMS thickness deviation from it."""
+    mean = sections.mean(axis=0)
+    rms = float(np.sqrt(np.mean((sections[..., 0] - mean[None, :, 0]) ** 2)))
+    return mean, rms
+
+
+def corrections(mill: DiscMill, side: Side, sections: np.ndarray, bottom: int, top: int) -> tuple[np.ndarray, ...]:
+    """Steps 7-8, eqs. 10-15: per section the radial correction k_r (the edge moved by k_r along the height meets
+    the section's bottom and top points with one thickness offset) and the tangential one k_t (that offset)."""
+
+    def offsets(k_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # eq. 12: thickness deviations dx_0, dx_n
+        x0 = sections[:, bottom, 0] - mill.edge_x(side, sections[:, bottom, 1] - k_r)
+        xn = sections[:, top, 0] - mill.edge_x(side, sections[:, top, 1] - k_r)
+        return x0, xn
+
+    k_r = np.zeros(len(sections))
+    h = 1e-4
+    for _ in range(8):  # Newton on eq. 10 (dx_0 = dx_n), derivative by central difference
+        a0, an = offsets(k_r + h)
+        b0, bn = offsets(k_r - h)
+        f0, fn = offsets(k_r)
+        f = f0 - fn
+        df = ((a0 - an) - (b0 - bn)) / (2 * h)
+        step = np.where(np.abs(df) > 1e-12, f / df, 0.0)
+        k_r = k_r - step
+        if np.max(np.abs(step)) < 1e-11:
+            break
+    x0, xn = offsets(k_r)
+    return k_r, (x0 + xn) / 2  # eq. 11: k_t = (dx_00 + dx_0n) / 2
+
+
+def plan_copying(
+    gear: Gear,
+    design: Modification | None,
+    mill_diameter: float,
+    clearance: float = 0.2,
+    n: int = 10,
+    mill_teeth: int = 12,
+    max_iterations: int = 8,
+    checks: int = 3,
+    check_points: int = 11,
+) -> CopyingPlan:
+    """The seed's 15 steps for ``gear`` carrying ``design``: the mill, both passes' paths and the accuracy check
+    (``checks`` rounds at most; 0: none)."""
+    radius = mill_diameter / 2
+    z = path_points(gear, n)
+    L = section_rolls(gear)
+    lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)
+    bottom, top = 0, tip_index(gear, L)  # the profile's bottom and top points (eqs. 11-15)
+    paths = {s: initial_path(gear, design, s, z, clearance) for s in SIDES}
+    log: list[dict] = []
+    k_r: dict[str, np.ndarray] = {}
+    k_t: dict[str, np.ndarray] = {}
+    psi: dict[str, np.ndarray] = {}
+    rms: dict[str, float] = {}
+    mill = None
+    for it in range(max_iterations):
+        sections = {s: profiling_sections(gear, design, paths[s], L) for s in SIDES}
+        edges = {}
+        for s in SIDES:
+            mean, rms[s] = mean_section(sections[s][0])
+            edges[s] = BezierChain.fit(mean, through=(top,))  # the edge meets the top point exactly
+        mill = DiscMill(radius, edges["left"], edges["right"], mill_teeth)
+        moved = 0.0
+        for s in SIDES:
+            secs, psi[s] = sections[s]
+            k_r[s], k_t[s] = corrections(mill, s, secs, bottom, top)
+            # the edge is the mean section relative to the path: a shift common to every path point moves path
+            # and edge alike and changes no flank, so it is left out (else path and edge drift together)
+            dr, dt = k_r[s] - k_r[s].mean(), k_t[s] - k_t[s].mean()
+            p = paths[s]
+            paths[s] = FlankPath(s, z, p.x + dt, p.y + dr)  # eq. 16
+            moved = max(moved, float(np.max(np.abs(dt))), float(np.max(np.abs(dr))))
+        log.append({"step": "path", "iteration": it + 1, "path_change_um": round(moved * 1e3, 5)})
+        if moved < PATH_TOLERANCE:
+            break
+    approach = approach_length(gear, radius)
+    plan = CopyingPlan(gear, design, mill, paths, clearance, approach, k_r, k_t, psi, rms, log)
+    lc = np.linspace(lf, la, check_points)
+    for c in range(checks):
+        worst, res = accuracy_check(plan, lc)
+        log.append({"step": "accuracy check", "round": c + 1, "max_residual_um": round(worst * 1e3, 4)})
+        if worst < CHECK_TOLERANCE or c == checks - 1:
+            break
+        for s in SIDES:
+            dx, dy = correction_from_residual(gear, s, lc, res[s])
+            p = plan.paths[s]
+            plan.paths[s] = FlankPath(s, z, p.x + dx, p.y + dy)
+    return plan
+
+
+def approach_length(gear: Gear, radius: float) -> float:
+    """Feed beyond an end face while the mill's periphery still reaches the tip circle, plus 0.5 mm [mm]."""
+    depth = gear.tip_radius - gear.root_radius
+    return math.sqrt(max(radius**2 - (radius - depth) ** 2, 0.0)) + 0.5
+
+
+def accuracy_check(
+    plan: CopyingPlan, L: np.ndarray, space: int = 0, passes: list[MillPassPoses] | None = None
+) -> tuple[float, dict[str, np.ndarray]]:
+    """Step 15: the flanks of ``space`` that the mill cuts on the planned path (its exact swept surface; no
+    deflections), or by ``passes`` (e.g. what a machine made), against the design at every path point and roll
+    length ``L``: residual [mm] per side (n, m), excess material positive, and the largest |residual|."""
+    gear = plan.gear
+    if passes is None:
+        passes = [plan.pass_poses(k % gear.teeth, s) for k in (space - 1, space, space + 1) for s in SIDES]
+    cut = MilledGear(gear, plan.mill, passes, "accuracy check")
+    res = {}
+    worst = 0.0
+    for s in SIDES:
+        zz, LL = np.meshgrid(plan.paths[s].z, L, indexing="ij")
+        zz = np.clip(zz, -gear.face_width / 2 + 1e-3, gear.face_width / 2 - 1e-3)
+        tooth = space if s == "left" else space + 1
+        p = flank_points(gear, s, LL / gear.base_radius, zz, tooth)
+        nrm = flank_normals(gear, s, LL / gear.base_radius, zz, tooth)
+        d = cut.probe(p.reshape(-1, 3), nrm.reshape(-1, 3), 0.05).reshape(p.shape[:-1])
+        design = 0.0 if plan.design is None else plan.design.deviation(gear, s, LL, zz)
+        res[s] = d - design
+        worst = max(worst, float(np.nanmax(np.abs(res[s]))))
+    return worst, res
+
+
+def correction_from_residual(gear: Gear, side: Side, L: np.ndarray, res: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Path corrections (dx, dy) [mm] per path point that cancel the residual's level and slope over the profile
+    (least squares; the seed's k_t, k_r match the bottom and top points only, which leaves a bow's whole height at
+    mid profile): the surface moves by (dx, dy) . n, n the flank normal out of the material."""
+    n = section_normals(gear, side, L)  # (m, 2)
+    ok = np.isfinite(res)
+    dx, dy = np.zeros(len(res)), np.zeros(len(res))
+    for i in range(len(res)):
+        sol = np.linalg.lstsq(n[ok[i]], -res[i, ok[i]], rcond=None)[0]
+        dx[i], dy[i] = sol
+    return dx, dy
