@@ -247,3 +247,29 @@ def test_bad_form_jobs_are_refused_with_the_key_and_the_fix(kwargs, key, words):
         form_job(**kwargs)
     text = str(info.value)
     assert key in text and words in text
+
+
+# ---- the mill's cutting force -----------------------------------------------------------------------------------
+def test_the_force_model_removes_each_pass_area_over_the_face_and_follows_kienzle(planned):
+    from cutting.form_forces import RADIAL_RATIO, MillLoad
+    from cutting.materials import material
+
+    plan, _, _ = planned
+    mat = material("16MnCr5")
+    ml = MillLoad(GEAR, plan.mill, mat, 600.0, 250.0, plan.clearance)
+    # every plane of the face ends up cut to the full section: the rate integrates to A b over the pass
+    z = np.linspace(30.0, -30.0, 60001)
+    for side, direction in (("left", -1.0), ("right", 1.0)):
+        w = ml.engagement(side, z if side == "left" else -z, direction)
+        assert np.trapezoid(w, dx=1e-3) == pytest.approx(GEAR.face_width, rel=2e-3)
+    # A b is what manifold's removal takes out of the blank with that pass (its own chip volume)
+    res = cut_gear(GEAR, plan.mill, [plan.pass_poses(0, "left"), plan.pass_poses(0, "right")], 0.005)
+    assert res.chips[0][2] == pytest.approx(ml.areas["left"] * GEAR.face_width, rel=0.02)
+    assert res.chips[1][2] == pytest.approx(ml.areas["right"] * GEAR.face_width, rel=0.05)
+    # Kienzle by hand: h_m = f_z sqrt(a_e / D), F_t = kc1.1 h_m^-mc A v_f / v_c, thrust 0.4 F_t
+    fz = 600.0 / (250.0 * plan.mill.teeth)
+    hm = fz * math.sqrt((GEAR.tip_radius - GEAR.root_radius) / 50.0)
+    ft = mat.kc11 * hm ** (-mat.mc) * ml.areas["left"] * (600.0 / 60) / (math.pi * 50.0 * 250.0 / 60)
+    assert ml.main_force("left") == pytest.approx(ft, rel=1e-9)
+    f = ml.force("left", np.array([10.0]), -1.0)[0]
+    assert f[1] == pytest.approx(RADIAL_RATIO * abs(f[2])) and f[2] > 0 < f[1]  # fed down: against the feed is +z

@@ -191,3 +191,25 @@ def test_a_stage_too_stiff_for_the_time_step_is_reported() -> None:
         simulate_form_milling(LAYOUT, PASSES[:1], params, FEED, RPM)
     with pytest.raises(ValueError, match="timestep"):
         simulate_form_milling(LAYOUT, PASSES[:1], FormMillParams().with_overrides({"timestep": 1e-3}), FEED, RPM)
+
+
+def test_a_cutting_thrust_pushes_the_mill_off_by_the_drive_compliance() -> None:
+    """A constant thrust of 500 N off the work (radial) on the straight pass: the mill yields radially by
+    F (1/k_nut + (t/2pi)^2 / k_screw) of the X drive (the semi-closed loop holds the motor, not the slide), here
+    500 (1/2.5e8 + (0.01/2pi)^2 / 5e3) = 2.25 um, and takes up the half of the nut's play the unloaded slide
+    floats in (1 um)."""
+    params = FormMillParams()
+
+    def thrust(index: int, z: np.ndarray) -> np.ndarray:
+        out = np.zeros((len(z), 3))
+        out[:, 1] = 500.0
+        return out
+
+    free = simulate_form_milling(LAYOUT, PASSES[:1], params, FEED, RPM)
+    loaded = simulate_form_milling(LAYOUT, PASSES[:1], params, FEED, RPM, load=thrust)
+    lead = LAYOUT.screw_pitch / (2 * math.pi)
+    expected = 500.0 * (1 / params.nut_stiffness + lead**2 / params.x_drive.stiffness) * 1e6
+    expected += params.nut_backlash / 2 * 1e6
+    d_free = free.passes[0].deviation()[_settled(free.passes[0]), 0].mean()
+    d_loaded = loaded.passes[0].deviation()[_settled(loaded.passes[0]), 0].mean()
+    assert d_loaded - d_free == pytest.approx(expected, abs=0.2)

@@ -49,13 +49,28 @@ def main() -> None:
 def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
     path = job or default_job_path()
     try:
-        sheet = setup_sheet(load_job(path), structure)
+        j = load_job(path)
+        if j.kind == "form_milling":
+            _setup_form_milling(j, as_json)
+            return
+        sheet = setup_sheet(j, structure)
     except (InputError, ValueError) as exc:
         _fail(exc)
     if as_json:
         click.echo(json.dumps(_finite(sheet.to_json()), indent=2, allow_nan=False))
     else:
         click.echo(format_sheet(sheet, str(path)))
+
+
+def _setup_form_milling(j, as_json: bool) -> None:
+    """The copying method's sheet: the mill, the path points with their corrections, the iterations."""
+    from virtual_machine.form_milling import format_plan, plan_job
+
+    plan = plan_job(j, checks=0)
+    if as_json:
+        click.echo(json.dumps(_finite(plan.summary()), indent=2, allow_nan=False))
+    else:
+        click.echo(format_plan(plan))
 
 
 @main.command(help="Measure a gear MESH (STL, PLY, OBJ, 3MF, GLB) as the gear of JOB's [gear] section.")
@@ -117,6 +132,9 @@ def cut(
     path = job or default_job_path()
     try:
         j = with_mesh_tolerance(load_job(path), None if mesh_tolerance is None else mesh_tolerance * 1e-3)
+        if j.kind == "form_milling":
+            _cut_form_milling(j, out, trajectory)
+            return
     except (InputError, ValueError) as exc:
         _fail(exc)
     st = j.skiving
@@ -197,6 +215,18 @@ def cut(
     click.echo(format_gear_stl(result["cut"]["gear_stl"]))
 
 
+def _cut_form_milling(j, out: Path, trajectory: Path | None) -> None:
+    """skive cut of a form-milling job: the ideal machine along the planned path of the profiled mill."""
+    from virtual_machine.form_milling import cut_form_job, format_copying
+
+    if trajectory is not None:
+        raise InputError(Problem("--trajectory", str(trajectory), "is for skiving jobs", "use `skive run` instead"))
+    doc = cut_form_job(j, out, stage)
+    click.echo(format_measurement(doc, str(out / "gear.stl")))
+    click.echo(format_copying(doc))
+    click.echo(format_gear_stl(doc["cut"]["gear_stl"]))
+
+
 def format_path(path: dict) -> str:
     """The accuracy check's iterations and what the path cannot make."""
     lines = ["", "PATH  the finishing pass's radial and tangential corrections (seed 003's accuracy check)"]
@@ -249,8 +279,11 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
     path = job or default_job_path()
     try:
         j = load_job(path)
-        if j.kind != "gear":
+        if j.kind == "thread":
             raise InputError(Problem("job", j.kind, "skive run cuts gears", "use `skive simulate` for a thread job"))
+        if j.kind == "form_milling":
+            _run_form_milling(j, path, out, rrd)
+            return
         total = program_duration(j.skiving)
     except (InputError, ValueError) as exc:
         _fail(exc)
@@ -279,6 +312,40 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
     if doc.get("modification_path"):
         click.echo(format_path(doc["modification_path"]))
     click.echo(format_run(doc["run"], out, rrd))
+
+
+def _run_form_milling(j, path: Path, out: Path, rrd: Path | None) -> None:
+    """skive run of a form-milling job: the simulated form-milling machine mills every space."""
+    from virtual_machine.form_milling import format_copying, run_form_job
+    from virtual_machine.physics import SimulationDivergedError
+
+    bars: list[Progress] = []
+
+    def announce(name: str) -> None:
+        for b in bars:
+            b.close()
+        stage(name)
+        if name.startswith("machine"):
+            bars.append(Progress("form-milling machine", 1.0, "of the program", value_format="{:.3f}"))
+
+    def progress(fraction: float) -> None:
+        if bars:
+            bars[-1].update_to(fraction)
+
+    try:
+        doc = run_form_job(j, path, out, rrd, progress, announce)
+    except (InputError, SimulationDivergedError, ValueError) as exc:
+        _fail(exc)
+    finally:
+        for b in bars:
+            b.close()
+    click.echo(format_measurement(doc, str(out / "gear.stl")))
+    click.echo(format_copying(doc))
+    wall = sum(v for k, v in doc["run"]["durations_s"].items() if k != "machine")
+    click.echo(
+        f"\nrun: {doc['run']['durations_s']['machine']:.1f} s of machine time in {wall:.1f} s; wrote "
+        f"{out / 'gear.stl'}, measurement.json, report.html, charts/" + (f", {rrd}" if rrd else "")
+    )
 
 
 @main.command(
@@ -445,6 +512,13 @@ def simulate(
     if j.kind == "thread":
         _simulate_thread(j, path, duration, out, as_json)
         return
+    if j.kind == "form_milling":
+        _fail(
+            InputError(
+                Problem("job", "[mill]", "a form-milling job is simulated with its cut", "use `skive run` for it"),
+                str(path),
+            )
+        )
     st = j.skiving
     total = duration or (sum(st.pass_times) + 0.5 + 1.2 * (len(st.passes) - 1))  # strokes + run-up + returns (approx.)
     bar = Progress("machine time", total, "s", value_format="{:.2f}", stream=None if not as_json else _NullStream())

@@ -346,11 +346,15 @@ def simulate_form_milling(
     spindle_rpm: float,
     progress: Callable[[float], None] | None = None,
     tuning: CncTuning | None = None,
+    load: Callable[[int, np.ndarray], np.ndarray] | None = None,
 ) -> FormMillRecord:
     """Run the passes on the simulated machine (MuJoCo) with the CNC of this module; the spindle at
     ``spindle_rpm`` throughout, the feed at ``feed_mm_min`` [mm/min]. ``progress(fraction)`` is called now and
     then. Raises ValueError for bad inputs and :class:`SimulationDivergedError` when the integration blows up or
-    a servo runs away (the message names what to change)."""
+    a servo runs away (the message names what to change). ``load(pass index, z)`` gives the cutting force on the
+    mill [N] (n, 3) in the space's frame (tangential, radial out, axial) at the commanded mill-centre face
+    positions z [mm] of the pass's feed; it acts at the mill's lowest point on the mill and, reversed, on the
+    table (none: the passes cut air)."""
     params = params or FormMillParams()
     tuning = tuning or CncTuning()
     if not passes:
@@ -391,6 +395,9 @@ def simulate_form_milling(
     tick, wall0 = 0, time.perf_counter()
     dwell = 0.0
     xpos, xmat = data.site_xpos, data.site_xmat
+    body_m, body_b = int(model.site_bodyid[site_m]), int(model.site_bodyid[site_b])
+    r_mill = layout.mill_radius
+    zero3 = np.zeros(3)
 
     def step() -> None:
         nonlocal tick
@@ -438,8 +445,17 @@ def simulate_form_milling(
         n = len(seg.pos)
         if seg.kind == "feed":
             rec = np.empty((n, 14))
+            forces = None
+            if load is not None:  # space frame (tangential, radial, axial) -> machine frame (x radial, y tangential)
+                f = np.asarray(load(seg.index, seg.pos[:, _Z] * 1e3), dtype=float)
+                forces = np.column_stack([f[:, 1], f[:, 0], f[:, 2]])
             for k in range(n):
                 pos[:4], vel[:4], acc[:4] = seg.pos[k], seg.vel[k], seg.acc[k]
+                if forces is not None:
+                    data.qfrc_applied[:] = 0.0
+                    point = xpos[site_m] - np.array([r_mill, 0.0, 0.0])
+                    mujoco.mj_applyFT(model, data, forces[k], zero3, point, body_m, data.qfrc_applied)
+                    mujoco.mj_applyFT(model, data, -forces[k], zero3, point, body_b, data.qfrc_applied)
                 # the state at this tick's time (site poses left by mj_step are one sub-step old)
                 mujoco.mj_kinematics(model, data)
                 rb = xmat[site_b].reshape(3, 3)
@@ -448,6 +464,7 @@ def simulate_form_milling(
                 rec[k, 4:7] = rb.T @ xmat[site_m].reshape(3, 3)[:, 2]
                 step()
                 rec[k, 7:11] = servo.error[:4]
+            data.qfrc_applied[:] = 0.0
             p = passes[seg.index]
             fe = rec[:, 7:11] * np.array([1 / ARCSEC, 1e6, 1e6, 1e6])
             records.append(

@@ -150,6 +150,28 @@ THREAD_PROCESS_KEYS: dict[str, Key] = {
     "material": PROCESS_KEYS["material"],
 }
 
+MILL_KEYS: dict[str, Key] = {
+    "diameter": Key(
+        float, REQUIRED, "mm", "outer diameter of the profiled disc mill (copying method, seed 003)", _positive
+    ),
+    "teeth": Key(int, 12, "", "teeth of the mill (feed per tooth)", _at_least(1)),
+    "clearance": Key(
+        float, 0.2, "mm", "the mill is this much narrower than the tooth space: one pass per flank", _positive
+    ),
+}
+
+FORM_PROCESS_KEYS: dict[str, Key] = {
+    "feed": Key(float, 300.0, "mm/min", "table feed of the mill along the face", _positive),
+    "mill_speed": Key(float, 250.0, "rpm", "mill spindle speed", _positive),
+    "path_points": Key(int, 10, "", "path points n per half face width (seed 003: z_i = i b / (2 n))", _at_least(2)),
+    "machine_iterations": Key(
+        int, 2, "", "runs of the accuracy check on the simulated machine (1: the planned path only)", _at_least(1)
+    ),
+    "material": PROCESS_KEYS["material"],
+    "sweep_error": Key(float, 0.005, "mm", "chord error allowed in the mill's swept volumes (gear.stl)", _positive),
+    "stl_tolerance": PROCESS_KEYS["stl_tolerance"],
+}
+
 MACHINE_KEYS: dict[str, Key] = {
     "structure": Key(str, "mechatronic", "", "kinematic structure (seed 000 figs 1-4)", _one_of(*STRUCTURES)),
     "synchronization": Key(
@@ -242,6 +264,13 @@ def machine_constants(machine: dict[str, Any], structure: str) -> dict[str, Any]
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
 OPTIONAL_SECTIONS = {"measurement": MEASUREMENT_KEYS, "modification": MODIFICATION_KEYS}
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
+#: a form-milling job (the copying method of seed 003): its machine section only overrides the model's parameters
+SECTIONS_FORM = {
+    "gear": GEAR_KEYS,
+    "mill": MILL_KEYS,
+    "process": FORM_PROCESS_KEYS,
+    "machine": {"model": MACHINE_KEYS["model"]},
+}
 
 
 def flatten_model(model: dict[str, Any] | None) -> dict[str, Any]:
@@ -261,10 +290,11 @@ def model_problems(model: dict[str, Any] | None, kind: str) -> list[Problem]:
         return []
     from dataclasses import fields
 
+    from machine_models.form_mill import FormMillParams
     from machine_models.parameters import SkivingMachineParams, override
     from machine_models.thread_lathe import ThreadLatheParams
 
-    base = ThreadLatheParams() if kind == "thread" else SkivingMachineParams()
+    base = {"thread": ThreadLatheParams, "form_milling": FormMillParams}.get(kind, SkivingMachineParams)()
     names = ", ".join(f.name for f in fields(base))
     out = []
     good = {}
@@ -385,7 +415,8 @@ def _patch(raw: list, key: str, problems: list[Problem]):
 
 @dataclass(frozen=True)
 class Job:
-    """A parsed, validated job. ``kind`` is "gear" or "thread"; unused sections are None."""
+    """A parsed, validated job. ``kind`` is "gear" (skiving), "form_milling" (the copying method) or "thread";
+    unused sections are None."""
 
     source: str
     kind: str
@@ -397,11 +428,12 @@ class Job:
     thread: dict[str, Any] | None = None
     measurement: dict[str, Any] | None = None
     modification: Modification | None = None  # the designed flank topography ([modification])
+    mill: dict[str, Any] | None = None  # the profiled disc mill ([mill]) of a form-milling job
 
     @property
     def skiving(self) -> SkivingSetup:
         if self.gear is None or self.cutter is None:
-            raise ValueError(f"{self.source} is a thread job; it has no skiving setup")
+            raise ValueError(f"{self.source} is a {self.kind.replace('_', '-')} job; it has no skiving setup")
         p = self.process
         return SkivingSetup(
             self.gear,
@@ -433,6 +465,8 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     """Validate a job given as a dict (as read from TOML). Raises :class:`InputError` with every problem."""
     problems: list[Problem] = []
     is_thread = "thread" in data
+    if "mill" in data:
+        return _parse_form_job(data, source)
     if is_thread and "gear" in data:
         raise InputError(
             Problem(
@@ -508,6 +542,91 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     if problems:
         raise InputError(problems, source)
     return job
+
+
+def _parse_form_job(data: dict[str, Any], source: str) -> Job:
+    """A form-milling job: [gear], [mill], [process], [machine], [measurement], [modification]."""
+    problems: list[Problem] = []
+    if "cutter" in data:
+        problems.append(
+            Problem(
+                "mill",
+                "[mill] and [cutter]",
+                "a job cuts with either a skiving cutter or a disc mill",
+                "remove [cutter] (form milling) or [mill] (skiving)",
+            )
+        )
+    for name in data:
+        if name not in SECTIONS_FORM and name not in OPTIONAL_SECTIONS and name != "cutter":
+            problems.append(
+                Problem(
+                    name,
+                    "[section]",
+                    "unknown section",
+                    "valid sections: " + ", ".join(f"[{s}]" for s in (*SECTIONS_FORM, *OPTIONAL_SECTIONS)),
+                )
+            )
+    parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in SECTIONS_FORM.items()}
+    measurement = parse_section("measurement", data.get("measurement", {}), MEASUREMENT_KEYS, problems)
+    modification = parse_modification(data.get("modification"), problems)
+    problems += model_problems(parsed["machine"].get("model"), "form_milling")
+    g, mill = parsed["gear"], parsed["mill"]
+    gear = None
+    if set(GEAR_KEYS) <= set(g):
+        gear = _gear_from(g)
+        problems += check_gear(gear, "gear")
+        from cutting.form_mill import check_copying_gear
+
+        problems += [
+            Problem("gear", "internal" if gear.internal else f"helix_angle = {g['helix_angle']}", why, "")
+            for why in check_copying_gear(gear)
+        ]
+        sound = not problems  # the mill and the design are checked on a gear the copying method can make
+        if sound and set(MILL_KEYS) <= set(mill):
+            problems += _mill_problems(gear, mill)
+        if sound and modification is not None:
+            problems += design_problems(modification, gear)
+    if problems:
+        raise InputError(problems, source)
+    return Job(
+        source,
+        "form_milling",
+        parsed["machine"],
+        parsed["process"],
+        gear=gear,
+        measurement=measurement,
+        modification=modification,
+        mill=mill,
+    )
+
+
+def _mill_problems(gear: Gear, mill: dict[str, Any]) -> list[Problem]:
+    """A mill too small for the tooth depth, or a clearance the tooth space cannot give."""
+    out = []
+    depth = gear.tip_radius - gear.root_radius
+    if mill["diameter"] / 2 < depth + 10.0:
+        out.append(
+            Problem(
+                "mill.diameter",
+                mill["diameter"],
+                f"the mill's radius must exceed the tooth depth {depth:.2f} mm by its 10 mm hub",
+                f"use a diameter of at least {2 * (depth + 10.0):.0f} mm",
+            )
+        )
+    from cutting.gear import form_roll_length
+
+    d_form = 2 * math.hypot(gear.base_radius, form_roll_length(gear))
+    space = math.pi * d_form / gear.teeth - gear.transverse_thickness_at(d_form)
+    if mill["clearance"] > 0.5 * space:
+        out.append(
+            Problem(
+                "mill.clearance",
+                mill["clearance"],
+                f"the tooth space is only {space:.3f} mm wide at the form circle: the mill would have no periphery",
+                f"use a clearance below {0.5 * space:.3f} mm (e.g. 0.2 mm)",
+            )
+        )
+    return out
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

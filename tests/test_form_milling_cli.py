@@ -1,0 +1,96 @@
+"""skive setup / cut / run of a form-milling job (the copying method of seed 003) end to end."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from virtual_machine.cli import main
+
+ASSET = Path(__file__).resolve().parent.parent / "assets" / "jobs" / "form_milled_crowned.toml"
+
+#: a small job for the suite: 14 teeth, 6 mm face, fast feed, one machine run
+SMALL = """
+[gear]
+teeth = 14
+normal_module = 2.0
+profile_shift = 0.2
+face_width = 6.0
+
+[mill]
+diameter = 50.0
+
+[process]
+feed = 1500.0
+path_points = 6
+machine_iterations = {iterations}
+sweep_error = 0.01
+
+[modification]
+lead_crowning = 0.008
+twist = 0.006
+"""
+
+
+def test_setup_prints_the_mill_and_the_path():
+    res = CliRunner().invoke(main, ["setup", str(ASSET)])
+    assert res.exit_code == 0, res.output
+    assert "COPYING METHOD (seed 003)" in res.output and "path point" in res.output
+    doc = json.loads(CliRunner().invoke(main, ["setup", str(ASSET), "--json"]).output)
+    assert len(doc["k_r_um"]["left"]) == 21 and doc["mill"]["diameter_mm"] == 50.0
+    assert len(doc["path_bezier"]["left"]) == 20  # cubic Bezier segments between the 21 path points
+
+
+def test_simulate_refuses_a_form_job_with_the_command_to_use(tmp_path):
+    res = CliRunner().invoke(main, ["simulate", str(ASSET), "--out", str(tmp_path)])
+    assert res.exit_code == 2 and "skive run" in res.output
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("form_run")
+    job = d / "job.toml"
+    job.write_text(SMALL.format(iterations=2))
+    res = CliRunner().invoke(main, ["run", str(job), "--out", str(d / "out"), "--rrd", str(d / "run.rrd")])
+    assert res.exit_code == 0, res.output
+    return d, res.output, json.loads((d / "out" / "measurement.json").read_text())
+
+
+def test_run_writes_every_file_and_says_what_the_copying_method_made(small_run):
+    d, output, doc = small_run
+    for name in ("gear.stl", "measurement.json", "report.html", "charts/topography.png"):
+        assert (d / "out" / name).is_file(), name
+    assert (d / "run.rrd").stat().st_size > 10_000
+    assert "COPYING METHOD" in output and "simulated machine, run 2" in output
+    assert doc["run"]["job"]["kind"] == "form_milling" and doc["cut"]["passes"] == 28
+    assert doc["run"]["durations_s"]["machine"] > 10  # every space milled: 28 passes, indexing, approaches
+
+
+def test_the_simulated_machine_makes_the_design_within_2um(small_run):
+    """The default machine (backlash, friction, the Z weight; no cutting forces) after one accuracy check on
+    what it cut: the modification within 2 um of the design everywhere, C_beta within 1 um."""
+    _, _, doc = small_run
+    checks = doc["copying"]["machine_checks"]
+    assert len(checks) == 2 and checks[-1]["max_residual_um"] < 2.0
+    for side in ("left", "right"):
+        assert doc["helix"][side]["C_beta"] == pytest.approx(doc["helix"][side]["C_beta_design"], abs=1.0)
+        topo = np.asarray(doc["topography"][side]["against_design_um"], dtype=float)
+        assert np.nanmax(np.abs(topo)) < 2.0
+    mesh = doc["mesh"]
+    assert mesh["within_bound"], mesh
+
+
+def test_cut_of_the_small_job_on_the_ideal_machine(tmp_path):
+    job = tmp_path / "job.toml"
+    job.write_text(SMALL.format(iterations=1))
+    res = CliRunner().invoke(main, ["cut", str(job), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    doc = json.loads((tmp_path / "out" / "measurement.json").read_text())
+    assert doc["cut"]["motion"].startswith("ideal")
+    for side in ("left", "right"):
+        topo = np.asarray(doc["topography"][side]["against_design_um"], dtype=float)
+        assert np.nanmax(np.abs(topo)) < 1.0

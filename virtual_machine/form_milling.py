@@ -1,0 +1,420 @@
+"""Form milling by the copying method (seed 003) as `skive setup`, `skive cut` and `skive run` do it.
+
+- :func:`plan_job`: the seed's 15 steps for the job's design (:func:`cutting.copying_path.plan_copying`).
+- :func:`cut_form_job` (`skive cut`): the ideal machine follows the planned path exactly.
+- :func:`run_form_job` (`skive run`): the simulated form-milling machine (MuJoCo, its CNC) follows it; the poses
+  it really made are what cuts. The accuracy check is repeated on what the machine cut (space 0 and its
+  neighbours) and the path corrected, up to ``process.machine_iterations`` runs; the last run is the gear.
+
+Either way the gear is the blank minus the mill's swept volumes: gear.stl from manifold3d, space after space,
+and the measurement on the exact swept surface of the same passes (:class:`cutting.form_sweep.MilledGear`),
+with gear.stl measured beside it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import html
+import json
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cutting.copying_path import (
+    CHECK_TOLERANCE,
+    CopyingPlan,
+    FlankPath,
+    accuracy_check,
+    correction_from_residual,
+    plan_copying,
+)
+from cutting.errors import InputError, Problem
+from cutting.flank import SIDES
+from cutting.form_forces import RADIAL_RATIO, MillLoad
+from cutting.form_removal import cut_gear
+from cutting.form_sweep import MilledGear, MillPassPoses
+from cutting.gear import form_roll_length
+from cutting.gear_file import write_gear_stl
+from cutting.materials import material
+from cutting.modification import roll
+from metrology.charts import finite, write_charts
+from metrology.cut_measurement import compare, unmeasured_mesh
+from metrology.datum import check_mesh
+from metrology.measure import MeasureOptions, measure_gear
+from metrology.workpiece import UnmeasurableError
+from virtual_machine.job import Job, flatten_model
+
+Stage = Callable[[str], None]
+CHECK_POINTS = 11
+
+
+def plan_job(job: Job, checks: int = 3) -> CopyingPlan:
+    """The seed's 15 steps for the job (``checks`` rounds of the accuracy check on the ideal machine)."""
+    m, p = job.mill, job.process
+    try:
+        return plan_copying(
+            job.gear,
+            job.modification,
+            m["diameter"],
+            m["clearance"],
+            p["path_points"],
+            m["teeth"],
+            checks=checks,
+            check_points=CHECK_POINTS,
+        )
+    except ValueError as exc:  # the mill the design asks for cannot be made (no periphery, an undercut edge)
+        raise InputError(
+            Problem("mill", m, str(exc), "change mill.clearance or the [modification]"), job.source
+        ) from exc
+
+
+def format_plan(plan: CopyingPlan) -> str:
+    """The setting sheet of the copying method: mill, path points, corrections, iterations."""
+    s = plan.summary()
+    mill = s["mill"]
+    lines = [
+        "COPYING METHOD (seed 003): profiled disc mill, one pass per flank",
+        f"  mill: diameter {mill['diameter_mm']:.1f} mm, {mill['teeth']} teeth, width {mill['width_mm']:.3f} mm, "
+        f"edge {len(mill['edge_bezier']['left'])} + {len(mill['edge_bezier']['right'])} cubic Bezier segments; "
+        f"clearance {plan.clearance:.3f} mm; run-in/out {plan.approach:.2f} mm beyond each face",
+        "  sections' RMS thickness deviation from the mean section (eq. 8): "
+        f"left {s['section_rms_um']['left']:.2f} um, right {s['section_rms_um']['right']:.2f} um",
+        "  path point   z [mm]   left: x [um]  y [um]   right: x [um]  y [um]   (from the nominal path point)",
+    ]
+    xn = {"left": -plan.clearance / 2, "right": plan.clearance / 2}
+    z = plan.paths["left"].z
+    for i in range(len(z)):
+        row = f"  {i - len(z) // 2:+10d} {z[i]:8.3f}"
+        for side in SIDES:
+            p = plan.paths[side]
+            row += f"   {(p.x[i] - xn[side]) * 1e3:10.3f} {(p.y[i] - plan.gear.root_radius) * 1e3:7.3f}"
+        lines.append(row)
+    for it in s["iterations"]:
+        if it["step"] == "path":
+            lines.append(f"  steps 11-14, iteration {it['iteration']}: path moved {it['path_change_um']:.4f} um")
+        else:
+            lines.append(f"  step 15, accuracy check {it['round']}: largest residual {it['max_residual_um']:.3f} um")
+    return "\n".join(lines)
+
+
+def format_copying(doc: dict[str, Any]) -> str:
+    """What the copying method did: the mill, the accuracy checks and the modification it made."""
+    c = doc["copying"]
+    mill = c["mill"]
+    lines = [
+        "",
+        "COPYING METHOD (seed 003)  profiled disc mill, one pass per flank",
+        f"  mill {mill['diameter_mm']:.1f} mm, width {mill['width_mm']:.3f} mm, edge of "
+        f"{len(mill['edge_bezier']['left'])} + {len(mill['edge_bezier']['right'])} cubic Bezier segments; "
+        f"{len(c['path_points_z_mm'])} path points per pass",
+    ]
+    for it in c["iterations"]:
+        if it["step"] != "path":
+            lines.append(
+                f"  ideal machine, accuracy check {it['round']}: largest residual {it['max_residual_um']:.3f} um"
+            )
+    for r in c.get("machine_checks", []):
+        lines.append(f"  simulated machine, run {r['run']}: largest residual {r['max_residual_um']:.3f} um")
+    for side in SIDES:
+        p, h = doc["profile"][side], doc["helix"][side]
+        lines.append(
+            f"  {side}: C_alpha {p['C_alpha']:.2f} um (design {p['C_alpha_design']:.2f}), C_beta {h['C_beta']:.2f} um "
+            f"(design {h['C_beta_design']:.2f})"
+        )
+    topo = doc.get("topography") or {}
+    worst = [float(np.nanmax(np.abs(np.asarray(topo[s]["against_design_um"], float)))) for s in SIDES if s in topo]
+    if worst:
+        lines.append(f"  topography against the design: largest {max(worst):.2f} um")
+    return "\n".join(lines)
+
+
+def _measure(job: Job, exact: MilledGear, stl, stl_path: Path, sweep_error: float) -> dict[str, Any]:
+    """The exact swept surface measured, gear.stl beside it (as `skive cut` of a skiving job)."""
+    opts = MeasureOptions.from_job(job.measurement, job.modification)
+    doc = measure_gear(exact, job.gear, opts, exact.name)
+    try:
+        mesh = check_mesh(stl.mesh, str(stl_path))
+        mesh_doc = measure_gear(mesh, job.gear, opts, str(stl_path))
+    except (InputError, UnmeasurableError) as exc:  # the file failed, not the gear: the exact measurement stands
+        doc["mesh"] = unmeasured_mesh(str(stl_path), str(exc), len(stl.mesh.faces))
+        return doc
+    doc["mesh"] = compare(doc, mesh_doc, job.gear, sweep_error, str(stl_path), len(stl.mesh.faces), stl.simplification)
+    return doc
+
+
+def _cut_and_measure(
+    job: Job, plan: CopyingPlan, passes: list[MillPassPoses], out: Path, stage: Stage, name: str
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """gear.stl by manifold3d (space after space) and the measurement of the exact swept surface."""
+    stage("removal: the mill's swept volumes, space after space (manifold3d)")
+    t0 = time.perf_counter()
+    tol = job.process["sweep_error"]
+    removal = cut_gear(job.gear, plan.mill, passes, tol)
+    seconds_cut = time.perf_counter() - t0
+    out.mkdir(parents=True, exist_ok=True)
+    stl = write_gear_stl(removal.gear_solid, out / "gear.stl", job.process["stl_tolerance"])
+    stage("measurement: the exact swept surface and gear.stl")
+    t0 = time.perf_counter()
+    exact = MilledGear(job.gear, plan.mill, passes, name)
+    doc = _measure(job, exact, stl, out / "gear.stl", tol)
+    cut = {
+        "method": "copying (seed 003)",
+        "passes": len(passes),
+        "hulls": removal.hulls,
+        "sweep_error_um": tol * 1e3,
+        "chip_volume_mm3": float(sum(v for _, _, v in removal.chips)),
+        "chips": [{"space": k, "flank": s, "volume_mm3": v} for k, s, v in removal.chips],
+        "triangles": stl.solid_triangles,
+        "gear_stl": stl.summary(),
+    }
+    return doc, {"cut": cut, "seconds": {"removal": seconds_cut, "measurement": time.perf_counter() - t0}}
+
+
+def cut_form_job(job: Job, out: Path, stage: Stage | None = None) -> dict[str, Any]:
+    """`skive cut` of a form-milling job: the ideal machine on the planned path; writes gear.stl,
+    measurement.json and the charts into ``out`` and returns the measurement document."""
+    stage = stage or (lambda name: None)
+    stage("path of the profiled mill (seed 003: 15 steps, accuracy check on the ideal machine)")
+    t0 = time.perf_counter()
+    plan = plan_job(job)
+    seconds_plan = time.perf_counter() - t0
+    doc, facts = _cut_and_measure(job, plan, plan.all_passes(), out, stage, "form-milled gear (ideal machine)")
+    doc["copying"] = plan.summary()
+    doc["cut"] = {
+        **facts["cut"],
+        "motion": "ideal: the planned path",
+        "seconds": {"plan": seconds_plan, **facts["seconds"]},
+    }
+    _write(doc, out)
+    return doc
+
+
+# ---- the simulated machine ----------------------------------------------------------------------------------
+def machine_layout(job: Job):
+    from machine_models.form_mill import FormMillLayout
+    from machine_models.parts import MM
+
+    g = job.gear
+    return FormMillLayout.for_gear(g.tip_radius * MM, g.face_width * MM, g.teeth, job.mill["diameter"] / 2 * MM, 0.02)
+
+
+def machine_params(job: Job):
+    from machine_models.form_mill import FormMillParams
+
+    return FormMillParams().with_overrides(flatten_model(job.machine.get("model")))
+
+
+def cnc_passes(plan: CopyingPlan) -> list:
+    """The passes for the CNC: per space the left pass fed down, the right pass fed up; the path as the mill
+    centre (radial, tangential) in the frame where space k faces +x (the machine indexes it there)."""
+    from virtual_machine.form_mill_cnc import MillPass
+
+    half = plan.gear.face_width / 2 + plan.approach
+    out = []
+    for k in range(plan.gear.teeth):
+        for side, (z0, z1) in zip(SIDES, ((half, -half), (-half, half)), strict=True):
+            path = plan.paths[side]
+
+            def centre(z: np.ndarray, path: FlankPath = path) -> np.ndarray:
+                xy = path.at(np.asarray(z, dtype=float))
+                return np.column_stack([xy[:, 1] + plan.mill.radius, xy[:, 0]])
+
+            out.append(MillPass(k, z0, z1, centre))
+    return out
+
+
+def mill_load(job: Job, plan: CopyingPlan) -> MillLoad:
+    """The steady cutting force of each pass (:mod:`cutting.form_forces`) for the job's material and process."""
+    p = job.process
+    return MillLoad(job.gear, plan.mill, material(p["material"]), p["feed"], p["mill_speed"], plan.clearance)
+
+
+def load_of(ml: MillLoad):
+    """The CNC's load callback: pass i of :func:`cnc_passes` is the left pass (fed down) for even i."""
+
+    def load(index: int, z: np.ndarray) -> np.ndarray:
+        side = SIDES[index % 2]
+        return ml.force(side, z, -1.0 if side == "left" else 1.0)
+
+    return load
+
+
+def recorded_poses(plan: CopyingPlan, record) -> list[MillPassPoses]:
+    """The poses the machine made, per pass, in the gear frame of :mod:`cutting.form_mill` (the CNC's frame has
+    space k at 2 pi k / z, ours at 2 pi (k + 1/2) / z: turned by pi / z)."""
+    turn = math.pi / plan.gear.teeth
+    c, s = math.cos(turn), math.sin(turn)
+    rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    out = []
+    for i, rec in enumerate(record.passes):
+        side = SIDES[i % 2]
+        out.append(MillPassPoses(int(record.spaces[i]), side, rec.t, rec.centre @ rot.T, rec.axis @ rot.T))
+    return out
+
+
+def machine_check(plan: CopyingPlan, poses: list[MillPassPoses]) -> tuple[float, dict[str, np.ndarray]]:
+    """Step 15 on what the machine cut: space 0's flanks (its passes and its neighbours') against the design."""
+    z = plan.gear.teeth
+    near = [p for p in poses if p.space in (z - 1, 0, 1)]
+    lc = np.linspace(form_roll_length(plan.gear), roll(plan.gear, plan.gear.tip_diameter_value), CHECK_POINTS)
+    return accuracy_check(plan, lc, passes=near)
+
+
+def run_form_job(
+    job: Job,
+    path: Path,
+    out: Path,
+    rrd: Path | None = None,
+    progress: Callable[[float], None] | None = None,
+    stage: Stage | None = None,
+) -> dict[str, Any]:
+    """`skive run` of a form-milling job on the simulated machine (see the module docstring)."""
+    from virtual_machine.form_mill_cnc import simulate_form_milling
+
+    stage = stage or (lambda name: None)
+    durations: dict[str, float] = {}
+    t0 = time.perf_counter()
+    stage("path of the profiled mill (seed 003: 15 steps, accuracy check on the ideal machine)")
+    plan = plan_job(job)
+    durations["plan"] = time.perf_counter() - t0
+    layout, params = machine_layout(job), machine_params(job)
+    p = job.process
+    runs = []
+    record = poses = None
+    lc = np.linspace(form_roll_length(job.gear), roll(job.gear, job.gear.tip_diameter_value), CHECK_POINTS)
+    for it in range(p["machine_iterations"]):
+        stage(f"machine: the form-milling machine mills every space, run {it + 1}")
+        t0 = time.perf_counter()
+        ml = mill_load(job, plan)
+        record = simulate_form_milling(
+            layout, cnc_passes(plan), params, p["feed"], p["mill_speed"], progress, load=load_of(ml)
+        )
+        durations[f"machine run {it + 1}"] = time.perf_counter() - t0
+        poses = recorded_poses(plan, record)
+        worst, res = machine_check(plan, poses)
+        runs.append({"run": it + 1, "max_residual_um": round(worst * 1e3, 4)})
+        if worst < CHECK_TOLERANCE or it == p["machine_iterations"] - 1:
+            break
+        for side in SIDES:  # step 15 on the machine: correct the path by what it cut
+            dx, dy = correction_from_residual(job.gear, side, lc, res[side])
+            fp = plan.paths[side]
+            plan.paths[side] = FlankPath(side, fp.z, fp.x + dx, fp.y + dy)
+    doc, facts = _cut_and_measure(job, plan, poses, out, stage, "form-milled gear (simulated machine)")
+    durations.update(facts["seconds"])
+    doc["copying"] = {**plan.summary(), "machine_checks": runs}
+    doc["cut"] = {**facts["cut"], "motion": "the simulated form-milling machine"}
+    doc["run"] = _run_facts(job, path, record, durations)
+    doc["run"]["forces"] = {
+        "material": ml.material.key,
+        "kc11": ml.material.kc11,
+        "mc": ml.material.mc,
+        "model": "steady force of each pass from the section it removes (cutting/form_forces.py)",
+        "mean_chip_thickness_mm": ml.chip_thickness,
+        "removed_area_mm2": ml.areas,
+        "main_force_N": {s: ml.main_force(s) for s in SIDES},
+        "thrust_N": {s: RADIAL_RATIO * ml.main_force(s) for s in SIDES},
+    }
+    stage("report")
+    charts = _write(doc, out)
+    _report(out / "report.html", path, doc, charts, plan)
+    if rrd is not None:
+        stage("recording")
+        _record(rrd, job, record, out / "gear.stl", doc, charts)
+    return doc
+
+
+def _run_facts(job: Job, path: Path, record, durations: dict[str, float]) -> dict[str, Any]:
+    text = Path(path).read_text()
+    steady = [r.deviation()[r.steady] for r in record.passes if r.steady.any()]
+    dev = np.vstack(steady) if steady else np.zeros((1, 3))
+    return {
+        "job": {"path": str(path), "sha256": hashlib.sha256(text.encode()).hexdigest(), "kind": job.kind},
+        "seed": None,  # nothing random: the same job gives the same gear
+        "machine": {"model": "CNC form-milling machine (machine_models/form_mill.py)", **(job.machine or {})},
+        "durations_s": {**{k: round(v, 3) for k, v in durations.items()}, "machine": float(record.sim_time)},
+        "mill_deviation_um": {  # recorded - commanded mill centre at constant feed, in the space's frame
+            axis: {"mean": float(dev[:, i].mean()), "peak_to_peak": float(np.ptp(dev[:, i]))}
+            for i, axis in enumerate(("radial", "tangential", "axial"))
+        },
+        "feed_mm_min": job.process["feed"],
+        "mill_rpm": job.process["mill_speed"],
+    }
+
+
+def _write(doc: dict[str, Any], out: Path) -> list[Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    charts = write_charts(out / "charts", doc)
+    (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
+    return charts
+
+
+def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], plan: CopyingPlan) -> None:
+    from virtual_machine.formatting import class_table
+    from virtual_machine.report import STYLE, _image, html_table
+
+    iso = doc["iso1328"]
+    cls = (iso.get("class") or {}).get("overall")
+    rows = [[k, left, right, tol, c] for k, left, right, tol, c in class_table(doc)]
+    run = doc["run"]
+    dev = run["mill_deviation_um"]
+    facts = [[k, v] for k, v in run["durations_s"].items()]
+    facts += [
+        [f"mill {a} deviation mean / p-p [um]", f"{d['mean']:.3f} / {d['peak_to_peak']:.3f}"] for a, d in dev.items()
+    ]
+    checks = [
+        ["ideal machine", it["round"], it["max_residual_um"]]
+        for it in doc["copying"]["iterations"]
+        if it["step"] != "path"
+    ]
+    checks += [["simulated machine", r["run"], r["max_residual_um"]] for r in doc["copying"]["machine_checks"]]
+    body = [
+        f"<h1>skive run: {html.escape(Path(path).name)}</h1>",
+        f'<p class="verdict">ISO 1328-1:2013 class of the gear: {cls}</p>',
+        "<p>Form milling by the copying method (seed 003): a profiled disc mill on the planned spatial path, one pass "
+        "per flank, on the simulated form-milling machine. Measured: the exact swept surface of the passes the "
+        "machine made, against the design.</p>",
+        "<h2>ISO 1328-1 deviations against the design [um]</h2>",
+        html_table(["parameter", "left", "right", "tolerance", "class"], rows),
+        "<h2>Accuracy check (step 15): largest residual against the design [um]</h2>",
+        html_table(["where", "round", "residual [um]"], checks),
+        *[_image(c) for c in charts],
+        "<h2>Run</h2>",
+        html_table(["", ""], facts),
+        "<h2>Path and mill</h2>",
+        f"<pre>{html.escape(format_plan(plan))}</pre>",
+        "<h2>Job file</h2>",
+        f"<pre>{html.escape(Path(path).read_text())}</pre>",
+    ]
+    page.write_text(
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>skive run</title><style>{STYLE}</style>'
+        "</head><body>\n" + "\n".join(body) + "\n</body></html>\n"
+    )
+
+
+def _record(rrd: Path, job: Job, record, stl_path: Path, doc: dict[str, Any], charts: list[Path]) -> None:
+    """A Rerun recording: the axes and the encoders' following errors over machine time, the gear, the charts."""
+    import rerun as rr
+    import trimesh
+
+    from virtual_machine.recording import _send_series
+
+    rrd.parent.mkdir(parents=True, exist_ok=True)
+    rec = rr.RecordingStream("skive_form_milling", send_properties=False)
+    rec.save(str(rrd))
+    rr.set_log_time_enabled(False, recording=rec)
+    t = np.asarray(record.trace_t, dtype=float)
+    _send_series(rec, "machine/axes", t, record.trace_q[:, :4], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]"])
+    _send_series(rec, "machine/following_error", t, record.trace_error, ["A [arcsec]", "X [um]", "Y [um]", "Z [um]"])
+    mesh = trimesh.load(stl_path, force="mesh")
+    rec.log(
+        "gear",
+        rr.Mesh3D(vertex_positions=np.asarray(mesh.vertices), triangle_indices=np.asarray(mesh.faces)),
+        static=True,
+    )
+    for c in charts:
+        rec.log(f"measurement/{c.stem}", rr.EncodedImage(path=c), static=True)
+    rec.flush()
