@@ -42,6 +42,7 @@ from machine_models.parts import (
     STEEL,
     STEELC,
     inertial,
+    machine_spec,
     motor,
     quat_x,
     tendon_coefs,
@@ -218,16 +219,7 @@ def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None =
     problems = layout.problems() + params.problems()
     if problems:
         raise ValueError("invalid form-milling machine parameters: " + "; ".join(problems))
-    spec = mujoco.MjSpec()
-    spec.modelname = "form_mill"
-    spec.compiler.degree = False
-    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
-    spec.option.timestep = params.timestep
-    spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{params.integrator.upper()}")
-    spec.option.gravity = [0.0, 0.0, -9.81]
-    # no body touches another (the cut is the cutting engine's business): skip collision detection entirely
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    spec.visual.global_.offwidth = 1280
+    spec = machine_spec("form_mill", params.timestep, params.integrator, (0.0, 0.0, -9.81))
     world = spec.worldbody
     world.add_light(pos=[0.2, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
     box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER

@@ -20,6 +20,21 @@ GREY, DARK, BLUE, ORANGE, STEELC = (
 )
 
 
+def machine_spec(name: str, timestep: float, integrator: str, gravity: tuple[float, float, float]) -> mujoco.MjSpec:
+    """An empty machine model: angles in radians, explicit inertias, the time step and integrator, gravity, and
+    no collision detection (no body touches another: the cut is the cutting engine's business)."""
+    spec = mujoco.MjSpec()
+    spec.modelname = name
+    spec.compiler.degree = False
+    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+    spec.option.timestep = timestep
+    spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
+    spec.option.gravity = list(gravity)
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+    spec.visual.global_.offwidth = 1280
+    return spec
+
+
 def quat_z(angle: float) -> list[float]:
     return [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
 

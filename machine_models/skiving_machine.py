@@ -38,6 +38,7 @@ from machine_models.parts import (
     STEEL,
     STEELC,
     inertial,
+    machine_spec,
     quat_x,
     quat_z,
     tendon_coefs,
@@ -87,16 +88,7 @@ def build_spec(
     # the model's screw has its real lead; the CNC counts pulses for the job's nominal one
     lay = layout_of(setup, lead_screw_pitch_mm * (1 + params.lead_screw_pitch_error))
     g, c = setup.gear, setup.cutter
-    spec = mujoco.MjSpec()
-    spec.modelname = "skiving_machine"
-    spec.compiler.degree = False
-    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
-    spec.option.timestep = params.timestep
-    spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{params.integrator.upper()}")
-    spec.option.gravity = [0.0, 0.0, -9.81]
-    # no body touches another (the cut is the cutting engine's business): skip collision detection entirely
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    spec.visual.global_.offwidth = 1280
+    spec = machine_spec("skiving_machine", params.timestep, params.integrator, (0.0, 0.0, -9.81))
     world = spec.worldbody
     world.add_light(pos=[0, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
     r_blank = g.tip_radius * MM if not g.internal else (g.root_radius + 3 * g.mn) * MM

@@ -43,6 +43,7 @@ from machine_models.parts import (
     STEEL,
     STEELC,
     inertial,
+    machine_spec,
     motor,
     tendon_coefs,
     visual,
@@ -149,16 +150,7 @@ def build_thread_lathe_spec(lay: ThreadLayout, params: ThreadLatheParams | None 
     problems = params.problems()
     if problems:
         raise ValueError("invalid lathe parameters: " + "; ".join(problems))
-    spec = mujoco.MjSpec()
-    spec.modelname = f"thread_lathe_{lay.form}"
-    spec.compiler.degree = False
-    spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
-    spec.option.timestep = params.timestep
-    spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{params.integrator.upper()}")
-    spec.option.gravity = [0.0, -9.81, 0.0]
-    # no body touches another (the cut is the cutting engine's business): skip collision detection entirely
-    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
-    spec.visual.global_.offwidth = 1280
+    spec = machine_spec(f"thread_lathe_{lay.form}", params.timestep, params.integrator, (0.0, -9.81, 0.0))
     world = spec.worldbody
     world.add_light(pos=[0.3, 1.2, 0.4], dir=[-0.2, -1, -0.2], diffuse=[0.8, 0.8, 0.8])
     box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER

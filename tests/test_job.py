@@ -628,8 +628,13 @@ SHIPPED = sorted(p.name for p in JOBS.glob("*.toml"))
 def test_shipped_jobs_load(name):
     job = load_job(JOBS / name)
     assert job.source == str(JOBS / name)
-    if "thread" in tomllib.loads((JOBS / name).read_text(encoding="utf-8")):
+    data = tomllib.loads((JOBS / name).read_text(encoding="utf-8"))
+    if "thread" in data:
         assert job.kind == "thread" and job.gear is None
+    elif "mill" in data:  # the copying method (seed 003): a gear cut by a profiled disc mill, no skiving setup
+        assert job.kind == "form_milling" and job.cutter is None and job.mill["diameter"] > 0
+        with pytest.raises(ValueError, match="form-milling job"):
+            _ = job.skiving
     else:
         assert job.kind == "gear"
         assert job.skiving.full_depth == pytest.approx(sum(job.process["passes"]), abs=1e-6)
