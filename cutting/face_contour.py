@@ -1,0 +1,774 @@
+"""Face tooth contours by continuous indexing (seed 004): the radial slots of a face coupling, cut by a tool head
+whose cutting elements and the workpiece turn in a fixed ratio; its setting sheet, the exact slot, the manifold cut
+and the measurement of both.
+
+Frames and the seed's quantities. The workpiece frame turns with the workpiece (axis z, the slotted face at z = 0,
+material below). The tool head (radius R to the element tips) turns in a vertical plane about a horizontal axis; its
+angle phi is the time parameter (phi = omega_t t). The workpiece angle is a = phi / m (eq. 11: omega_t = m omega_w),
+so each tool revolution passes one slot and the slot k's centre line is the radial line at 2 pi k / m. Element j sits
+at the phase beta_j on the head (a sector of ``elements`` elements ``element_pitch`` apart, centred on phi); its own
+angle is psi = phi + beta_j. The head's centre is above the point M at radius L (seed: L, the distance of the line
+through M perpendicular to the tool axis, i.e. the vertical through M, from the workpiece axis), the tool plane is
+turned by the setting angle lambda from the radial line OM (eq. 1, lambda = arcsin(L / (R m))). The tip of element j
+is (eq. 5)
+
+    x = L cos a + R sin psi cos(a - lambda),   y = L sin a + R sin psi sin(a - lambda),
+    z = R (1 - cos psi) - S psi / (2 pi).
+
+The seed prints cos(a + lambda): with a counted as in its x = L cos a the element's velocity at M is radial (the
+condition eq. 1 is derived from) only for the tool plane at a - lambda (the tangential speed at M is
+omega_w (L - R m sin lambda) = 0), so the path uses a - lambda; lambda itself is eq. 1's positive angle.
+
+Controls (``control``):
+
+* ``"fixed"``: eq. 5 as it stands. The bottom of a slot is the tool circle, so it is concave (deeper at M), and the
+  slot's centre line bows sideways by about s^2 / (R m cos lambda) at a distance s from M (V turns along the slot).
+* ``"eccentric"``: eq. 14. The head's centre is carried by an eccentric (radius e, axis O) turning N =
+  ``eccentric_ratio`` times per tool revolution (N m cycles per workpiece revolution, a multiple of m); at phi = 0 the
+  eccentric is at 180 deg (eq. 14's start), so in the tool plane (down, along) the tip is
+  (R cos psi - e cos N phi, R sin psi - e sin N phi) from O: z gains - e (1 - cos N phi), the position along the slot
+  - e sin N phi. Eq. 14 prints m for N (eq. 15/16 write N); N is a field because the eccentric's flattening holds
+  only while N times the slot's half angle on the tool circle stays well below 1 (N = m = 24 leaves a W-shaped bottom
+  of tens of micrometres on the default coupling). At M the tip's horizontal speed is omega_t (R - N e) (eq. 15 at
+  phi = 0: V1 - V2), so the setting angle keeps V radial there with eq. 1 on R - N e.
+* ``"cyclic_ratio"``: the speed ratio varied cyclically, q = ``ratio_cycles`` cycles per tool revolution (q m per
+  workpiece revolution): a = phi / m - A (1 - cos q phi), A = ``ratio_amplitude`` [rad]; the ratio at M stays 1 / m.
+  :func:`straight_slot_amplitude` is the A that cancels the centre line's bow to second order.
+
+Both controls are geared to the head angle phi, so an element at beta_j != 0 meets them at the phase N beta_j
+(q beta_j): only the element at beta = 0 gets the flat / straight setting exactly.
+
+The cut: the head plunges with feed S per revolution (the seed's z, per element angle) until the depth is reached,
+then turns one more workpiece revolution at full depth (spark-out). The xy motion does not depend on the feed, so
+every plunge pass is the final pass lifted by depth - feed >= 0: the slot is the final passes' swept volume. Each
+element is a thin plate in the plane of the tool axis and its radius: a straight tip edge of width ``edge_width``
+along the tool axis, flanks opening by ``flank_angle``, ``element_height`` high.
+
+Measurement: the slot bottom along the slot's radial centre line (the lowest z the tip edge reaches over each point),
+its form (deviation from the straight line through its ends: + concave, - convex), the slot's side lines at a height
+(tangential deviation from the nominal radial line through the side at the middle radius, and their bow from the
+straight line through their ends) and the slot spacing; exactly from the path (roots on the element's motion, to
+1e-9 mm) and from the manifold solid (vertical rays, plane sections): they agree within the sweep's chord tolerance.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+import manifold3d as mf
+import numpy as np
+from scipy.optimize import brentq
+
+__all__ = [
+    "FLAT_TOLERANCE",
+    "SWEEP_TOLERANCE",
+    "FaceCoupling",
+    "FaceCut",
+    "SlotMeasure",
+    "bottom_form",
+    "cut_slots",
+    "cutting_speed",
+    "eccentric_speed",
+    "eccentric_tool_speed",
+    "element_path",
+    "exact_bottom",
+    "exact_sides",
+    "face_blank",
+    "flat_bottom_eccentricity",
+    "measure_exact",
+    "measure_mesh",
+    "measuring_radii",
+    "mesh_bottom",
+    "mesh_sides",
+    "path_velocity",
+    "phi_at_radius",
+    "plate_corners",
+    "setting_angle",
+    "setting_sheet",
+    "side_lines",
+    "slot_hulls",
+    "slot_spacing",
+    "speed_direction",
+    "straight_slot_amplitude",
+    "workpiece_angle",
+]
+
+Control = Literal["fixed", "eccentric", "cyclic_ratio"]
+CONTROLS = ("fixed", "eccentric", "cyclic_ratio")
+#: a slot bottom whose form is within this [mm] is "flat"
+FLAT_TOLERANCE = 2e-3
+#: the manifold sweep's chord error [mm] (hull chords of the element's path, the blank's circles)
+SWEEP_TOLERANCE = 1e-3
+#: samples of a pass that bracket a root before bisection; bisection steps (1e-4 rad / 2^50: exact in double)
+SCAN_SAMPLES = 2001
+BISECTION_STEPS = 50
+#: measuring points along a slot
+MEASURING_POINTS = 41
+#: neighbouring hulls of a pass overlap by this fraction of a step
+OVERLAP = 0.02
+
+
+@dataclass(frozen=True)
+class FaceCoupling:
+    """A face coupling's slots and the continuous-indexing setup that cuts them (lengths [mm], angles [rad]).
+
+    m slots; L the radius of M (where V is radial); R the tool radius to the tips; S the feed per tool revolution;
+    ``depth`` the slot depth at M; ``inner_radius``..``outer_radius`` the slotted face; the tool's ``elements``
+    (count, phase pitch ``element_pitch``, tip edge ``edge_width``, ``flank_angle``, ``element_height``); the
+    ``control`` and its settings: eccentricity ``e`` and ``eccentric_ratio`` N, ``ratio_cycles`` q and
+    ``ratio_amplitude`` A.
+    """
+
+    m: int = 24
+    L: float = 52.5
+    R: float = 125.0
+    S: float = 0.05
+    depth: float = 3.0
+    inner_radius: float = 45.0
+    outer_radius: float = 60.0
+    elements: int = 1
+    element_pitch: float = 0.0
+    edge_width: float = 2.0
+    flank_angle: float = math.radians(20.0)
+    element_height: float = 5.0
+    control: Control = "fixed"
+    e: float = 0.0
+    eccentric_ratio: int = 4
+    ratio_cycles: int = 6
+    ratio_amplitude: float = 0.0
+
+    def __post_init__(self) -> None:
+        _check(self)
+
+    @property
+    def phases(self) -> np.ndarray:
+        """The elements' phases beta_j [rad], centred on the head angle."""
+        return (np.arange(self.elements) - (self.elements - 1) / 2) * self.element_pitch
+
+    @property
+    def middle_radius(self) -> float:
+        return 0.5 * (self.inner_radius + self.outer_radius)
+
+    def setting_angle(self) -> float:
+        return setting_angle(self)
+
+    def cutting_speed(self, radius: np.ndarray | float, tool_speed: float = 1.0) -> np.ndarray:
+        return cutting_speed(self, radius, tool_speed)
+
+    def flat_bottom_eccentricity(self) -> float:
+        return flat_bottom_eccentricity(self)
+
+    def straight_slot_amplitude(self) -> float:
+        return straight_slot_amplitude(self)
+
+
+def _fail(name: str, why: str) -> None:
+    raise ValueError(f"{name}: {why}")
+
+
+def _check(c: FaceCoupling) -> None:
+    """Inputs first: each ValueError names its field."""
+    if not isinstance(c.m, int) or c.m < 2:
+        _fail("m", f"the number of slots must be an integer >= 2, got {c.m!r}")
+    for name in ("R", "S", "depth", "inner_radius", "edge_width", "element_height"):
+        v = getattr(c, name)
+        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+            _fail(name, f"must be a positive finite number, got {v!r}")
+    if not c.outer_radius > c.inner_radius:
+        _fail("outer_radius", f"must exceed inner_radius {c.inner_radius}, got {c.outer_radius}")
+    if not c.inner_radius <= c.L <= c.outer_radius:
+        _fail("L", f"M (radius L = {c.L}) must lie on the slotted face {c.inner_radius}..{c.outer_radius}")
+    if c.control not in CONTROLS:
+        _fail("control", f"must be one of {CONTROLS}, got {c.control!r}")
+    if not isinstance(c.elements, int) or c.elements < 1:
+        _fail("elements", f"must be an integer >= 1, got {c.elements!r}")
+    if not (math.isfinite(c.element_pitch) and c.element_pitch >= 0):
+        _fail("element_pitch", f"must be >= 0, got {c.element_pitch!r}")
+    if not 0 <= c.flank_angle < math.radians(45):
+        _fail("flank_angle", f"must be in [0, 45 deg), got {math.degrees(c.flank_angle):.3g} deg")
+    if not c.element_height > c.depth:
+        _fail("element_height", f"{c.element_height} must exceed depth {c.depth} (the element clears the face)")
+    if not c.depth < 0.5 * c.R:
+        _fail("depth", f"{c.depth} must be below R / 2 = {c.R / 2}")
+    if not isinstance(c.eccentric_ratio, int) or c.eccentric_ratio < 2:
+        _fail("eccentric_ratio", f"N must be an integer >= 2, got {c.eccentric_ratio!r}")
+    if not isinstance(c.ratio_cycles, int) or c.ratio_cycles < 1:
+        _fail("ratio_cycles", f"q must be an integer >= 1, got {c.ratio_cycles!r}")
+    if not (math.isfinite(c.e) and c.e >= 0):
+        _fail("e", f"must be >= 0, got {c.e!r}")
+    if c.e > 0 and c.control != "eccentric":
+        _fail("e", f"an eccentricity needs control = 'eccentric' (control is {c.control!r})")
+    if not (math.isfinite(c.ratio_amplitude) and c.ratio_amplitude >= 0):
+        _fail("ratio_amplitude", f"must be >= 0, got {c.ratio_amplitude!r}")
+    if c.ratio_amplitude > 0 and c.control != "cyclic_ratio":
+        _fail("ratio_amplitude", f"needs control = 'cyclic_ratio' (control is {c.control!r})")
+    if c.ratio_amplitude * c.ratio_cycles >= 1 / c.m:
+        _fail("ratio_amplitude", f"A q = {c.ratio_amplitude * c.ratio_cycles:.4g} >= 1/m: the workpiece would reverse")
+    radius = c.R - c.eccentric_ratio * c.e
+    if radius <= 0:
+        _fail("e", f"N e = {c.eccentric_ratio * c.e:.4g} >= R: the tip would run backwards at M")
+    if c.L >= radius * c.m:
+        name = "e" if c.e > 0 else "L"
+        _fail(name, f"L = {c.L} >= (R - N e) m = {radius * c.m:.4g}: lambda = arcsin(L / (R m)) does not exist")
+    width = c.edge_width + 2 * c.depth * math.tan(c.flank_angle)
+    spread = (c.elements - 1) * c.element_pitch / c.m
+    if width / c.inner_radius + spread >= 2 * math.pi / c.m:
+        name = "element_pitch" if spread > 0 else "edge_width"
+        _fail(
+            name,
+            f"the slot ({width:.3g} mm at the face, sector {spread:.3g} rad) is wider than the pitch at the "
+            f"inner radius",
+        )
+    # the final pass must run through the face (the tip below z = 0 from the inner to the outer radius), the tip
+    # moving on along the slot while it cuts
+    for beta in c.phases:
+        phi = _pass_phis(c, beta, samples=4001)[1:-1]
+        r = np.linalg.norm(_tip(c, phi, beta, final=True)[0], axis=-1)
+        if r.min() > c.inner_radius or r.max() < c.outer_radius:
+            _fail(
+                "depth",
+                f"the final pass is below the face only from r = {r.min():.4g} to {r.max():.4g}: deepen "
+                f"the slot or enlarge R to cut it through {c.inner_radius}..{c.outer_radius}",
+            )
+        if np.any(np.diff(_along(c, phi, beta)) <= 0):
+            _fail("e", "the tip runs backwards along the slot while it cuts (N e too large for the pass)")
+
+
+# ---------------------------------------------------------------------------------------------------- kinematics
+
+
+def setting_angle(c: FaceCoupling) -> float:
+    """lambda = arcsin(L / ((R - N e) m)) [rad] (eq. 1; R - N e is the radius of the tip's horizontal speed at M,
+    = R without the eccentric): the tool plane's angle to the radial line OM that makes V radial at M."""
+    e = c.e if c.control == "eccentric" else 0.0
+    return math.asin(c.L / ((c.R - c.eccentric_ratio * e) * c.m))
+
+
+def workpiece_angle(c: FaceCoupling, phi: np.ndarray | float) -> np.ndarray:
+    """The workpiece angle a [rad] at the head angle phi: phi / m (eq. 11), minus A (1 - cos q phi) under the
+    cyclic ratio control."""
+    phi = np.asarray(phi, dtype=float)
+    a = phi / c.m
+    if c.control == "cyclic_ratio":
+        a = a - c.ratio_amplitude * (1 - np.cos(c.ratio_cycles * phi))
+    return a
+
+
+def _frame(
+    c: FaceCoupling, phi: np.ndarray, final: bool = True, beta: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """At head angle phi: the tool plane's horizontal direction u, the tool axis n (both (..., 2)), the head
+    centre's horizontal position (..., 2) and height, the workpiece angle."""
+    a = workpiece_angle(c, phi)
+    tu = a - setting_angle(c)
+    u = np.stack([np.cos(tu), np.sin(tu)], axis=-1)
+    n = np.stack([-np.sin(tu), np.cos(tu)], axis=-1)
+    e = c.e if c.control == "eccentric" else 0.0
+    N = c.eccentric_ratio
+    feed = c.depth if final else c.S * (phi + beta) / (2 * math.pi)
+    centre = c.L * np.stack([np.cos(a), np.sin(a)], axis=-1) - (e * np.sin(N * phi))[..., None] * u
+    height = c.R - e + e * np.cos(N * phi) - feed
+    return u, n, centre, height, a
+
+
+def _along(c: FaceCoupling, phi: np.ndarray, beta: float) -> np.ndarray:
+    """The tip's position along the tool plane from the eccentric's axis: R sin psi - e sin N phi [mm]."""
+    e = c.e if c.control == "eccentric" else 0.0
+    return c.R * np.sin(phi + beta) - e * np.sin(c.eccentric_ratio * phi)
+
+
+def _tip(c: FaceCoupling, phi: np.ndarray, beta: float, final: bool) -> tuple[np.ndarray, np.ndarray]:
+    u, _, centre, height, _ = _frame(c, phi, final, beta)
+    psi = phi + beta
+    return centre + (c.R * np.sin(psi))[..., None] * u, height - c.R * np.cos(psi)
+
+
+def element_path(c: FaceCoupling, phi: np.ndarray | float, element: int = 0, final: bool = False) -> np.ndarray:
+    """The tip of element ``element`` in the workpiece frame, (..., 3) [mm], at head angles phi [rad]
+    (phi = omega_t t; the seed's a m for the fixed setting): eq. 5 with the control's terms. ``final`` replaces the
+    seed's feed term S psi / (2 pi) by the full depth (the spark-out pass)."""
+    if not 0 <= element < c.elements:
+        raise ValueError(f"element: must be in 0..{c.elements - 1}, got {element}")
+    phi = np.asarray(phi, dtype=float)
+    xy, z = _tip(c, phi, float(c.phases[element]), final)
+    return np.concatenate([xy, z[..., None]], axis=-1)
+
+
+def path_velocity(
+    c: FaceCoupling, phi: np.ndarray | float, element: int = 0, tool_speed: float = 1.0, final: bool = True
+) -> np.ndarray:
+    """d/dt of :func:`element_path` [mm/s] at the tool speed omega_t [rad/s] (central differences, 1e-10 relative):
+    the relative velocity V of the seed's eq. 7."""
+    phi = np.asarray(phi, dtype=float)
+    h = 1e-6
+    d = (element_path(c, phi + h, element, final) - element_path(c, phi - h, element, final)) / (2 * h)
+    return tool_speed * d
+
+
+def cutting_speed(c: FaceCoupling, radius: np.ndarray | float, tool_speed: float = 1.0) -> np.ndarray:
+    """|V| [mm/s] at workpiece radius R_w along the slot, the seed's eq. 4:
+    |V|^2 = (R_w omega_w)^2 + V_t^2 + 2 V_t R_w omega_w cos(pi/2 + lambda), omega_w = omega_t / m,
+    with the angle between the tool's and the workpiece's velocities pi/2 + lambda (the seed's figure 1; its
+    printed cos is of that angle) and V_t the tip's speed at M: R omega_t, with the eccentric eq. 15 at phi = 0,
+    (R - N e) omega_t. Exact at M (R_w = L: V radial, |V| = V_t cos lambda); along the slot the path's own speed is
+    :func:`path_velocity`."""
+    r = np.asarray(radius, dtype=float)
+    lam = setting_angle(c)
+    e = c.e if c.control == "eccentric" else 0.0
+    vt = (c.R - c.eccentric_ratio * e) * tool_speed
+    vw = r * tool_speed / c.m
+    return np.sqrt(vw**2 + vt**2 + 2 * vt * vw * math.cos(math.pi / 2 + lam))
+
+
+def eccentric_speed(c: FaceCoupling, phi: np.ndarray | float, tool_speed: float = 1.0) -> np.ndarray:
+    """The tip's speed in the tool plane [mm/s] under the eccentric, eq. 15:
+    |V|^2 = V1^2 + V2^2 - 2 V1 V2 cos(N phi - phi), V1 = R omega_t, V2 = e N omega_t."""
+    phi = np.asarray(phi, dtype=float)
+    v1, v2 = c.R * tool_speed, c.e * c.eccentric_ratio * tool_speed
+    return np.sqrt(v1**2 + v2**2 - 2 * v1 * v2 * np.cos((c.eccentric_ratio - 1) * phi))
+
+
+def eccentric_tool_speed(c: FaceCoupling, v: float, phi: np.ndarray | float) -> np.ndarray:
+    """The tool's speed n [rev/s] that holds the cutting speed v [mm/s] at head angle phi under the eccentric,
+    eq. 16: n = v / (2 pi sqrt(N^2 e^2 + R^2 - 2 e N R cos(N phi - phi)))."""
+    phi = np.asarray(phi, dtype=float)
+    N, e, R = c.eccentric_ratio, c.e, c.R
+    return v / (2 * math.pi * np.sqrt(N**2 * e**2 + R**2 - 2 * e * N * R * np.cos((N - 1) * phi)))
+
+
+def straight_slot_amplitude(c: FaceCoupling) -> float:
+    """The cyclic ratio's amplitude A [rad] that cancels the bow of the slot's centre line to second order:
+    the tip's polar angle is phi^2 (R cos lambda / (m L) - A q^2 / 2) near M, so A = 2 R cos lambda / (m L q^2)."""
+    lam = math.asin(c.L / (c.R * c.m))
+    return 2 * c.R * math.cos(lam) / (c.m * c.L * c.ratio_cycles**2)
+
+
+def phi_at_radius(c: FaceCoupling, radius: np.ndarray | float, element: int | None = None) -> np.ndarray:
+    """Head angles [rad] at which the tip of ``element`` (default: the one nearest beta = 0) is at ``radius`` on the
+    final pass through slot 0."""
+    r = np.atleast_1d(np.asarray(radius, dtype=float))
+    beta = float(c.phases[c.elements // 2 if element is None else element])
+    phi = _pass_phis(c, beta, margin=1.0)
+
+    def gap(x: np.ndarray) -> np.ndarray:
+        return np.linalg.norm(_tip(c, x, beta, final=True)[0], axis=-1) - r
+
+    g = np.linalg.norm(_tip(c, phi, beta, final=True)[0], axis=-1)[None, :] - r[:, None]
+    k, ok = _first_root(g)
+    x = _bisect(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
+    return np.where(ok, x, np.nan)
+
+
+def speed_direction(c: FaceCoupling, radius: np.ndarray | float, tool_speed: float = 1.0) -> np.ndarray:
+    """The angle [rad] of the relative velocity V's horizontal part to the radial direction where the tip is at
+    ``radius`` (+ towards larger polar angles): 0 at M by the setting, growing towards the slot's ends (the seed's
+    figure 2: V turns along the slot, so the slot leaves the radial line)."""
+    phi = phi_at_radius(c, radius)
+    element = c.elements // 2
+    p = element_path(c, phi, element, final=True)[..., :2]
+    v = path_velocity(c, phi, element, tool_speed)[..., :2]
+    radial = p / np.linalg.norm(p, axis=-1, keepdims=True)
+    return np.arctan2(radial[..., 0] * v[..., 1] - radial[..., 1] * v[..., 0], np.einsum("ij,ij->i", radial, v))
+
+
+def setting_sheet(c: FaceCoupling, tool_speed: float = 1.0) -> dict[str, float]:
+    """The setting sheet's figures (tool speed omega_t [rad/s]): the setting angle [deg], the tip's radius of speed at
+    M, the cutting speed |V| (eq. 4) at the slot's inner end, M and outer end [mm/s], V's direction at the ends
+    [deg], the flat-bottom eccentricity [mm] (N = ``eccentric_ratio``), the straight-slot ratio amplitude [rad] (q =
+    ``ratio_cycles``), the control's cycles per workpiece revolution and the cycle's tool revolutions (plunge at S,
+    one workpiece revolution of spark-out)."""
+    e = c.e if c.control == "eccentric" else 0.0
+    ends = np.array([c.inner_radius, c.L, c.outer_radius])
+    v = cutting_speed(c, ends, tool_speed)
+    direction = np.degrees(speed_direction(c, ends[[0, 2]], tool_speed))
+    cycles = {"fixed": 0, "eccentric": c.eccentric_ratio * c.m, "cyclic_ratio": c.ratio_cycles * c.m}[c.control]
+    return {
+        "setting_angle_deg": math.degrees(setting_angle(c)),
+        "tip_speed_radius_mm": c.R - c.eccentric_ratio * e,
+        "V_inner_mm_s": float(v[0]),
+        "V_M_mm_s": float(v[1]),
+        "V_outer_mm_s": float(v[2]),
+        "V_direction_inner_deg": float(direction[0]),
+        "V_direction_outer_deg": float(direction[1]),
+        "flat_bottom_e_mm": flat_bottom_eccentricity(c),
+        "straight_slot_amplitude_rad": straight_slot_amplitude(c),
+        "control_cycles_per_workpiece_rev": float(cycles),
+        "tool_revolutions": c.depth / c.S + c.m,
+    }
+
+
+# ---------------------------------------------------------------------------------------------------- exact slot
+
+
+def _pass_phis(c: FaceCoupling, beta: float, margin: float = 0.0, samples: int = SCAN_SAMPLES) -> np.ndarray:
+    """Head angles of element beta's final pass through slot 0 while its tip is below z = margin [mm]."""
+    psi = np.linspace(-1.2, 1.2, 4801)
+    _, z = _tip(c, psi - beta, beta, final=True)
+    below = np.flatnonzero(z < margin)
+    if below.size == 0:
+        raise ValueError(f"height: the tip never goes below z = {margin:.4g} (the slot is {c.depth} deep)")
+    i0 = below[np.argmin(np.abs(psi[below]))]  # the run around the bottom
+    lo = hi = i0
+    while lo > 0 and z[lo - 1] < margin:
+        lo -= 1
+    while hi < len(psi) - 1 and z[hi + 1] < margin:
+        hi += 1
+    lo, hi = max(lo - 1, 0), min(hi + 1, len(psi) - 1)
+    return np.linspace(psi[lo], psi[hi], samples) - beta
+
+
+def _bisect(f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray, flo: np.ndarray) -> np.ndarray:
+    """Vectorised bisection of f on brackets [lo, hi] (f(lo) = flo)."""
+    for _ in range(BISECTION_STEPS):
+        mid = 0.5 * (lo + hi)
+        fm = f(mid)
+        left = np.sign(fm) == np.sign(flo)
+        lo = np.where(left, mid, lo)
+        flo = np.where(left, fm, flo)
+        hi = np.where(left, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def _first_root(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of g (points x samples), the index of the first sign change and whether there is one."""
+    change = np.signbit(g[:, :-1]) != np.signbit(g[:, 1:])
+    return np.argmax(change, axis=1), change.any(axis=1)
+
+
+def exact_bottom(c: FaceCoupling, radii: np.ndarray) -> np.ndarray:
+    """The slot bottom z [mm] at ``radii`` on a slot's radial centre line: the lowest height of any element's
+    tip edge passing over the point (the edge lies along the tool axis, horizontal, so its height there is the tip's
+    when (P - tip) . u = 0). Bracketed on the pass's samples, bisected to 1e-12 rad. All slots are slot 0 turned by
+    2 pi k / m (the controls repeat every tool revolution), so this is every slot's bottom."""
+    r = np.asarray(radii, dtype=float)
+    p = np.stack([r, np.zeros_like(r)], axis=-1)
+    best = np.full(r.shape, np.nan)
+    for beta in c.phases:
+        phi = _pass_phis(c, beta)
+        tip, _ = _tip(c, phi, beta, final=True)
+        u = _frame(c, phi)[0]
+        g = np.einsum("ijk,jk->ij", p[:, None, :] - tip[None], u)
+        k, ok = _first_root(g)
+
+        def gap(x: np.ndarray, p: np.ndarray = p, beta: float = beta) -> np.ndarray:
+            t, _ = _tip(c, x, beta, final=True)
+            return np.einsum("ij,ij->i", p - t, _frame(c, x)[0])
+
+        x = _bisect(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
+        t, z = _tip(c, x, beta, final=True)
+        across = np.abs(np.einsum("ij,ij->i", p - t, _frame(c, x)[1]))
+        z = np.where(ok & (across <= 0.5 * c.edge_width), z, np.nan)
+        best = np.fmin(best, z)
+    return best
+
+
+def _side_point(
+    c: FaceCoupling, phi: np.ndarray, beta: float, height: float, sign: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ``sign`` flank's end of element beta's section at z = ``height`` (..., 2), and whether the plate
+    reaches that height there."""
+    u, n, centre, zc, _ = _frame(c, phi)
+    psi = phi + beta
+    t = (zc - height) / np.cos(psi)  # distance from the head's centre along the element's radius
+    half = 0.5 * c.edge_width + (c.R - t) * math.tan(c.flank_angle)
+    pt = centre + (t * np.sin(psi))[..., None] * u + sign * half[..., None] * n
+    return pt, (t <= c.R) & (t >= c.R - c.element_height)
+
+
+def exact_sides(c: FaceCoupling, radii: np.ndarray, height: float, slot: int = 0) -> np.ndarray:
+    """Polar angles [rad] of the slot's sides at ``radii`` and z = ``height``, (2, n): the - side (towards smaller
+    angles) and the + side. The section of an element's plate at that height is a segment along the tool axis; the
+    slot's section is the union of these segments, bounded by their ends (roots of |end| = r, bisected)."""
+    r = np.asarray(radii, dtype=float)
+    out = np.stack([np.full(r.shape, np.inf), np.full(r.shape, -np.inf)])
+    for beta in c.phases:
+        phi = _pass_phis(c, beta, margin=height)
+        for row, sign in ((0, -1), (1, 1)):
+            pt, valid = _side_point(c, phi, beta, height, sign)
+            g = np.where(valid, np.linalg.norm(pt, axis=-1), np.nan)[None, :] - r[:, None]
+            k, ok = _first_root(np.nan_to_num(g, nan=-1.0))
+
+            def gap(x: np.ndarray, beta: float = beta, sign: int = sign) -> np.ndarray:
+                return np.linalg.norm(_side_point(c, x, beta, height, sign)[0], axis=-1) - r
+
+            x = _bisect(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
+            q, reach = _side_point(c, x, beta, height, sign)
+            ang = np.where(ok & reach, np.arctan2(q[:, 1], q[:, 0]), np.nan)
+            out[row] = np.fmin(out[row], ang) if sign < 0 else np.fmax(out[row], ang)
+    return out + 2 * math.pi * slot / c.m
+
+
+def flat_bottom_eccentricity(c: FaceCoupling) -> float:
+    """The eccentricity e [mm] that makes the slot bottom flat: the exact bottom at the middle radius on the straight
+    line through the bottom at the inner and the outer radius (a depth gauge at the ends and the middle reads one
+    line; what is left is a W of the order R (N^2 - 1) delta^4 / 24, delta the slot's half angle on the tool circle,
+    see :func:`measure_exact`). Solved (brentq, 1e-9 mm) on the exact bottom of the eccentric control with N =
+    ``eccentric_ratio``; near R (1 - cos delta) / (1 - cos N delta), and R / N^2 for a short slot."""
+    ends = np.array([c.inner_radius, c.middle_radius, c.outer_radius])
+
+    def middle(e: float) -> float:
+        z = exact_bottom(replace(c, control="eccentric", e=e, ratio_amplitude=0.0), ends)
+        return float(z[1] - 0.5 * (z[0] + z[2]))
+
+    N = c.eccentric_ratio
+    delta = 0.5 * (c.outer_radius - c.inner_radius) / c.R
+    guess = c.R * (1 - math.cos(delta)) / (1 - math.cos(N * delta))
+    limit = 0.999 * (c.R - c.L / c.m) / N
+    hi = min(1.25 * guess, limit)
+    while middle(hi) < 0:
+        if hi >= limit:
+            raise ValueError(f"eccentric_ratio: no eccentricity flattens this slot with N = {N}")
+        hi = min(1.5 * hi, limit)
+    return brentq(middle, 0.0, hi, xtol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------------- measurement
+
+
+def bottom_form(radii: np.ndarray, z: np.ndarray) -> tuple[float, str]:
+    """The bottom's form [mm]: the largest deviation from the straight line through its ends, signed + where the
+    bottom lies below that line (concave, deeper inside), - above (convex); and its name ("flat" within
+    FLAT_TOLERANCE)."""
+    line = z[0] + (z[-1] - z[0]) * (radii - radii[0]) / (radii[-1] - radii[0])
+    d = line - z
+    form = float(d[np.argmax(np.abs(d))])
+    shape = "flat" if abs(form) <= FLAT_TOLERANCE else ("concave" if form > 0 else "convex")
+    return form, shape
+
+
+def side_lines(radii: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per side (rows of ``angles``): the tangential deviation [mm] from the nominal radial line through the side at
+    the middle radius (r sin(theta - theta_mid)), and the bow [mm]: the largest signed distance (+ towards larger
+    angles) of the side from the straight line through its ends."""
+    mid = len(radii) // 2
+    dev = radii * np.sin(angles - angles[:, mid : mid + 1])
+    pts = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=-1)
+    chord = pts[:, -1] - pts[:, 0]
+    normal = np.stack([-chord[:, 1], chord[:, 0]], axis=-1) / np.linalg.norm(chord, axis=-1, keepdims=True)
+    dist = np.einsum("sik,sk->si", pts - pts[:, :1], normal)
+    bow = dist[np.arange(len(dist)), np.argmax(np.abs(dist), axis=1)]
+    return dev, bow
+
+
+@dataclass(frozen=True, eq=False)
+class SlotMeasure:
+    """One slot measured: ``radii`` [mm], ``bottom`` z [mm], ``form`` [mm] (+ concave) and ``shape``; ``sides``
+    (2, n) polar angles [rad] at ``height``, their ``side_deviation`` (2, n) [mm] from the nominal radial lines and
+    ``side_bow`` (2,) [mm]; ``centre`` the slot's angle at radius L [rad]."""
+
+    slot: int
+    radii: np.ndarray
+    bottom: np.ndarray
+    form: float
+    shape: str
+    height: float
+    sides: np.ndarray
+    side_deviation: np.ndarray
+    side_bow: np.ndarray
+    centre: float
+
+
+def _measure(
+    slot: int, radii: np.ndarray, height: float, bottom: np.ndarray, sides: np.ndarray, centre_sides: np.ndarray
+) -> SlotMeasure:
+    form, shape = bottom_form(radii, bottom)
+    dev, bow = side_lines(radii, sides)
+    return SlotMeasure(slot, radii, bottom, form, shape, height, sides, dev, bow, float(np.mean(centre_sides)))
+
+
+def measuring_radii(c: FaceCoupling, points: int = MEASURING_POINTS) -> np.ndarray:
+    return np.linspace(c.inner_radius, c.outer_radius, points)
+
+
+def measure_exact(
+    c: FaceCoupling, slots: tuple[int, ...] = (0,), radii: np.ndarray | None = None, height: float | None = None
+) -> list[SlotMeasure]:
+    """The slots measured on the exact swept geometry (sides at ``height``, default half the depth)."""
+    radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
+    height = -0.5 * c.depth if height is None else height
+    bottom = exact_bottom(c, radii)
+    out = []
+    for k in slots:
+        sides = exact_sides(c, radii, height, k)
+        centre = exact_sides(c, np.array([c.L]), height, k)[:, 0]
+        out.append(_measure(k, radii, height, bottom, sides, centre))
+    return out
+
+
+def slot_spacing(c: FaceCoupling, measures: list[SlotMeasure]) -> np.ndarray:
+    """Deviations [rad] of the angular pitch between consecutive measured slots from 2 pi / m (per slot number
+    step)."""
+    k = np.array([s.slot for s in measures], dtype=float)
+    a = np.array([s.centre for s in measures])
+    return np.diff(a) / np.diff(k) - 2 * math.pi / c.m
+
+
+# ---------------------------------------------------------------------------------------------------- manifold cut
+
+
+def _segments(radius: float, tol: float) -> int:
+    return max(16, math.ceil(math.pi / math.acos(1 - tol / radius)))
+
+
+def face_blank(c: FaceCoupling, tol: float = SWEEP_TOLERANCE, base: float = 2.0) -> mf.Manifold:
+    """The annular face blank, z from -(depth + base) to 0: the outer circle circumscribed and the inner one
+    inscribed by polygons of chord error ``tol`` (the blank covers the whole true annulus)."""
+    n_out, n_in = _segments(c.outer_radius, tol), _segments(c.inner_radius, tol)
+    outer = mf.CrossSection.circle(c.outer_radius / math.cos(math.pi / n_out), n_out)
+    inner = mf.CrossSection.circle(c.inner_radius, n_in)
+    h = c.depth + base
+    return mf.Manifold.extrude(outer - inner, h).translate((0.0, 0.0, -h))
+
+
+def plate_corners(c: FaceCoupling, phi: np.ndarray, beta: float) -> np.ndarray:
+    """The element plate's four corners (..., 4, 3) on the final pass: the tip edge's ends and the top's."""
+    u, n, centre, zc, _ = _frame(c, phi)
+    psi = phi + beta
+    u3 = np.concatenate([u, np.zeros((*u.shape[:-1], 1))], axis=-1)
+    n3 = np.concatenate([n, np.zeros((*n.shape[:-1], 1))], axis=-1)
+    c3 = np.concatenate([centre, zc[..., None]], axis=-1)
+    rho = np.sin(psi)[..., None] * u3 - np.cos(psi)[..., None] * np.array([0.0, 0.0, 1.0])
+    top = c.R - c.element_height
+    w_tip = 0.5 * c.edge_width
+    w_top = w_tip + c.element_height * math.tan(c.flank_angle)
+    corners = [
+        c3 + c.R * rho - w_tip * n3,
+        c3 + c.R * rho + w_tip * n3,
+        c3 + top * rho + w_top * n3,
+        c3 + top * rho - w_top * n3,
+    ]
+    return np.stack(corners, axis=-2)
+
+
+def _steps(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each hull's start and end angle: consecutive samples, widened by OVERLAP of the step at both ends so that
+    neighbouring hulls overlap (hulls that only share a plate leave zero-volume slivers in the boolean)."""
+    d = OVERLAP * np.diff(phi)
+    return phi[:-1] - d, phi[1:] + d
+
+
+def _chord_error(c: FaceCoupling, phi: np.ndarray, beta: float) -> float:
+    """The largest distance of the plate's corners at the quarter points of each hull from its straight move."""
+    lo, hi = _steps(phi)
+    p0, p1 = plate_corners(c, lo, beta), plate_corners(c, hi, beta)
+    worst = 0.0
+    for f in (0.25, 0.5, 0.75):
+        q = plate_corners(c, lo + f * (hi - lo), beta)
+        worst = max(worst, float(np.max(np.linalg.norm(q - ((1 - f) * p0 + f * p1), axis=-1))))
+    return worst
+
+
+def pass_samples(c: FaceCoupling, beta: float, tol: float) -> tuple[np.ndarray, float]:
+    """Head angles of element beta's final pass (tip below the face, one step beyond) with the plate's chord error
+    within ``tol`` [mm] (the path's curvature radius is about R + e N^2, the first guess), and that error."""
+    curvature = c.R + (c.e * c.eccentric_ratio**2 if c.control == "eccentric" else 0.0) + c.L / c.m**2
+    span = _pass_phis(c, beta, samples=2)
+    steps = max(2, math.ceil((span[1] - span[0]) / math.sqrt(8 * tol / curvature)))
+    while True:
+        phi = np.linspace(span[0], span[1], steps + 1)
+        err = _chord_error(c, phi, beta)
+        if err <= tol:
+            return phi, err
+        steps = math.ceil(steps * 1.3)
+
+
+@dataclass(frozen=True, eq=False)
+class FaceCut:
+    """The manifold cut: the ``solid``, the ``slots`` cut, the number of hulls, the sweep's chord error [mm] (the
+    largest over the passes, <= ``tol``) and the time it took [s]."""
+
+    solid: mf.Manifold
+    slots: tuple[int, ...]
+    hulls: int
+    chord_error: float
+    tol: float
+    seconds: float = field(default=0.0)
+
+
+def slot_hulls(c: FaceCoupling, slot: int, tol: float = SWEEP_TOLERANCE) -> tuple[list[mf.Manifold], float]:
+    """The convex pieces of slot ``slot``'s swept volume (every element's final pass): hulls of consecutive plate
+    placements, within ``tol`` [mm] of the true sweep; and their chord error."""
+    turn = 2 * math.pi * slot / c.m
+    rot = np.array([[math.cos(turn), -math.sin(turn), 0.0], [math.sin(turn), math.cos(turn), 0.0], [0.0, 0.0, 1.0]])
+    hulls, worst = [], 0.0
+    for beta in c.phases:
+        phi, err = pass_samples(c, beta, tol)
+        worst = max(worst, err)
+        lo, hi = (plate_corners(c, x, beta) @ rot.T for x in _steps(phi))
+        hulls += [mf.Manifold.hull_points(np.vstack([a, b])) for a, b in zip(lo, hi, strict=True)]
+    return hulls, worst
+
+
+def cut_slots(c: FaceCoupling, slots: tuple[int, ...] = (0, 1), tol: float = SWEEP_TOLERANCE) -> FaceCut:
+    """The face blank with the slots' swept volumes removed (one batched boolean); ``tol`` [mm] the chord error."""
+    t0 = time.perf_counter()
+    pieces, worst = [], 0.0
+    for k in slots:
+        h, err = slot_hulls(c, k, tol)
+        pieces += h
+        worst = max(worst, err)
+    solid = mf.Manifold.batch_boolean([face_blank(c, tol), *pieces], mf.OpType.Subtract)
+    if solid.status() != mf.Error.NoError or solid.is_empty():
+        raise RuntimeError(f"the face cut failed: {solid.status()}")
+    solid.num_tri()  # evaluate now (the boolean is lazy) so the time is the cut's
+    return FaceCut(solid, tuple(slots), len(pieces), worst, tol, time.perf_counter() - t0)
+
+
+def mesh_bottom(solid: mf.Manifold, c: FaceCoupling, radii: np.ndarray, slot: int = 0) -> np.ndarray:
+    """The slot bottom z [mm] on the solid: a vertical ray down slot ``slot``'s centre line at each radius, its
+    first hit."""
+    turn = 2 * math.pi * slot / c.m
+    top, bottom = 1.0, -(c.depth + 10.0)
+    out = np.full(len(radii), np.nan)
+    for i, r in enumerate(np.asarray(radii, dtype=float)):
+        x, y = r * math.cos(turn), r * math.sin(turn)
+        hits = solid.ray_cast((x, y, top), (x, y, bottom))
+        if hits:
+            out[i] = top + hits[0].distance * (bottom - top)
+    return out
+
+
+def mesh_sides(solid: mf.Manifold, c: FaceCoupling, radii: np.ndarray, height: float, slot: int = 0) -> np.ndarray:
+    """Polar angles [rad] of slot ``slot``'s sides at ``radii`` on the solid's plane section at z = ``height``,
+    (2, n): the section's edges crossing each circle r, the nearest crossing either side of the slot's centre line."""
+    turn = 2 * math.pi * slot / c.m
+    polys = solid.slice(height).to_polygons()
+    a = np.vstack(polys)
+    b = np.vstack([np.roll(p, -1, axis=0) for p in polys])
+    d = b - a
+    out = np.full((2, len(radii)), np.nan)
+    for i, r in enumerate(np.asarray(radii, dtype=float)):
+        # |a + t d|^2 = r^2, t in [0, 1]
+        qa, qb, qc = np.einsum("ij,ij->i", d, d), 2 * np.einsum("ij,ij->i", a, d), np.einsum("ij,ij->i", a, a) - r * r
+        disc = qb * qb - 4 * qa * qc
+        ok = disc >= 0
+        ts = []
+        for sgn in (-1.0, 1.0):
+            t = (-qb[ok] + sgn * np.sqrt(disc[ok])) / (2 * qa[ok])
+            good = (t >= 0) & (t <= 1)
+            ts.append(a[ok][good] + t[good, None] * d[ok][good])
+        pts = np.vstack(ts)
+        rel = np.angle(np.exp(1j * (np.arctan2(pts[:, 1], pts[:, 0]) - turn)))
+        neg, pos = rel[rel < 0], rel[rel > 0]
+        if len(neg) and len(pos):
+            out[0, i], out[1, i] = neg.max() + turn, pos.min() + turn
+    return out
+
+
+def measure_mesh(
+    cut: FaceCut, c: FaceCoupling, radii: np.ndarray | None = None, height: float | None = None
+) -> list[SlotMeasure]:
+    """The cut slots measured on the manifold solid (rays for the bottom, a plane section for the sides)."""
+    radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
+    height = -0.5 * c.depth if height is None else height
+    out = []
+    for k in cut.slots:
+        bottom = mesh_bottom(cut.solid, c, radii, k)
+        sides = mesh_sides(cut.solid, c, radii, height, k)
+        centre = mesh_sides(cut.solid, c, np.array([c.L]), height, k)[:, 0]
+        out.append(_measure(k, radii, height, bottom, sides, centre))
+    return out
