@@ -652,3 +652,56 @@ def cut_workpiece(
     if solid.status() != mf.Error.NoError:
         raise RuntimeError(f"manifold3d could not cut the workpiece: {solid.status()}")
     return TurnedSolid(setup, n, solid, pieces, chord, sag, method)
+
+
+# --- a path a machine made ------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SampledTurning(TurningSetup):
+    """Turning along a path given by samples: spindle angles ``theta`` [rad, increasing, from 0] and the tool's
+    axial positions ``z`` [mm] there (what a simulated lathe made); linear between the samples. ``vibration``
+    (the commanded one) only sizes the windows; ``theta0`` says where in its phase the samples begin."""
+
+    theta: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
+    z: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
+    theta0: float = 0.0  # the spindle angle [rad] since the vibration started at which the samples begin
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        th = np.asarray(self.theta, dtype=float)
+        if th.ndim != 1 or len(th) < 2 or np.any(np.diff(th) <= 0) or len(self.z) != len(th):
+            raise ValueError("theta must be increasing samples [rad] with one z [mm] each")
+
+    @property
+    def revolutions(self) -> int:
+        """Whole revolutions the samples cover."""
+        return int((self.theta[-1] - self.theta[0]) / TWO_PI)
+
+    def path(self, theta: np.ndarray | float) -> np.ndarray | float:
+        z = np.interp(np.asarray(theta, dtype=float), self.theta, self.z)
+        return float(z) if np.ndim(z) == 0 else z
+
+
+def turned_surface_summary(setup: TurningSetup, n_revs: int | None = None, n_phi: int = 72) -> dict:
+    """What the turned surface and the chips show, in micrometres: the spacing range of successive paths, the
+    crests from the envelope (Rt_max, mean Rt, mean crest) and from the path positions alone (the geometric
+    prediction), and the chip breaks per revolution."""
+    n = _revs(setup, n_revs)
+    measured = roughness(setup, n_phi, n)
+    predicted = roughness(setup, n_phi, n, predicted=True)
+    phis = np.linspace(0.0, TWO_PI, 721)[:-1]
+    spacing = np.asarray(setup.spacing(phis + TWO_PI * (n // 2)))
+    breaks = chip_breaks(setup, max(n, 4))
+    um = 1e3
+    return {
+        "spacing_um": {"min": float(spacing.min() * um), "max": float(spacing.max() * um), "S0": setup.feed * um},
+        "Rt_max_um": measured.rt_max * um,
+        "Rt_mean_um": measured.rt_mean * um,
+        "crest_mean_um": measured.crest_mean * um,
+        "predicted_Rt_max_um": predicted.rt_max * um,
+        "predicted_Rt_mean_um": predicted.rt_mean * um,
+        "plain_turning_crest_um": float(crest_height(setup.feed, setup.nose_radius, setup.depth)) * um,
+        "chip_breaks_per_rev": breaks.per_rev,
+        "min_uncut_chip_um": breaks.min_thickness * um,
+    }

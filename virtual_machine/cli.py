@@ -53,6 +53,16 @@ def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
         if j.kind == "form_milling":
             _setup_form_milling(j, as_json)
             return
+        if j.kind == "turning":
+            from cutting.vibration_turning import turned_surface_summary
+            from virtual_machine.turning import format_prediction, ideal_setup
+
+            if as_json:
+                doc = turned_surface_summary(ideal_setup(j), j.process["revolutions"])
+                click.echo(json.dumps(_finite(doc), indent=2, allow_nan=False))
+            else:
+                click.echo(format_prediction(j))
+            return
         sheet = setup_sheet(j, structure)
     except (InputError, ValueError) as exc:
         _fail(exc)
@@ -262,10 +272,6 @@ def _finite(obj: object) -> object:
     return obj
 
 
-if __name__ == "__main__":
-    main()
-
-
 @main.command(help="Run JOB on the simulated machine: cut the gear under its cutting forces, measure it, report.")
 @click.argument("job", required=False, type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
@@ -281,6 +287,13 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
         j = load_job(path)
         if j.kind == "thread":
             raise InputError(Problem("job", j.kind, "skive run cuts gears", "use `skive simulate` for a thread job"))
+        if j.kind == "turning":
+            from virtual_machine.turning import format_run, run_turning
+
+            doc = run_turning(j, path, out, rrd, stage)
+            click.echo(format_run(doc))
+            click.echo(f"\nwrote {out / 'workpiece.stl'}, measurement.json, report.html" + (f", {rrd}" if rrd else ""))
+            return
         if j.kind == "form_milling":
             _run_form_milling(j, path, out, rrd)
             return
@@ -512,6 +525,14 @@ def simulate(
     if j.kind == "thread":
         _simulate_thread(j, path, duration, out, as_json)
         return
+    if j.kind == "turning":
+        from virtual_machine.turning import format_run, simulate_summary
+
+        doc, _, _ = simulate_summary(j)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "simulation.json").write_text(json.dumps(_finite(doc), indent=2, allow_nan=False))
+        click.echo(json.dumps(_finite(doc), indent=2) if as_json else format_run(doc))
+        return
     if j.kind == "form_milling":
         _fail(
             InputError(
@@ -632,3 +653,7 @@ def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: 
             f"drift {drift:+.3f} um over {abs(travel):.1f} mm"
         )
     click.echo(f"written: {out / 'thread_motion.npz'}, {out / 'simulation.json'}, {out / 'scene.xml'}")
+
+
+if __name__ == "__main__":
+    main()

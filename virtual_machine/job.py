@@ -172,6 +172,30 @@ FORM_PROCESS_KEYS: dict[str, Key] = {
     "stl_tolerance": PROCESS_KEYS["stl_tolerance"],
 }
 
+TURNING_KEYS: dict[str, Key] = {
+    "diameter": Key(float, REQUIRED, "mm", "workpiece diameter before the cut (sets the spindle speed)", _positive),
+    "length": Key(float, 10.0, "mm", "turned length", _positive),
+    "feed": Key(float, REQUIRED, "mm/rev", "feed per revolution S0", _positive),
+    "nose_radius": Key(float, 0.8, "mm", "tool nose radius r_eps", _positive),
+    "depth": Key(float, 0.3, "mm", "depth of cut a_p (less than the nose radius)", _positive),
+}
+
+VIBRATION_KEYS: dict[str, Key] = {
+    "amplitude": Key(float, REQUIRED, "mm", "axial amplitude A of the feed vibration (seed 004)", _at_least(0.0)),
+    "cycles_per_rev": Key(
+        float, REQUIRED, "", "vibration cycles per spindle revolution (a fraction shifts them)", _positive
+    ),
+    "xi": Key(float, 1.0, "", "asymmetry xi = T_in / T_out (1: symmetric vibration)", _positive),
+    "form": Key(str, "soft", "", "'soft' (half cosines) or 'hard' (straight strokes)", _one_of("soft", "hard")),
+}
+
+TURNING_PROCESS_KEYS: dict[str, Key] = {
+    "cutting_speed": THREAD_PROCESS_KEYS["cutting_speed"],
+    "material": PROCESS_KEYS["material"],
+    "revolutions": Key(int, 40, "", "revolutions cut and measured (after the run-up)", _at_least(8)),
+    "sweep_error": Key(float, 0.001, "mm", "chord error of the turned surface's manifold solid", _positive),
+}
+
 MACHINE_KEYS: dict[str, Key] = {
     "structure": Key(str, "mechatronic", "", "kinematic structure (seed 000 figs 1-4)", _one_of(*STRUCTURES)),
     "synchronization": Key(
@@ -265,6 +289,8 @@ SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KE
 OPTIONAL_SECTIONS = {"measurement": MEASUREMENT_KEYS, "modification": MODIFICATION_KEYS}
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
 #: a form-milling job (the copying method of seed 003): its machine section only overrides the model's parameters
+#: a turning job (vibration turning, seed 004) on the lathe of seed 001
+SECTIONS_TURNING = {"turning": TURNING_KEYS, "process": TURNING_PROCESS_KEYS, "machine": MACHINE_KEYS}
 SECTIONS_FORM = {
     "gear": GEAR_KEYS,
     "mill": MILL_KEYS,
@@ -294,7 +320,8 @@ def model_problems(model: dict[str, Any] | None, kind: str) -> list[Problem]:
     from machine_models.parameters import SkivingMachineParams, override
     from machine_models.thread_lathe import ThreadLatheParams
 
-    base = {"thread": ThreadLatheParams, "form_milling": FormMillParams}.get(kind, SkivingMachineParams)()
+    lathe = ThreadLatheParams
+    base = {"thread": lathe, "turning": lathe, "form_milling": FormMillParams}.get(kind, SkivingMachineParams)()
     names = ", ".join(f.name for f in fields(base))
     out = []
     good = {}
@@ -429,6 +456,8 @@ class Job:
     measurement: dict[str, Any] | None = None
     modification: Modification | None = None  # the designed flank topography ([modification])
     mill: dict[str, Any] | None = None  # the profiled disc mill ([mill]) of a form-milling job
+    turning: dict[str, Any] | None = None  # [turning] of a turning job (its [thread] the lathe's feed as a lead)
+    vibration: Any = None  # the feed vibration (cutting.vibration_turning.FeedVibration) or None
 
     @property
     def skiving(self) -> SkivingSetup:
@@ -467,6 +496,8 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     is_thread = "thread" in data
     if "mill" in data:
         return _parse_form_job(data, source)
+    if "turning" in data:
+        return _parse_turning_job(data, source)
     if is_thread and "gear" in data:
         raise InputError(
             Problem(
@@ -542,6 +573,60 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     if problems:
         raise InputError(problems, source)
     return job
+
+
+def _parse_turning_job(data: dict[str, Any], source: str) -> Job:
+    """A turning job on the lathe of seed 001: [turning], an optional [vibration], [process], [machine]. The lathe
+    is set up as for a thread whose lead is the feed S0 (right hand: the carriage feeds towards the chuck)."""
+    problems: list[Problem] = []
+    for name in data:
+        if name not in SECTIONS_TURNING and name != "vibration":
+            problems.append(
+                Problem(
+                    name,
+                    "[section]",
+                    "unknown section",
+                    "valid sections: " + ", ".join(f"[{s}]" for s in (*SECTIONS_TURNING, "vibration")),
+                )
+            )
+    parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in SECTIONS_TURNING.items()}
+    machine = parsed["machine"]
+    problems += model_problems(machine.get("model"), "turning")
+    vib_values = (
+        parse_section("vibration", data["vibration"], VIBRATION_KEYS, problems) if "vibration" in data else None
+    )
+    t = parsed["turning"]
+    vibration = None
+    if not problems:
+        from cutting.vibration_turning import FeedVibration, TurningSetup
+
+        try:
+            if vib_values is not None:
+                vibration = FeedVibration(
+                    vib_values["amplitude"], vib_values["cycles_per_rev"], vib_values["xi"], vib_values["form"]
+                )
+            TurningSetup(t["diameter"] / 2, t["feed"], t["nose_radius"], t["depth"], vibration)
+        except ValueError as exc:
+            field = str(exc).split()[0]
+            section = "vibration" if field in VIBRATION_KEYS else "turning"
+            problems.append(Problem(f"{section}.{field}", "", str(exc), "see the README's turning keys"))
+        if vibration is not None and (machine["structure"], machine["synchronization"]) != (
+            "mechatronic",
+            "master-slave",
+        ):
+            problems.append(
+                Problem(
+                    "machine.synchronization",
+                    machine["synchronization"],
+                    "vibration turning needs the feed axis to follow the spindle's encoder",
+                    "set structure = 'mechatronic' and synchronization = 'master-slave'",
+                )
+            )
+    if problems:
+        raise InputError(problems, source)
+    thread = {"lead": t["feed"], "hand": "right", "diameter": t["diameter"], "length": t["length"]}
+    process = {**parsed["process"], "passes": [t["depth"]]}
+    return Job(source, "turning", machine, process, thread=thread, turning=t, vibration=vibration)
 
 
 def _parse_form_job(data: dict[str, Any], source: str) -> Job:

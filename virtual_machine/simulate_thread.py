@@ -75,8 +75,12 @@ def _ramp(t: float, runup: float) -> float:
     return 1.0 if t >= runup else 0.5 * (1.0 - math.cos(math.pi * t / runup))
 
 
-def build_thread_structure(job: Job, params: ThreadLatheParams, angle0: tuple[float, float], tuning=None):
-    """The controllers of the job's form with its setting sheet: ThreadMechanical / MasterSlave / EqualCoordinates."""
+def build_thread_structure(
+    job: Job, params: ThreadLatheParams, angle0: tuple[float, float], tuning=None, vibration=None
+):
+    """The controllers of the job's form with its setting sheet: ThreadMechanical / MasterSlave / EqualCoordinates.
+    ``vibration`` (:class:`cutting.vibration_turning.FeedVibration`): the feed vibration of vibration turning,
+    made by the slave's command (master-slave only: the feed axis follows the spindle's encoder)."""
     m = job.machine
     lay = thread_layout(job, params)
     sheet = thread_sheet(job, "mechanical" if lay.form == "mechanical" else "mechatronic")
@@ -94,6 +98,18 @@ def build_thread_structure(job: Job, params: ThreadLatheParams, angle0: tuple[fl
     j_m1 = params.spindle_motor_inertia + params.spindle_inertia * r_sp**2
     j_m2 = params.screw_motor_inertia + j_carriage * lay.feed_ratio**2
     adaptive = m["adaptive_correction"]
+    pulses = None
+    if vibration is not None:
+        if lay.form != "master-slave":
+            raise ValueError(
+                f"vibration turning needs machine.synchronization = 'master-slave' (the feed axis follows the "
+                f"spindle's encoder, so the vibration stays synchronised to it); this job's form is {lay.form!r}"
+            )
+        per_m = m["command_pulses_per_rev"] / (2 * math.pi) / lay.feed_ratio / lay.screw_lead  # M2 pulses per m
+
+        def pulses(theta: float) -> float:
+            return float(vibration.axial(theta)) * MM * per_m
+
     if lay.form == "master-slave":
         kx = st["kx"].realisation
         return ThreadMasterSlave(
@@ -108,6 +124,7 @@ def build_thread_structure(job: Job, params: ThreadLatheParams, angle0: tuple[fl
             adaptive,
             tuning,
             angle0,
+            pulses,
         )
     return ThreadEqualCoordinates(
         m["reference_frequency"],
@@ -131,9 +148,11 @@ def simulate_thread(
     duration: float | None = None,
     disturbance: Callable[[float], float] | None = None,
     servo_substeps: int = 2,
+    vibration=None,
 ) -> ThreadRecord:
     """Run-up and the first threading stroke of ``job``, until the tool leaves the thread (``duration`` [s]
-    overrides that). ``disturbance(t)`` is an extra torque on the spindle [N m] (a load on the master).
+    overrides that). ``disturbance(t)`` is an extra torque on the spindle [N m] (a load on the master);
+    ``vibration`` a feed vibration (vibration turning, seed 004) on the slave's command.
     Raises :class:`SimulationDivergedError` when MuJoCo reports bad accelerations."""
     params = params or override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
     lay = thread_layout(job, params)
@@ -153,7 +172,7 @@ def simulate_thread(
     qpos, qvel, ctrl, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
     dof_b1 = vadr["B1"]
     b1_0, p2_0 = float(qpos[i_b1]), float(qpos[i_p2])
-    structure = build_thread_structure(job, params, (b1_0, float(qpos[i_tv])))
+    structure = build_thread_structure(job, params, (b1_0, float(qpos[i_tv])), vibration=vibration)
     dt = model.opt.timestep * servo_substeps
     feed = lay.lead * lay.spindle_speed / (2 * math.pi)  # m/s
     runup = params.runup_time

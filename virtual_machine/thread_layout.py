@@ -28,7 +28,7 @@ def thread_form(job) -> str:
 
 def thread_layout(job, params: ThreadLatheParams, sheet=None) -> ThreadLayout:
     """The layout of ``job`` (a thread job) from its setting sheet (computed if not given)."""
-    if job.kind != "thread":
+    if job.kind not in ("thread", "turning"):
         raise ValueError(f"{job.source} is a gear job; the thread lathe needs a [thread] job")
     form = thread_form(job)
     sheet = sheet or thread_sheet(job, "mechanical" if form == "mechanical" else "mechatronic")

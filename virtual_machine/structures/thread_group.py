@@ -14,6 +14,7 @@ pulses. The carriage direction (the thread's hand, R1 of fig. 1) is the sign ``d
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from virtual_machine.controllers import (
@@ -130,9 +131,16 @@ class ThreadMasterSlave:
         adaptive: bool,
         tuning: ThreadTuning | None = None,
         angle0: tuple[float, float] = (0.0, 0.0),
+        vibration: Callable[[float], float] | None = None,
     ):
         tuning = tuning or ThreadTuning()
         self.spindle_motor_speed, self.direction, self.feed_ratio = spindle_motor_speed, direction, feed_ratio
+        #: vibration turning (seed 004): ``vibration(theta)`` M2 command pulses (fractional) added to the slave's
+        #: command at the master's angle theta [rad] since the feed engaged (encoder 6, interpolated), so the
+        #: vibration is synchronised to the spindle as the feed itself is
+        self.vibration = vibration
+        self._vib = 0.0
+        self._enc0 = None
         self.m1 = SpeedDrive(tuning.spindle, inertias[0])
         self.enc6 = Encoder(encoder_lines, 4, angle0[0])
         self.rate7_8 = RateMultiplier(block_n, counter_k)
@@ -154,9 +162,18 @@ class ThreadMasterSlave:
         rate.inp = enc.count if cnc.feed else 0
         rate.update(dt)
         self.slave_pulses += self.direction * rate.out
-        self.pa9.inp = self.direction * self._fine(rate, 0)
+        vib_step = 0.0
+        if self.vibration is not None and cnc.feed:
+            if self._enc0 is None:  # the vibration starts with the feed, at the master's angle then
+                self._enc0 = enc.fine_position
+            theta = (enc.fine_position - self._enc0) * 2 * math.pi / enc.counts_per_rev
+            vib = self.direction * self.vibration(theta)
+            vib_step, self._vib = vib - self._vib, vib
+        self.pa9.inp = self.direction * self._fine(rate, 0) + vib_step
         self.pa9.update(dt)
-        t2 = self.axis.update(dt, self.pa9.out, self.slave_pulses, angles[1] / self.feed_ratio, motor_speeds[1])
+        t2 = self.axis.update(
+            dt, self.pa9.out, self.slave_pulses + round(self._vib), angles[1] / self.feed_ratio, motor_speeds[1]
+        )
         return t1, t2
 
 
