@@ -36,6 +36,9 @@ FAR = 1e3
 #: the scan for a pass's least margin: coarse samples about this far apart along the feed [mm], the path's slope
 #: taken over this much feed [mm]
 SCAN_STEP = 0.05
+#: a space's passes are asked only for points within the mill's axial span of its symmetry line plus this [mm]
+#: (the path's own tangential moves, clearance and corrections, stay far within it)
+REACH_PAD = 1.0
 SCAN_BASE = 0.5  # the margin of a point the mill's axial span does not reach [mm]
 
 
@@ -156,10 +159,14 @@ class MilledGear:
         own = np.floor(pos).astype(int) % z
         near = np.where(pos - np.floor(pos) < 0.5, own - 1, own + 1) % z
         out = np.full(len(q), FAR)
+        lo, hi = self._u[0] - REACH_PAD, self._u[-1] + REACH_PAD
         for spaces in (own, near):
             for k in np.unique(spaces):
+                a = 2 * math.pi * (k + 0.5) / z  # the space's symmetry line: its passes' mill axis is across it
+                x_s = -math.sin(a) * q[:, 0] + math.cos(a) * q[:, 1]
+                reach = (spaces == k) & (x_s >= lo) & (x_s <= hi)  # within the mill's axial span of this space
                 for i in self._by_space.get(int(k), []):
-                    sel = np.nonzero((spaces == k) & (out > 0 if sign_only else True))[0]
+                    sel = np.nonzero(reach & (out > 0 if sign_only else True))[0]
                     if sel.size:
                         out[sel] = np.minimum(out[sel], self.pass_margin(i, q[sel]))
         return out
