@@ -1,0 +1,738 @@
+"""The CNC of the face-contour machine (seed 004, continuous indexing), its simulation loop, and the cut and the
+measurement of the motion the machine really makes, with the geometry of :mod:`cutting.face_contour`.
+
+**Electronic gearbox** (seed 000 fig. 4, equal-coordinates scheme, as seed 004 asks for continuous indexing): every
+axis counts the pulses of **reference generator 14** (p pulses per head revolution):
+
+- tool head H: the generator's pulses themselves (divider 6 with kv = 1: the generator's frequency sets the head's
+  speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p;
+- work spindle A: **frequency divider** 7 with k = m (the indexing ratio 1/m, eq. 11) -> **summator** 9, whose
+  second input carries the cyclic-ratio modulation - A (1 - cos q phi) of :func:`cutting.face_contour.
+  workpiece_angle` (control "cyclic_ratio"; the CNC's function generator of the head's command angle) -> A;
+- eccentric E (control "eccentric"): a rate multiplier N (N pulses per generator pulse): the eccentric e geared N
+  times to the head, E = N phi;
+- infeed Z: rate multiplier ks (S / resolution pulses per p generator pulses: the seed's feed S per tool
+  revolution), gated by the CNC at the programmed depth (then the spark-out: one more workpiece revolution),
+  Z = - min(S phi / 2 pi, depth).
+
+The pulse-to-analog converters turn each axis's fine count (its divider's content included, no +-1 pulse jitter)
+into the position command and the generator's frequency into the speed feed-forward. Per axis the servo is the
+cascade of :mod:`virtual_machine.form_mill_cnc` on the **motor encoder** (semi-closed loop): position loop (Kv) with
+speed feed-forward -> PI speed loop -> torque, plus inertia feed-forward, limited to the motor's peak torque with
+anti-windup. The stages' compliance, backlash and friction therefore show between tip and workpiece, not at the
+encoders.
+
+**Run.** The machine starts at rest at head turn ``start_turn`` (default: ``run_in`` turns before the first
+recorded pass) with every axis where the programme has it then and every stage relaxed: the plunge passes before
+it lie above the final ones (the xy motion does not depend on the feed), so they cut nothing the final passes
+leave. It runs up, and records, at the servo rate, the element tips' poses in the workpiece frame (sites
+``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest.
+
+**Cut and measure** the recorded motion: :func:`cut_recorded` sweeps the elements' plates (the plate corners of
+:func:`cutting.face_contour.plate_corners`, here from the recorded frames) as hulls through the face blank;
+:func:`measure_recorded` measures the slot bottom and sides exactly on the recorded path (cubic splines of the
+poses in time, roots bisected), as :func:`cutting.face_contour.measure_exact` does on the ideal path.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import manifold3d as mf
+import mujoco
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from cutting.face_contour import (
+    SWEEP_TOLERANCE,
+    FaceCoupling,
+    FaceCut,
+    SlotMeasure,
+    bottom_form,
+    element_path,
+    face_blank,
+    measuring_radii,
+    side_lines,
+    workpiece_angle,
+)
+from machine_models.face_contour_machine import (
+    FaceMachineLayout,
+    FaceMachineParams,
+    build_face_machine_spec,
+    head_angle_joints,
+    relaxed_qpos,
+    stage_omega_h,
+)
+from machine_models.parameters import ARCSEC
+from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
+from virtual_machine.physics import SimulationDivergedError
+
+__all__ = [
+    "AXES",
+    "ElectronicGearbox",
+    "FaceContourRecord",
+    "FacePassRecord",
+    "FaceServo",
+    "FaceTuning",
+    "cut_recorded",
+    "final_turn",
+    "measure_recorded",
+    "pass_window",
+    "recorded_bottom",
+    "recorded_corners",
+    "recorded_hulls",
+    "recorded_sides",
+    "simulate_face_contour",
+]
+
+AXES = ("A", "H", "E", "Z")  # work angle a [rad], head angle phi [rad], eccentric [rad], infeed [m]
+MOTORS = ("MA", "MH", "ME", "MZ")
+_A, _H, _E, _Z = range(4)
+#: bisection steps on a recorded pass (half a servo period / 2^40: far below a nanometre of tip motion)
+BISECTION_STEPS = 40
+#: neighbouring hulls of a recorded pass overlap by this fraction of a step (as cutting.face_contour)
+OVERLAP = 0.02
+
+
+@dataclass(frozen=True)
+class FaceTuning:
+    """Servo gains, the electronic gearbox's resolution and the run's limits (per axis in the order A, H, E, Z)."""
+
+    servo_rate: float = 2000.0  # Hz: position and speed loops (the physics sub-steps a whole number of times)
+    velocity_bandwidth: tuple[float, ...] = (40.0, 40.0, 60.0, 80.0)  # Hz: PI speed loops
+    position_gain: tuple[float, ...] = (60.0, 60.0, 80.0, 100.0)  # 1/s: Kv
+    ramp: float = 0.5  # s: half-cosine run-up of reference generator 14
+    pulses_per_rev: int = 2**24  # command pulses per revolution of A, H and E (3.7e-7 rad: 0.05 um at R = 125 mm)
+    infeed_resolution: float = 1e-9  # m per infeed command pulse
+    runaway: tuple[float, ...] = (0.01, 0.05, 0.05, 1e-3)  # rad, rad, rad, m: following error that stops the run
+    trace_every: int = 8  # servo ticks per sample of the whole-run traces
+    window_margin: float = 0.5  # mm: a pass is recorded while an element's tip (final pass) is below this height
+
+
+@dataclass
+class FacePassRecord:
+    """One element pass over slot ``slot`` (tool turn ``turn``: the head angle passes 2 pi turn at its middle) at the
+    servo rate, in the workpiece frame (site ``blank_frame``): time ``t`` [s], the head's absolute angle ``phi``
+    (joints) and its command ``phi_cmd`` [rad], the workpiece angle ``a`` [rad]; per element j (first axis) the tip
+    ``tip`` [mm], the tip edge's direction ``edge`` (the tool axis, site x) and the element's radial direction
+    ``radial`` (head centre -> tip, site z), (E, n, 3); ``following_error`` at the encoders (A, H, E [arcsec],
+    Z [um]) (n, 4)."""
+
+    slot: int
+    turn: int
+    t: np.ndarray
+    phi: np.ndarray
+    phi_cmd: np.ndarray
+    a: np.ndarray
+    tip: np.ndarray
+    edge: np.ndarray
+    radial: np.ndarray
+    following_error: np.ndarray
+
+    def deviation(self, c: FaceCoupling) -> np.ndarray:
+        """Recorded tip - the seed's tip (:func:`cutting.face_contour.element_path`, final pass) at the recorded head
+        angle, per element (E, n, 3) [um]: what the machine's coupling of A, E and Z to the head does wrong."""
+        ideal = np.stack([element_path(c, self.phi, j, final=True) for j in range(len(self.tip))])
+        return (self.tip - ideal) * 1e3
+
+    def slot_deviation(self, c: FaceCoupling) -> np.ndarray:
+        """:meth:`deviation` in the slot's frame: radial (along the slot's centre line), tangential (+ towards
+        larger polar angles), axial [um], (E, n, 3)."""
+        d = self.deviation(c)
+        turn = 2 * math.pi * self.slot / c.m
+        cs, sn = math.cos(turn), math.sin(turn)
+        return np.stack([cs * d[..., 0] + sn * d[..., 1], -sn * d[..., 0] + cs * d[..., 1], d[..., 2]], axis=-1)
+
+
+@dataclass
+class FaceContourRecord:
+    """A face-contour run: the ``coupling``, the final passes over the slots of interest (``passes``) and whole-run
+    traces every ``trace_every`` servo ticks: time [s], the head's command angle [rad], the axes ``trace_q`` (A,
+    phi, E [rad], Z [mm]), the synchronisation errors ``trace_sync`` against the head's real angle (A - a(phi)
+    [arcsec], E - N phi [arcsec], Z - z(phi) [um]: what the electronic gearbox and the drives leave), motor torques
+    ``trace_torque`` (MA, MH, ME, MZ) [N m] and encoder following errors ``trace_error`` (A, H, E [arcsec], Z [um]).
+    Numpy and frozen dataclasses only: picklable."""
+
+    coupling: FaceCoupling
+    tool_rpm: float
+    start_turn: int
+    passes: list[FacePassRecord]
+    trace_t: np.ndarray
+    trace_phi_cmd: np.ndarray
+    trace_q: np.ndarray
+    trace_sync: np.ndarray
+    trace_torque: np.ndarray
+    trace_error: np.ndarray
+    eccentric: bool
+    wall_time: float = 0.0  # s
+    sim_time: float = 0.0  # s
+    axes: tuple[str, ...] = field(default=AXES)
+
+    @property
+    def slots(self) -> tuple[int, ...]:
+        return tuple(p.slot for p in self.passes)
+
+    def pass_of(self, slot: int) -> FacePassRecord:
+        for p in self.passes:
+            if p.slot == slot:
+                return p
+        raise ValueError(f"slot: {slot} was not recorded (recorded: {self.slots})")
+
+    def deviation(self) -> np.ndarray:
+        """All passes' :meth:`FacePassRecord.deviation` stacked along the samples, (E, n, 3) [um]."""
+        return np.concatenate([p.deviation(self.coupling) for p in self.passes], axis=1)
+
+
+# ---------------------------------------------------------------------------------------------------- programme
+
+
+def pass_window(c: FaceCoupling, margin: float = 0.5) -> tuple[float, float]:
+    """Head angles [rad] relative to 2 pi j between which some element's tip is below ``margin`` [mm] on the final
+    pass over slot j mod m (the union over the elements, a grid step beyond)."""
+    phi = np.linspace(-1.5, 1.5, 6001)
+    lo, hi = math.inf, -math.inf
+    for j in range(c.elements):
+        z = element_path(c, phi, j, final=True)[:, 2]
+        below = np.flatnonzero(z < margin)
+        if below.size == 0:
+            continue
+        i0 = below[np.argmin(z[below])]
+        a = b = i0
+        while a > 0 and z[a - 1] < margin:
+            a -= 1
+        while b < len(phi) - 1 and z[b + 1] < margin:
+            b += 1
+        lo, hi = min(lo, phi[max(a - 1, 0)]), max(hi, phi[min(b + 1, len(phi) - 1)])
+    if not math.isfinite(lo):
+        raise ValueError(f"window_margin: no element goes below z = {margin} mm on the final pass")
+    return float(lo), float(hi)
+
+
+def final_turn(c: FaceCoupling, slot: int, window: tuple[float, float]) -> int:
+    """The tool turn j whose pass is slot ``slot``'s final one: the first pass over it (j = slot mod m) that lies
+    wholly after the plunge has reached the depth at phi = 2 pi depth / S (the spark-out's workpiece revolution
+    passes every slot once at full depth)."""
+    first = math.ceil(c.depth / c.S - window[0] / (2 * math.pi) - 1e-9)
+    return first + (slot - first) % c.m
+
+
+class ElectronicGearbox:
+    """Reference generator 14 -> head H; -> frequency divider 7 (1/m) -> summator 9 (+ cyclic-ratio modulation) ->
+    work A; -> rate multiplier N -> eccentric E; -> rate multiplier ks (S per turn), gated at the depth -> infeed Z.
+
+    ``command(t, dt)`` gives the axes' positions, speeds and accelerations (A, H, E [rad], Z [m]) for the tick that
+    starts at t; ``update(dt, t)`` issues that tick's pulses."""
+
+    def __init__(self, c: FaceCoupling, start_turn: int, tool_speed: float, tuning: FaceTuning):
+        self.c, self.tuning = c, tuning
+        p = tuning.pulses_per_rev
+        self.rad = 2 * math.pi / p  # rad per command pulse
+        self.f_full = tool_speed / self.rad  # Hz: generator frequency at the head's full speed
+        self.gen14 = ReferenceGenerator(0.0)
+        self.d7 = FrequencyDivider(c.m)
+        self.s9 = Summator(1)
+        self.mult_e = RateMultiplier(c.eccentric_ratio, 1)
+        n_s = round(c.S * 1e-3 / tuning.infeed_resolution)
+        if n_s < 1:
+            raise ValueError(f"S = {c.S} mm: below the infeed resolution {tuning.infeed_resolution * 1e3:g} mm")
+        self.ks = RateMultiplier(n_s, p)
+        self.feed_per_turn = n_s * tuning.infeed_resolution  # m: S as the gearbox realises it
+        self.depth_pulses = round(c.depth * 1e-3 / tuning.infeed_resolution)
+        self.phi0 = 2 * math.pi * start_turn
+        self.a0 = float(workpiece_angle(c, self.phi0))
+        self.e0 = c.eccentric_ratio * self.phi0 if c.control == "eccentric" else 0.0
+        self.feed0 = round(start_turn * n_s)  # infeed pulses issued before the start (the plunge so far)
+        self.eccentric = c.control == "eccentric"
+
+    def scale(self, t: float) -> tuple[float, float]:
+        """The generator's frequency as a fraction of its full value and its rate [1/s]: half-cosine run-up."""
+        ramp = self.tuning.ramp
+        if t >= ramp:
+            return 1.0, 0.0
+        return 0.5 * (1 - math.cos(math.pi * t / ramp)), 0.5 * math.pi / ramp * math.sin(math.pi * t / ramp)
+
+    def command(self, t: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions and speeds at the tick's start t, accelerations at its middle (the torque is held for the tick:
+        a zero-order hold; the acceleration at the start would leave a phase lag of half a tick)."""
+        c, rad = self.c, self.rad
+        s, _ = self.scale(t)
+        w = self.f_full * rad * s  # head speed [rad/s]
+        s_mid, ds_mid = self.scale(t + dt / 2)
+        w_mid, dw = self.f_full * rad * s_mid, self.f_full * rad * ds_mid  # [rad/s, rad/s^2]
+        pos, vel, acc = np.zeros(4), np.zeros(4), np.zeros(4)
+        phi = self.phi0 + self.gen14.position * rad
+        phi_mid = phi + 0.5 * (w + w_mid) * dt / 2
+        pos[_H], vel[_H], acc[_H] = phi, w, dw
+        # work: divider 7 -> summator 9 (main: the divided train, second input: the cyclic-ratio modulation)
+        self.s9.a = self.d7.fine_position
+        self.s9.b = 0.0
+        vel[_A], acc[_A] = w / c.m, dw / c.m
+        if c.control == "cyclic_ratio":
+            amp, q = c.ratio_amplitude, c.ratio_cycles
+            self.s9.b = (float(workpiece_angle(c, phi)) - phi / c.m) / rad
+            vel[_A] -= amp * q * math.sin(q * phi) * w
+            acc[_A] -= amp * q * (q * math.cos(q * phi_mid) * w_mid**2 + math.sin(q * phi_mid) * dw)
+        self.s9.update(0.0)
+        pos[_A] = self.a0 + self.s9.out * rad
+        if self.eccentric:
+            n = c.eccentric_ratio
+            pos[_E], vel[_E], acc[_E] = self.e0 + self.mult_e.fine_position * rad, n * w, n * dw
+        fed = self.feed0 + self.ks.fine_position
+        res = self.tuning.infeed_resolution
+        pos[_Z] = -min(fed, self.depth_pulses) * res
+        if fed < self.depth_pulses:
+            vel[_Z], acc[_Z] = -self.feed_per_turn * w / (2 * math.pi), -self.feed_per_turn * dw / (2 * math.pi)
+        return pos, vel, acc
+
+    def update(self, dt: float, t: float) -> None:
+        """Issue the pulses of the tick that starts at t, at the generator frequency of its middle (the pulses then
+        advance each command by what its speed and held acceleration move the axis: the trapezoid rule)."""
+        gen = self.gen14
+        gen.frequency = self.f_full * self.scale(t + dt / 2)[0]
+        gen.update(dt)
+        self.d7.inp = gen.out
+        self.d7.update(dt)
+        self.mult_e.inp = gen.out
+        self.mult_e.update(dt)
+        # the CNC's gate: the feed stops at the programmed depth (the spark-out turns on)
+        self.ks.inp = gen.out if self.feed0 + self.ks.position < self.depth_pulses else 0
+        self.ks.update(dt)
+
+
+class FaceServo:
+    """The drives of the machine: position loops and PI speed loops on the motor encoders (A, H, [E,] Z), inertia
+    feed-forward, torque limits with anti-windup. Addresses resolved once; ``axis0``: the axes' start positions."""
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        params: FaceMachineParams,
+        tuning: FaceTuning,
+        axis0: np.ndarray,
+    ):
+        self.model, self.data, self.tuning = model, data, tuning
+        self.eccentric = "E" in head_angle_joints(model)
+        self.idx = np.array([_A, _H, _E, _Z] if self.eccentric else [_A, _H, _Z])
+        lead = params.screw_pitch / (2 * math.pi)
+        g_all = np.array(
+            [
+                params.work_drive.ratio,
+                params.head_drive.ratio,
+                params.eccentric_drive.ratio,
+                params.z_drive.ratio * lead,
+            ]
+        )
+        self.g = g_all[self.idx]  # axis motion per motor radian (the CNC's nominal ratios)
+        motors = [MOTORS[i] for i in self.idx]
+        self.qm = np.array([int(model.joint(m).qposadr[0]) for m in motors])
+        self.vm = np.array([int(model.joint(m).dofadr[0]) for m in motors])
+        self.act = np.array([int(model.actuator(m).id) for m in motors])
+        self.peak = model.actuator_ctrlrange[self.act, 1].copy()
+        mujoco.mj_forward(model, data)
+        self.qm0 = data.qpos[self.qm].copy()
+        self.axis0 = axis0[self.idx].copy()
+        # inertia at each motor with the chain rigid (g^T M g) and the static torque it holds at the start
+        chains = {
+            _A: (("MA", 1.0), ("A", g_all[_A])),
+            _H: (("MH", 1.0), ("H", g_all[_H])),  # the head's absolute angle moves, the eccentric held
+            _E: (("ME", 1.0), ("E", g_all[_E]), ("H", -g_all[_E])),  # the head's absolute angle held by its drive
+            _Z: (("MZ", 1.0), ("TZ", params.z_drive.ratio), ("Z", g_all[_Z])),
+        }
+        load = data.qfrc_bias - data.qfrc_gravcomp
+        n = len(self.idx)
+        self.inertia, hold = np.zeros(n), np.zeros(n)
+        for k, i in enumerate(self.idx):
+            vec = np.zeros(model.nv)
+            for joint, ratio in chains[i]:
+                vec[model.joint(joint).dofadr[0]] = ratio
+            res = np.zeros(model.nv)
+            mujoco.mj_mulM(model, data, res, vec)
+            self.inertia[k] = vec @ res
+            hold[k] = vec @ load
+        w = 2 * math.pi * np.asarray(tuning.velocity_bandwidth, dtype=float)[self.idx]
+        self.kp = self.inertia * w
+        self.ki = self.kp * w / 4
+        self.kv = np.asarray(tuning.position_gain, dtype=float)[self.idx]
+        self.integral = np.clip(hold, -self.peak, self.peak)
+        self.torque = np.zeros(4)
+        self.error = np.zeros(4)
+
+    def update(self, dt: float, pos: np.ndarray, vel: np.ndarray, acc: np.ndarray) -> None:
+        """One servo tick: commanded positions, speeds, accelerations (A, H, E, Z) -> motor torques in ``ctrl``
+        (held over the physics sub-steps); ``torque`` and ``error`` (A, H, E, Z; E zero without the eccentric)."""
+        d, g, i = self.data, self.g, self.idx
+        e = pos[i] - (self.axis0 + g * (d.qpos[self.qm] - self.qm0))
+        ew = (vel[i] + self.kv * e) / g - d.qvel[self.vm]
+        integral = self.integral + self.ki * ew * dt
+        u = self.inertia * acc[i] / g + self.kp * ew + integral
+        sat = np.abs(u) > self.peak
+        if sat.any():
+            u = np.clip(u, -self.peak, self.peak)
+            integral = np.where(sat & (np.sign(u) == np.sign(ew)), self.integral, integral)
+        self.integral = integral
+        self.torque[i] = u
+        self.error[i] = e
+        d.ctrl[self.act] = u
+
+
+def _diagnose(layout: FaceMachineLayout, params: FaceMachineParams, t: float) -> str:
+    head = f"the face-contour machine diverged at t = {t:.4f} s (MuJoCo reported bad accelerations). "
+    wh = stage_omega_h(layout, params)
+    if not wh:
+        return head + f"Every stage is rigid: reduce machine.timestep (now {params.timestep:g} s)"
+    worst = max(wh, key=wh.__getitem__)
+    what = f"machine.{worst}" if worst == "nut_stiffness" else f"machine.{worst}.stiffness"
+    return head + (
+        f"Stiffest stage: {worst} with omega*h = {wh[worst]:.2f} (explicit springs need < 2, better < 0.5); lower "
+        f"{what}, raise its damping, or reduce machine.timestep (now {params.timestep:g} s)"
+    )
+
+
+def _runaway(servo: FaceServo, tuning: FaceTuning, tool_rpm: float, h: float, t: float) -> str:
+    """Which servo ran away and what to change: its motor's peak torque when it was saturated, else its gains."""
+    i = int(np.argmax(np.abs(servo.error) / np.asarray(tuning.runaway)))
+    axis, peak = AXES[i], f"machine.{MOTORS[i][1].lower()}_motor_torque"
+    head = f"the {axis} servo ran away at t = {t:.4f} s (following error beyond {tuning.runaway[i]:g}). "
+    k = int(np.flatnonzero(servo.idx == i)[0])
+    if abs(servo.torque[i]) >= servo.peak[k] * (1 - 1e-9):
+        return head + f"{MOTORS[i]} is at its peak torque: raise {peak} or lower tool_rpm (now {tool_rpm:g})"
+    return head + (
+        f"Lower FaceTuning.velocity_bandwidth / position_gain of {axis}, or reduce machine.timestep (now {h:g} s) if "
+        f"a stage's omega*h is near 2 (face_contour_machine.stage_omega_h)"
+    )
+
+
+def simulate_face_contour(
+    coupling: FaceCoupling,
+    params: FaceMachineParams | None = None,
+    slots: Sequence[int] = (0, 1, 2),
+    tool_rpm: float = 150.0,
+    run_in: int = 2,
+    start_turn: int | None = None,
+    tuning: FaceTuning | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> FaceContourRecord:
+    """Cut ``coupling``'s slots on the simulated machine (MuJoCo) with the electronic gearbox of this module, the
+    head at ``tool_rpm``, and record the final pass over each of ``slots``. The run starts at rest ``run_in`` tool
+    turns before the first of these passes (or at ``start_turn``) and ends after the last. Raises ValueError for bad
+    inputs and :class:`SimulationDivergedError` when the integration blows up or a servo runs away (the message
+    names what to change)."""
+    params = params or FaceMachineParams()
+    tuning = tuning or FaceTuning()
+    if not (math.isfinite(tool_rpm) and tool_rpm > 0):
+        raise ValueError(f"tool_rpm = {tool_rpm}: must be > 0")
+    slots = tuple(slots)
+    if not slots or any(not isinstance(k, int | np.integer) or not 0 <= k < coupling.m for k in slots):
+        raise ValueError(f"slots = {slots}: must be slot numbers in [0, {coupling.m})")
+    if len(set(slots)) != len(slots):
+        raise ValueError(f"slots = {slots}: each slot once")
+    layout = FaceMachineLayout.from_coupling(coupling)
+    model = build_face_machine_spec(layout, params).compile()  # raises ValueError naming bad parameters
+    h = model.opt.timestep
+    substeps = round(1 / (tuning.servo_rate * h))
+    if substeps < 1 or abs(substeps * h * tuning.servo_rate - 1) > 1e-9:
+        raise ValueError(
+            f"the servo period 1/{tuning.servo_rate:g} s must be a whole multiple of machine.timestep ({h:g} s)"
+        )
+    dt = substeps * h
+    omega = tool_rpm * 2 * math.pi / 60
+    window = pass_window(coupling, tuning.window_margin)
+    turns = {k: final_turn(coupling, k, window) for k in slots}
+    first = min(turns.values())
+    if start_turn is None:
+        if not (isinstance(run_in, int) and run_in >= 1):
+            raise ValueError(f"run_in = {run_in}: must be an integer >= 1 (tool turns before the first pass)")
+        start_turn = first - run_in
+    run_up = omega * tuning.ramp / 2  # rad: the head's angle during the run-up
+    if 2 * math.pi * (first - start_turn) + window[0] < run_up + 0.1 * omega:
+        raise ValueError(
+            f"run_in = {first - start_turn}: the first recorded pass would start before the head has run up and "
+            f"settled ({(run_up + 0.1 * omega) / (2 * math.pi):.2f} turns); raise run_in or shorten FaceTuning.ramp"
+        )
+
+    egb = ElectronicGearbox(coupling, start_turn, omega, tuning)
+    pos, _, _ = egb.command(0.0, dt)
+    eccentric = layout.eccentric
+    axes = {"A": pos[_A], "H": pos[_H] - pos[_E], "Z": pos[_Z]} | ({"E": pos[_E]} if eccentric else {})
+    data = mujoco.MjData(model)
+    data.qpos[:] = relaxed_qpos(model, axes)
+    servo = FaceServo(model, data, params, tuning, pos)
+
+    qa = {n: int(model.joint(n).qposadr[0]) for n in ("A", "H", "Z")}
+    qe = int(model.joint("E").qposadr[0]) if eccentric else -1
+    site_b = int(model.site("blank_frame").id)
+    sites = [int(model.site("element_frame" if j == 0 else f"element_frame_{j}").id) for j in range(coupling.elements)]
+    xpos, xmat = data.site_xpos, data.site_xmat
+    bad = [data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL)]
+    runaway = np.asarray(tuning.runaway)
+    order = sorted(slots, key=turns.__getitem__)
+    windows = [(k, 2 * math.pi * turns[k] + window[0], 2 * math.pi * turns[k] + window[1]) for k in order]
+    phi_end = windows[-1][2] + 0.02
+    total = phi_end - egb.phi0
+    n_slot = 0
+    rows: list[np.ndarray] = []
+    passes: list[FacePassRecord] = []
+    traces: list[np.ndarray] = []
+    n_el = coupling.elements
+    to_arcsec = np.array([1 / ARCSEC, 1 / ARCSEC, 1 / ARCSEC, 1e6])
+    tick, wall0 = 0, time.perf_counter()
+
+    def close_pass() -> None:
+        k = windows[n_slot][0]
+        r = np.array(rows)  # (n, 4 + 9 E + 4): t, phi, phi_cmd, a; per element tip, edge, radial; errors
+        n = len(r)
+        poses = r[:, 4 : 4 + 9 * n_el].reshape(n, n_el, 3, 3).transpose(1, 0, 2, 3)
+        passes.append(
+            FacePassRecord(
+                slot=int(k),
+                turn=int(turns[k]),
+                t=r[:, 0].copy(),
+                phi=r[:, 1].copy(),
+                phi_cmd=r[:, 2].copy(),
+                a=r[:, 3].copy(),
+                tip=poses[:, :, 0].copy(),
+                edge=poses[:, :, 1].copy(),
+                radial=poses[:, :, 2].copy(),
+                following_error=r[:, 4 + 9 * n_el :] * to_arcsec,
+            )
+        )
+        rows.clear()
+
+    while True:
+        t = data.time
+        cmd_pos, cmd_vel, cmd_acc = egb.command(t, dt)
+        phi_cmd = cmd_pos[_H]
+        if phi_cmd > phi_end:
+            break
+        servo.update(dt, cmd_pos, cmd_vel, cmd_acc)
+        phi = data.qpos[qa["H"]] + (data.qpos[qe] if eccentric else 0.0)
+        if n_slot < len(windows) and phi_cmd >= windows[n_slot][1]:
+            if phi_cmd <= windows[n_slot][2]:
+                mujoco.mj_kinematics(model, data)  # the state at this tick (site poses after mj_step are stale)
+                rb = xmat[site_b].reshape(3, 3)
+                row = [np.array([t, phi, phi_cmd, data.qpos[qa["A"]]])]
+                for s in sites:
+                    rs = rb.T @ xmat[s].reshape(3, 3)
+                    row += [rb.T @ (xpos[s] - xpos[site_b]) * 1e3, rs[:, 0], rs[:, 2]]
+                row.append(servo.error.copy())
+                rows.append(np.concatenate(row))
+            else:
+                close_pass()
+                n_slot += 1
+        if tick % tuning.trace_every == 0:
+            q = np.array([data.qpos[qa["A"]], phi, data.qpos[qe] if eccentric else 0.0, data.qpos[qa["Z"]]])
+            ideal_a = float(workpiece_angle(coupling, phi))
+            ideal_z = -min(egb.feed_per_turn * phi / (2 * math.pi), coupling.depth * 1e-3)
+            sync = [
+                (q[0] - ideal_a) / ARCSEC,
+                (q[2] - coupling.eccentric_ratio * phi) / ARCSEC if eccentric else 0.0,
+                (q[3] - ideal_z) * 1e6,
+            ]
+            traces.append(np.concatenate([[t, phi_cmd], q, sync, servo.torque, servo.error * to_arcsec]))
+        mujoco.mj_step(model, data, nstep=substeps)
+        tick += 1
+        if bad[0].number or bad[1].number or not math.isfinite(data.qpos[qa["Z"]]):
+            raise SimulationDivergedError(_diagnose(layout, params, t))  # data.time: reset by MuJoCo
+        if np.any(np.abs(servo.error) > runaway):
+            raise SimulationDivergedError(_runaway(servo, tuning, tool_rpm, h, data.time))
+        egb.update(dt, t)
+        if progress is not None and tick % 500 == 0:
+            progress(min((phi_cmd - egb.phi0) / total, 0.999))
+    if rows:
+        close_pass()
+    if progress is not None:
+        progress(1.0)
+    tr = np.array(traces)
+    return FaceContourRecord(
+        coupling=coupling,
+        tool_rpm=float(tool_rpm),
+        start_turn=int(start_turn),
+        passes=sorted(passes, key=lambda p: slots.index(p.slot)),
+        trace_t=tr[:, 0],
+        trace_phi_cmd=tr[:, 1],
+        trace_q=tr[:, 2:6] * np.array([1.0, 1.0, 1.0, 1e3]),
+        trace_sync=tr[:, 6:9],
+        trace_torque=tr[:, 9:13],
+        trace_error=tr[:, 13:17],
+        eccentric=eccentric,
+        wall_time=time.perf_counter() - wall0,
+        sim_time=float(data.time),
+    )
+
+
+# ---------------------------------------------------------------------------------------------------- recorded cut
+
+
+class _PassPath:
+    """Cubic splines (in time) of one element's recorded pass: tip [mm], edge and radial directions."""
+
+    def __init__(self, p: FacePassRecord, element: int):
+        self.t = p.t
+        self.tip = CubicSpline(p.t, p.tip[element], axis=0)
+        self.edge = CubicSpline(p.t, p.edge[element], axis=0)
+        self.radial = CubicSpline(p.t, p.radial[element], axis=0)
+
+    def at(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        edge, radial = self.edge(t), self.radial(t)
+        edge /= np.linalg.norm(edge, axis=-1, keepdims=True)
+        radial /= np.linalg.norm(radial, axis=-1, keepdims=True)
+        return self.tip(t), edge, radial
+
+
+def recorded_corners(c: FaceCoupling, tip: np.ndarray, edge: np.ndarray, radial: np.ndarray) -> np.ndarray:
+    """The element plate's four corners (..., 4, 3) from a recorded frame (tip [mm], edge = tool axis, radial =
+    head centre -> tip): those of :func:`cutting.face_contour.plate_corners`, whose frame comes from the ideal
+    motion instead (the tip edge's ends, then the top's)."""
+    w_tip = 0.5 * c.edge_width
+    w_top = w_tip + c.element_height * math.tan(c.flank_angle)
+    top = tip - c.element_height * radial
+    return np.stack([tip - w_tip * edge, tip + w_tip * edge, top + w_top * edge, top - w_top * edge], axis=-2)
+
+
+def _bisect(f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray, flo: np.ndarray) -> np.ndarray:
+    for _ in range(BISECTION_STEPS):
+        mid = 0.5 * (lo + hi)
+        fm = f(mid)
+        left = np.sign(fm) == np.sign(flo)
+        lo, flo, hi = np.where(left, mid, lo), np.where(left, fm, flo), np.where(left, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def _first_root(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    change = np.signbit(g[:, :-1]) != np.signbit(g[:, 1:])
+    return np.argmax(change, axis=1), change.any(axis=1)
+
+
+def _steps(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    d = OVERLAP * np.diff(t)
+    return t[:-1] - d, t[1:] + d
+
+
+def recorded_hulls(c: FaceCoupling, p: FacePassRecord, tol: float = SWEEP_TOLERANCE) -> tuple[list, float]:
+    """The convex pieces of a recorded pass's swept volume (every element): hulls of consecutive plate placements
+    on the splined poses, the servo period subdivided until the chord error is within ``tol`` [mm]; and that
+    error."""
+    hulls, worst = [], 0.0
+    for j in range(len(p.tip)):
+        path = _PassPath(p, j)
+        split = 1
+        while True:
+            t = np.linspace(p.t[0], p.t[-1], split * (len(p.t) - 1) + 1)
+            lo, hi = _steps(t)
+            c0, c1 = recorded_corners(c, *path.at(lo)), recorded_corners(c, *path.at(hi))
+            err = 0.0
+            for f in (0.25, 0.5, 0.75):
+                q = recorded_corners(c, *path.at(lo + f * (hi - lo)))
+                err = max(err, float(np.max(np.linalg.norm(q - ((1 - f) * c0 + f * c1), axis=-1))))
+            if err <= tol:
+                break
+            split += 1
+        worst = max(worst, err)
+        hulls += [mf.Manifold.hull_points(np.vstack([a, b])) for a, b in zip(c0, c1, strict=True)]
+    return hulls, worst
+
+
+def cut_recorded(record: FaceContourRecord, tol: float = SWEEP_TOLERANCE) -> FaceCut:
+    """The face blank with the recorded passes' swept volumes removed (one batched boolean), as
+    :func:`cutting.face_contour.cut_slots` does with the ideal motion; ``tol`` [mm] the chord error."""
+    t0 = time.perf_counter()
+    c = record.coupling
+    pieces, worst = [], 0.0
+    for p in record.passes:
+        h, err = recorded_hulls(c, p, tol)
+        pieces += h
+        worst = max(worst, err)
+    solid = mf.Manifold.batch_boolean([face_blank(c, tol), *pieces], mf.OpType.Subtract)
+    if solid.status() != mf.Error.NoError or solid.is_empty():
+        raise RuntimeError(f"the face cut of the recorded motion failed: {solid.status()}")
+    solid.num_tri()
+    return FaceCut(solid, record.slots, len(pieces), worst, tol, time.perf_counter() - t0)
+
+
+def recorded_bottom(record: FaceContourRecord, radii: np.ndarray, slot: int = 0) -> np.ndarray:
+    """Slot ``slot``'s bottom z [mm] at ``radii`` on its radial centre line, from the recorded pass: the lowest
+    height of any element's tip edge passing over the point (the root of (P - tip) . u = 0, u the horizontal
+    normal of the edge, on the splined poses), as :func:`cutting.face_contour.exact_bottom` on the ideal path."""
+    c, p = record.coupling, record.pass_of(slot)
+    turn = 2 * math.pi * slot / c.m
+    r = np.asarray(radii, dtype=float)
+    pt = np.stack([r * math.cos(turn), r * math.sin(turn)], axis=-1)
+    best = np.full(r.shape, np.nan)
+    for j in range(len(p.tip)):
+        path = _PassPath(p, j)
+
+        def gap(t: np.ndarray, path: _PassPath = path) -> np.ndarray:
+            tip, edge, _ = path.at(t)
+            u = np.stack([edge[..., 1], -edge[..., 0]], axis=-1)  # edge x z: the tool plane's horizontal direction
+            return np.einsum("...k,...k->...", pt - tip[..., :2], u)
+
+        u = np.stack([p.edge[j][:, 1], -p.edge[j][:, 0]], axis=-1)
+        g = np.einsum("ink,nk->in", pt[:, None, :] - p.tip[j][None, :, :2], u)
+        k, ok = _first_root(g)
+        t = _bisect(gap, p.t[k], p.t[k + 1], g[np.arange(len(r)), k])
+        tip, edge, _ = path.at(t)
+        across = np.abs(np.einsum("ij,ij->i", pt - tip[:, :2], edge[:, :2]))
+        z = np.where(ok & (across <= 0.5 * c.edge_width), tip[:, 2], np.nan)
+        best = np.fmin(best, z)
+    return best
+
+
+def recorded_sides(record: FaceContourRecord, radii: np.ndarray, height: float, slot: int = 0) -> np.ndarray:
+    """Polar angles [rad] of slot ``slot``'s sides at ``radii`` and z = ``height`` from the recorded pass, (2, n):
+    the - side and the + side (as :func:`cutting.face_contour.exact_sides`): the ends of the plates' sections at
+    that height, their crossings of the circles r bisected on the splined poses."""
+    c, p = record.coupling, record.pass_of(slot)
+    r = np.asarray(radii, dtype=float)
+    out = np.stack([np.full(r.shape, np.inf), np.full(r.shape, -np.inf)])
+    tan = math.tan(c.flank_angle)
+    turn = 2 * math.pi * slot / c.m
+    for j in range(len(p.tip)):
+        path = _PassPath(p, j)
+        for row, sign in ((0, -1), (1, 1)):
+
+            def side(t: np.ndarray, path: _PassPath = path, sign: int = sign) -> tuple[np.ndarray, np.ndarray]:
+                tip, edge, radial = path.at(t)
+                s = (tip[..., 2] - height) / radial[..., 2]  # from the tip towards the head centre
+                q = tip - s[..., None] * radial + (sign * (0.5 * c.edge_width + s * tan))[..., None] * edge
+                return q[..., :2], (s >= 0) & (s <= c.element_height)
+
+            pts, valid = side(p.t)
+            g = np.where(valid, np.linalg.norm(pts, axis=-1), np.nan)[None, :] - r[:, None]
+            k, ok = _first_root(np.nan_to_num(g, nan=-1.0))
+
+            def gap(t: np.ndarray, side=side) -> np.ndarray:
+                return np.linalg.norm(side(t)[0], axis=-1) - r
+
+            t = _bisect(gap, p.t[k], p.t[k + 1], g[np.arange(len(r)), k])
+            q, reach = side(t)
+            rel = np.angle(np.exp(1j * (np.arctan2(q[:, 1], q[:, 0]) - turn)))  # about the slot's centre line
+            ang = np.where(ok & reach, turn + rel, np.nan)
+            out[row] = np.fmin(out[row], ang) if sign < 0 else np.fmax(out[row], ang)
+    return out
+
+
+def measure_recorded(
+    record: FaceContourRecord,
+    slots: Sequence[int] | None = None,
+    radii: np.ndarray | None = None,
+    height: float | None = None,
+) -> list[SlotMeasure]:
+    """The recorded slots measured exactly on the recorded motion (bottom, sides at ``height``, default half the
+    depth, and the centre at radius L), as :func:`cutting.face_contour.measure_exact` measures the ideal slots; the
+    spacing follows with :func:`cutting.face_contour.slot_spacing`."""
+    c = record.coupling
+    radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
+    height = -0.5 * c.depth if height is None else height
+    out = []
+    for k in record.slots if slots is None else slots:
+        bottom = recorded_bottom(record, radii, k)
+        sides = recorded_sides(record, radii, height, k)
+        centre = recorded_sides(record, np.array([c.L]), height, k)[:, 0]
+        form, shape = bottom_form(radii, bottom)
+        dev, bow = side_lines(radii, sides)
+        out.append(SlotMeasure(k, radii, bottom, form, shape, height, sides, dev, bow, float(np.mean(centre))))
+    return out
