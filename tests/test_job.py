@@ -631,6 +631,8 @@ def test_shipped_jobs_load(name):
     data = tomllib.loads((JOBS / name).read_text(encoding="utf-8"))
     if "thread" in data:
         assert job.kind == "thread" and job.gear is None
+    elif "coupling" in data:  # a face coupling by continuous indexing (seed 004)
+        assert job.kind == "face_contour" and job.coupling.m == data["coupling"]["slots"]
     elif "turning" in data:  # vibration turning (seed 004) on the lathe: its feed set up as a lead
         assert job.kind == "turning" and job.thread["lead"] == job.turning["feed"] and job.gear is None
     elif "mill" in data:  # the copying method (seed 003): a gear cut by a profiled disc mill, no skiving setup

@@ -53,6 +53,15 @@ def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
         if j.kind == "form_milling":
             _setup_form_milling(j, as_json)
             return
+        if j.kind == "face_contour":
+            from cutting.face_contour import setting_sheet
+            from virtual_machine.face_contour_job import format_setting_sheet, tool_speed
+
+            if as_json:
+                click.echo(json.dumps(_finite(setting_sheet(j.coupling, tool_speed(j))), indent=2, allow_nan=False))
+            else:
+                click.echo(format_setting_sheet(j))
+            return
         if j.kind == "turning":
             from cutting.vibration_turning import turned_surface_summary
             from virtual_machine.turning import format_prediction, ideal_setup
@@ -145,6 +154,14 @@ def cut(
         if j.kind == "form_milling":
             _cut_form_milling(j, out, trajectory)
             return
+        if j.kind == "face_contour":
+            from virtual_machine.face_contour_job import cut_face_job, format_result
+
+            click.echo(format_result(cut_face_job(j, out, stage)))
+            click.echo(f"\nwrote {out / 'coupling.stl'}, measurement.json")
+            return
+        if j.kind in ("turning", "thread"):
+            raise InputError(Problem("job", j.kind, "skive cut makes gears and couplings", "use `skive run`"))
     except (InputError, ValueError) as exc:
         _fail(exc)
     st = j.skiving
@@ -287,6 +304,13 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
         j = load_job(path)
         if j.kind == "thread":
             raise InputError(Problem("job", j.kind, "skive run cuts gears", "use `skive simulate` for a thread job"))
+        if j.kind == "face_contour":
+            from virtual_machine.face_contour_job import format_result, run_face_job
+
+            doc = run_face_job(j, path, out, None, stage)
+            click.echo(format_result(doc))
+            click.echo(f"\nwrote {out / 'coupling.stl'}, measurement.json, report.html")
+            return
         if j.kind == "turning":
             from virtual_machine.turning import format_run, run_turning
 
@@ -525,6 +549,13 @@ def simulate(
     if j.kind == "thread":
         _simulate_thread(j, path, duration, out, as_json)
         return
+    if j.kind == "face_contour":
+        _fail(
+            InputError(
+                Problem("job", "[coupling]", "a face-contour job is simulated with its cut", "use `skive run` for it"),
+                str(path),
+            )
+        )
     if j.kind == "turning":
         from virtual_machine.turning import format_run, simulate_summary
 

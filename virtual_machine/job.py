@@ -196,6 +196,41 @@ TURNING_PROCESS_KEYS: dict[str, Key] = {
     "sweep_error": Key(float, 0.001, "mm", "chord error of the turned surface's manifold solid", _positive),
 }
 
+COUPLING_KEYS: dict[str, Key] = {
+    "slots": Key(int, REQUIRED, "", "number of slots m of the face coupling", _at_least(2)),
+    "L": Key(float, REQUIRED, "mm", "radius of the point M where the cutting speed is radial (seed 004)", _positive),
+    "tool_radius": Key(float, REQUIRED, "mm", "tool head radius R to the element tips", _positive),
+    "feed": Key(float, 0.05, "mm/rev", "infeed S per tool revolution", _positive),
+    "depth": Key(float, REQUIRED, "mm", "slot depth at M", _positive),
+    "inner_radius": Key(float, REQUIRED, "mm", "inner radius of the slotted face", _positive),
+    "outer_radius": Key(float, REQUIRED, "mm", "outer radius of the slotted face", _positive),
+    "elements": Key(int, 1, "", "cutting elements of the tool head (a sector)", _at_least(1)),
+    "element_pitch": Key(float, 0.0, "deg", "phase pitch of the elements on the head", _at_least(0.0)),
+    "edge_width": Key(float, 2.0, "mm", "width of an element's straight tip edge", _positive),
+    "flank_angle": Key(float, 20.0, "deg", "an element's flank angle", _at_least(0.0)),
+    "element_height": Key(float, 5.0, "mm", "height of an element above its tip", _positive),
+    "control": Key(
+        str,
+        "fixed",
+        "",
+        "'fixed', 'eccentric' or 'cyclic_ratio' (seed 004)",
+        _one_of("fixed", "eccentric", "cyclic_ratio"),
+    ),
+    "e": Key(float, None, "mm", "eccentricity (default: the setting sheet's flat-bottom e)", _at_least(0.0)),
+    "eccentric_ratio": Key(int, 4, "", "eccentric turns N per tool revolution", _at_least(1)),
+    "ratio_cycles": Key(int, 6, "", "cycles q of the speed ratio per tool revolution", _at_least(1)),
+    "ratio_amplitude": Key(
+        float, None, "deg", "amplitude of the ratio's cycle (default: straight slots)", _at_least(0.0)
+    ),
+}
+
+FACE_PROCESS_KEYS: dict[str, Key] = {
+    "tool_speed": Key(float, 150.0, "rpm", "tool head speed", _positive),
+    "slots_cut": Key(int, 3, "", "slots cut, recorded and measured (0, 1, ...)", _at_least(2)),
+    "material": PROCESS_KEYS["material"],
+    "sweep_error": Key(float, 0.001, "mm", "chord error of the slots' manifold solid", _positive),
+}
+
 MACHINE_KEYS: dict[str, Key] = {
     "structure": Key(str, "mechatronic", "", "kinematic structure (seed 000 figs 1-4)", _one_of(*STRUCTURES)),
     "synchronization": Key(
@@ -291,6 +326,8 @@ SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machi
 #: a form-milling job (the copying method of seed 003): its machine section only overrides the model's parameters
 #: a turning job (vibration turning, seed 004) on the lathe of seed 001
 SECTIONS_TURNING = {"turning": TURNING_KEYS, "process": TURNING_PROCESS_KEYS, "machine": MACHINE_KEYS}
+#: a face-contour job (continuous indexing of a face coupling, seed 004)
+SECTIONS_FACE = {"coupling": COUPLING_KEYS, "process": FACE_PROCESS_KEYS, "machine": {"model": MACHINE_KEYS["model"]}}
 SECTIONS_FORM = {
     "gear": GEAR_KEYS,
     "mill": MILL_KEYS,
@@ -321,7 +358,10 @@ def model_problems(model: dict[str, Any] | None, kind: str) -> list[Problem]:
     from machine_models.thread_lathe import ThreadLatheParams
 
     lathe = ThreadLatheParams
-    base = {"thread": lathe, "turning": lathe, "form_milling": FormMillParams}.get(kind, SkivingMachineParams)()
+    from machine_models.face_contour_machine import FaceMachineParams
+
+    machines = {"thread": lathe, "turning": lathe, "form_milling": FormMillParams, "face_contour": FaceMachineParams}
+    base = machines.get(kind, SkivingMachineParams)()
     names = ", ".join(f.name for f in fields(base))
     out = []
     good = {}
@@ -458,6 +498,7 @@ class Job:
     mill: dict[str, Any] | None = None  # the profiled disc mill ([mill]) of a form-milling job
     turning: dict[str, Any] | None = None  # [turning] of a turning job (its [thread] the lathe's feed as a lead)
     vibration: Any = None  # the feed vibration (cutting.vibration_turning.FeedVibration) or None
+    coupling: Any = None  # the face coupling (cutting.face_contour.FaceCoupling) of a face-contour job
 
     @property
     def skiving(self) -> SkivingSetup:
@@ -498,6 +539,8 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
         return _parse_form_job(data, source)
     if "turning" in data:
         return _parse_turning_job(data, source)
+    if "coupling" in data:
+        return _parse_face_job(data, source)
     if is_thread and "gear" in data:
         raise InputError(
             Problem(
@@ -573,6 +616,68 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     if problems:
         raise InputError(problems, source)
     return job
+
+
+def _parse_face_job(data: dict[str, Any], source: str) -> Job:
+    """A face-contour job (seed 004): [coupling], [process], [machine]; the coupling's own checks name their key."""
+    problems: list[Problem] = []
+    for name in data:
+        if name not in SECTIONS_FACE:
+            problems.append(
+                Problem(name, "[section]", "unknown section", "valid sections: [coupling], [process], [machine]")
+            )
+    parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in SECTIONS_FACE.items()}
+    problems += model_problems(parsed["machine"].get("model"), "face_contour")
+    coupling = None
+    if not problems:
+        try:
+            coupling = _coupling(parsed["coupling"])
+        except ValueError as exc:
+            names = {"m": "slots", "R": "tool_radius", "S": "feed"}
+            field = str(exc).split(":")[0].split()[0]
+            problems.append(
+                Problem(f"coupling.{names.get(field, field)}", "", str(exc), "see the README's coupling keys")
+            )
+        if coupling is not None and parsed["process"]["slots_cut"] > coupling.m:
+            problems.append(
+                Problem("process.slots_cut", parsed["process"]["slots_cut"], "more than the coupling has", "")
+            )
+    if problems:
+        raise InputError(problems, source)
+    return Job(source, "face_contour", parsed["machine"], parsed["process"], coupling=coupling)
+
+
+def _coupling(c: dict[str, Any]):
+    """The FaceCoupling of [coupling]; an eccentric without e gets the flat-bottom e, a cyclic ratio without its
+    amplitude the straight-slot one (both from the setting sheet)."""
+    import dataclasses
+
+    from cutting.face_contour import FaceCoupling, flat_bottom_eccentricity, straight_slot_amplitude
+
+    coupling = FaceCoupling(
+        m=c["slots"],
+        L=c["L"],
+        R=c["tool_radius"],
+        S=c["feed"],
+        depth=c["depth"],
+        inner_radius=c["inner_radius"],
+        outer_radius=c["outer_radius"],
+        elements=c["elements"],
+        element_pitch=math.radians(c["element_pitch"]),
+        edge_width=c["edge_width"],
+        flank_angle=math.radians(c["flank_angle"]),
+        element_height=c["element_height"],
+        control=c["control"],
+        e=c["e"] or 0.0,
+        eccentric_ratio=c["eccentric_ratio"],
+        ratio_cycles=c["ratio_cycles"],
+        ratio_amplitude=math.radians(c["ratio_amplitude"] or 0.0),
+    )
+    if coupling.control == "eccentric" and c["e"] is None:
+        coupling = dataclasses.replace(coupling, e=flat_bottom_eccentricity(coupling))
+    if coupling.control == "cyclic_ratio" and c["ratio_amplitude"] is None:
+        coupling = dataclasses.replace(coupling, ratio_amplitude=straight_slot_amplitude(coupling))
+    return coupling
 
 
 def _parse_turning_job(data: dict[str, Any], source: str) -> Job:

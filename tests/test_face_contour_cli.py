@@ -1,0 +1,52 @@
+"""A face coupling job (seed 004) through skive setup / cut / run, and its bad input."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from cutting.errors import InputError
+from virtual_machine.cli import main
+from virtual_machine.job import parse_job
+
+ASSET = Path(__file__).resolve().parent.parent / "assets" / "jobs" / "face_coupling.toml"
+
+
+def test_setup_prints_the_setting_sheet():
+    res = CliRunner().invoke(main, ["setup", str(ASSET)])
+    assert res.exit_code == 0, res.output
+    assert "setting angle lambda" in res.output and "flat slot bottom" in res.output
+    doc = json.loads(CliRunner().invoke(main, ["setup", str(ASSET), "--json"]).output)
+    assert doc["setting_angle_deg"] == pytest.approx(1.3406, abs=1e-3)  # arcsin(52.5 / (125 * 24))
+
+
+@pytest.mark.parametrize("command", ["cut", "run"])
+def test_cut_and_run_make_flat_slots_with_the_setting_sheets_e(command, tmp_path):
+    """The job's eccentric takes the setting sheet's e: the bottoms come out flat within 2 um, on the ideal
+    kinematics and on the simulated machine, the solid agreeing with the exact measure within its sweep error."""
+    res = CliRunner().invoke(main, [command, str(ASSET), "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    doc = json.loads((tmp_path / "measurement.json").read_text())
+    assert len(doc["slots"]) == 3 and (tmp_path / "coupling.stl").stat().st_size > 10_000
+    for s in doc["slots"]:
+        assert s["bottom_shape"] == "flat" and abs(s["bottom_form_um"]) < 2.0
+    assert doc["mesh"]["bottom_form_difference_um"] < 1.0
+    assert all(abs(v) < 0.5 for v in doc["spacing_arcsec"])  # 2 pi / m between the slots
+    if command == "run":
+        assert doc["run"]["job"]["kind"] == "face_contour" and (tmp_path / "report.html").is_file()
+
+
+def test_simulate_points_a_face_job_to_run(tmp_path):
+    res = CliRunner().invoke(main, ["simulate", str(ASSET), "--out", str(tmp_path)])
+    assert res.exit_code == 2 and "skive run" in res.output
+
+
+def test_a_setting_angle_that_cannot_be_is_refused_by_its_key():
+    text = ASSET.read_text().replace("L = 52.5", "L = 3500.0")
+    with pytest.raises(InputError) as info:
+        parse_job(tomllib.loads(text), "bad.toml")
+    assert "coupling.L" in str(info.value)

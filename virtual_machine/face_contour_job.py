@@ -1,0 +1,197 @@
+"""Face tooth contours by continuous indexing (seed 004) as `skive setup`, `skive cut` and `skive run` do them.
+
+- `skive setup`: the setting sheet (setting angle lambda, |V| along the slot, the flat-bottom e, the straight-slot
+  ratio amplitude) of :func:`cutting.face_contour.setting_sheet`.
+- `skive cut`: the ideal kinematics cut the first ``process.slots_cut`` slots (:func:`cutting.face_contour.cut_slots`).
+- `skive run`: the face-contour machine (MuJoCo, its electronic gearbox) cuts them; the slots are cut from the
+  motion it recorded (:mod:`virtual_machine.face_contour_cnc`).
+
+Either way the coupling is measured exactly (from the motion) and on the manifold solid: slot bottom form
+(+ concave), side deviations and bows, slot spacing; written to measurement.json with coupling.stl.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import html
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cutting.face_contour import (
+    FaceCoupling,
+    cut_slots,
+    measure_exact,
+    measure_mesh,
+    setting_sheet,
+    slot_spacing,
+)
+from metrology.charts import finite
+from virtual_machine.job import Job, flatten_model
+
+UM = 1e3
+ARCSEC = math.pi / 180 / 3600
+
+
+def tool_speed(job: Job) -> float:
+    """The head's angular speed [rad/s]."""
+    return job.process["tool_speed"] * 2 * math.pi / 60
+
+
+def format_setting_sheet(job: Job) -> str:
+    c: FaceCoupling = job.coupling
+    s = setting_sheet(c, tool_speed(job))
+    lines = [
+        f"FACE COUPLING (seed 004): {c.m} slots by continuous indexing, control {c.control!r}",
+        f"  setting angle lambda = arcsin(L / (R m)) = {s['setting_angle_deg']:.4f} deg (L {c.L:g}, R {c.R:g} mm)",
+        f"  cutting speed |V|: inner end {s['V_inner_mm_s'] * 0.06:.1f}, M {s['V_M_mm_s'] * 0.06:.1f}, outer end "
+        f"{s['V_outer_mm_s'] * 0.06:.1f} m/min at {job.process['tool_speed']:g} rpm; V turns "
+        f"{s['V_direction_inner_deg']:+.3f} / {s['V_direction_outer_deg']:+.3f} deg from radial at the ends",
+        f"  eccentric: e for a flat slot bottom = {s['flat_bottom_e_mm']:.4f} mm (N = {c.eccentric_ratio})"
+        + (f"; set e = {c.e:.4f} mm" if c.control == "eccentric" else ""),
+        f"  cyclic ratio: amplitude for straight slots = {math.degrees(s['straight_slot_amplitude_rad']):.5f} deg "
+        f"(q = {c.ratio_cycles})"
+        + (f"; set {math.degrees(c.ratio_amplitude):.5f} deg" if c.control == "cyclic_ratio" else ""),
+        f"  cycle: {s['tool_revolutions']:.0f} tool revolutions (plunge at S = {c.S:g} mm/rev, one workpiece "
+        "revolution of spark-out)",
+    ]
+    return "\n".join(lines)
+
+
+def measurement(c: FaceCoupling, exact: list, mesh: list | None, cut, tol: float) -> dict[str, Any]:
+    """The coupling's measurement: per slot bottom form and side deviations [um], the spacing [arcsec] (exact),
+    and the mesh's figures beside them."""
+
+    def slot(m) -> dict[str, Any]:
+        return {
+            "slot": m.slot,
+            "bottom_form_um": m.form * UM,
+            "bottom_shape": m.shape,
+            "side_bow_um": (m.side_bow * UM).tolist(),
+            "side_deviation_um": {"max": float(np.max(np.abs(m.side_deviation)) * UM)},
+        }
+
+    doc: dict[str, Any] = {
+        "slots": [slot(m) for m in exact],
+        "spacing_arcsec": (slot_spacing(c, exact) / ARCSEC).tolist() if len(exact) > 1 else [],
+        "bottom_radii_mm": exact[0].radii.tolist(),
+        "bottom_z_um": (exact[0].bottom * UM).tolist(),
+    }
+    if mesh is not None:
+        doc["mesh"] = {
+            "sweep_error_um": tol * UM,
+            "hulls": cut.hulls,
+            "slots": [slot(m) for m in mesh],
+            "bottom_form_difference_um": float(max(abs(a.form - b.form) for a, b in zip(exact, mesh, strict=True)))
+            * UM,
+        }
+    return doc
+
+
+def cut_face_job(job: Job, out: Path, stage=None) -> dict[str, Any]:
+    """`skive cut`: the ideal kinematics cut and measured; writes coupling.stl and measurement.json."""
+    stage = stage or (lambda name: None)
+    c: FaceCoupling = job.coupling
+    slots = tuple(range(job.process["slots_cut"]))
+    tol = job.process["sweep_error"]
+    stage("cut: the elements' swept volumes (manifold3d)")
+    cut = cut_slots(c, slots, tol)
+    stage("measurement: exact and on the solid")
+    doc = measurement(c, measure_exact(c, slots), measure_mesh(cut, c), cut, tol)
+    doc["setting_sheet"] = setting_sheet(c, tool_speed(job))
+    doc["cut"] = {"motion": "ideal kinematics", "seconds": cut.seconds, "chord_error_um": cut.chord_error * UM}
+    _write(out, doc, cut)
+    return doc
+
+
+def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None) -> dict[str, Any]:
+    """`skive run`: the face-contour machine cuts the slots; they are cut and measured from its recorded motion."""
+    from machine_models.face_contour_machine import FaceMachineParams
+    from virtual_machine.face_contour_cnc import cut_recorded, measure_recorded, simulate_face_contour
+
+    stage = stage or (lambda name: None)
+    c: FaceCoupling = job.coupling
+    slots = tuple(range(job.process["slots_cut"]))
+    tol = job.process["sweep_error"]
+    params = FaceMachineParams().with_overrides(flatten_model(job.machine.get("model")))
+    durations = {}
+    t0 = time.perf_counter()
+    stage("machine: the face-contour machine cuts the slots (electronic gearbox)")
+    record = simulate_face_contour(c, params, slots, job.process["tool_speed"], progress=progress)
+    durations["machine"] = time.perf_counter() - t0
+    stage("cut and measurement of the recorded motion")
+    t0 = time.perf_counter()
+    cut = cut_recorded(record, tol)
+    doc = measurement(c, measure_recorded(record, slots), measure_mesh(cut, c), cut, tol)
+    durations["cut and measurement"] = time.perf_counter() - t0
+    ideal = measure_exact(c, slots[:1])[0]
+    doc["ideal_bottom_form_um"] = ideal.form * UM
+    doc["setting_sheet"] = setting_sheet(c, tool_speed(job))
+    sync = record.trace_sync
+    text = Path(path).read_text()
+    doc["run"] = {
+        "job": {"path": str(path), "sha256": hashlib.sha256(text.encode()).hexdigest(), "kind": job.kind},
+        "seed": None,
+        "durations_s": {**{k: round(v, 3) for k, v in durations.items()}, "machine_time": float(record.sim_time)},
+        "synchronisation_peak_to_peak": {
+            "work_arcsec": float(np.ptp(sync[:, 0])),
+            "eccentric_arcsec": float(np.ptp(sync[:, 1])) if record.eccentric else None,
+            "infeed_um": float(np.ptp(sync[:, 2])),
+        },
+    }
+    _write(out, doc, cut)
+    _report(out / "report.html", path, doc, job)
+    return doc
+
+
+def format_result(doc: dict[str, Any]) -> str:
+    lines = ["FACE COUPLING measured (exact from the motion; the manifold solid beside it)"]
+    for s in doc["slots"]:
+        lines.append(
+            f"  slot {s['slot']}: bottom {s['bottom_shape']} {s['bottom_form_um']:+.2f} um, side bows "
+            f"{s['side_bow_um'][0]:+.2f} / {s['side_bow_um'][1]:+.2f} um"
+        )
+    if doc["spacing_arcsec"]:
+        lines.append("  spacing deviation: " + ", ".join(f"{v:+.3f}" for v in doc["spacing_arcsec"]) + " arcsec")
+    if "mesh" in doc:
+        lines.append(
+            f"  the solid ({doc['mesh']['hulls']} hulls, sweep error {doc['mesh']['sweep_error_um']:.1f} um): bottom "
+            f"form within {doc['mesh']['bottom_form_difference_um']:.2f} um of the exact"
+        )
+    if "ideal_bottom_form_um" in doc:
+        lines.append(f"  the ideal kinematics' bottom form: {doc['ideal_bottom_form_um']:+.2f} um")
+    return "\n".join(lines)
+
+
+def _write(out: Path, doc: dict[str, Any], cut) -> None:
+    import trimesh
+
+    out.mkdir(parents=True, exist_ok=True)
+    mesh = cut.solid.to_mesh()
+    tm = trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts), process=False)
+    tm.export(out / "coupling.stl")
+    (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
+
+
+def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
+    from virtual_machine.report import STYLE, html_table
+
+    rows = [[s["slot"], s["bottom_shape"], s["bottom_form_um"], *s["side_bow_um"]] for s in doc["slots"]]
+    body = [
+        f"<h1>skive run: {html.escape(Path(path).name)}</h1>",
+        "<p>Face coupling by continuous indexing (seed 004) on the simulated face-contour machine: the slots cut "
+        "from the motion it recorded, measured exactly and on the manifold solid.</p>",
+        html_table(["slot", "bottom", "bottom form [um]", "side bow 1 [um]", "side bow 2 [um]"], rows),
+        html_table(["spacing deviation [arcsec]"], [[v] for v in doc["spacing_arcsec"]]),
+        html_table(["", ""], [[k, v] for k, v in doc["run"]["durations_s"].items()]),
+        f"<pre>{html.escape(format_setting_sheet(job))}</pre>",
+        f"<pre>{html.escape(Path(path).read_text())}</pre>",
+    ]
+    page.write_text(
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>skive run</title><style>{STYLE}</style>'
+        "</head><body>\n" + "\n".join(body) + "\n</body></html>\n"
+    )
