@@ -312,10 +312,11 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
             click.echo(f"\nwrote {out / 'coupling.stl'}, measurement.json, report.html")
             return
         if j.kind == "turning":
-            from virtual_machine.turning import format_run, run_turning
+            from virtual_machine.turning import format_run as format_turning
+            from virtual_machine.turning import run_turning
 
             doc = run_turning(j, path, out, rrd, stage)
-            click.echo(format_run(doc))
+            click.echo(format_turning(doc))
             click.echo(f"\nwrote {out / 'workpiece.stl'}, measurement.json, report.html" + (f", {rrd}" if rrd else ""))
             return
         if j.kind == "form_milling":
@@ -557,12 +558,13 @@ def simulate(
             )
         )
     if j.kind == "turning":
-        from virtual_machine.turning import format_run, simulate_summary
+        from virtual_machine.turning import format_run as format_turning
+        from virtual_machine.turning import simulate_summary
 
         doc, _, _ = simulate_summary(j)
         out.mkdir(parents=True, exist_ok=True)
         (out / "simulation.json").write_text(json.dumps(_finite(doc), indent=2, allow_nan=False))
-        click.echo(json.dumps(_finite(doc), indent=2) if as_json else format_run(doc))
+        click.echo(json.dumps(_finite(doc), indent=2) if as_json else format_turning(doc))
         return
     if j.kind == "form_milling":
         _fail(
