@@ -40,9 +40,15 @@ def test_cut_and_run_make_flat_slots_with_the_setting_sheets_e(command, tmp_path
         assert doc["run"]["job"]["kind"] == "face_contour" and (tmp_path / "report.html").is_file()
 
 
-def test_simulate_points_a_face_job_to_run(tmp_path):
+def test_simulate_reports_the_gearbox_synchronisation_and_run_records(tmp_path):
     res = CliRunner().invoke(main, ["simulate", str(ASSET), "--out", str(tmp_path)])
-    assert res.exit_code == 2 and "skive run" in res.output
+    assert res.exit_code == 0, res.output
+    doc = json.loads((tmp_path / "simulation.json").read_text())
+    assert doc["machine_time_s"] > 1.0 and doc["synchronisation_peak_to_peak"]["eccentric_arcsec"] is not None
+    args = ["run", str(ASSET), "--out", str(tmp_path / "run"), "--rrd", str(tmp_path / "r.rrd")]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "r.rrd").stat().st_size > 10_000
 
 
 def test_a_setting_angle_that_cannot_be_is_refused_by_its_key():

@@ -307,9 +307,9 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
         if j.kind == "face_contour":
             from virtual_machine.face_contour_job import format_result, run_face_job
 
-            doc = run_face_job(j, path, out, None, stage)
+            doc = run_face_job(j, path, out, None, stage, rrd)
             click.echo(format_result(doc))
-            click.echo(f"\nwrote {out / 'coupling.stl'}, measurement.json, report.html")
+            click.echo(f"\nwrote {out / 'coupling.stl'}, measurement.json, report.html" + (f", {rrd}" if rrd else ""))
             return
         if j.kind == "turning":
             from virtual_machine.turning import format_run as format_turning
@@ -551,12 +551,13 @@ def simulate(
         _simulate_thread(j, path, duration, out, as_json)
         return
     if j.kind == "face_contour":
-        _fail(
-            InputError(
-                Problem("job", "[coupling]", "a face-contour job is simulated with its cut", "use `skive run` for it"),
-                str(path),
-            )
-        )
+        from virtual_machine.face_contour_job import format_simulation, simulate_face_job
+
+        _, summary = simulate_face_job(j)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "simulation.json").write_text(json.dumps(_finite(summary), indent=2, allow_nan=False))
+        click.echo(json.dumps(_finite(summary), indent=2) if as_json else format_simulation(summary))
+        return
     if j.kind == "turning":
         from virtual_machine.turning import format_run as format_turning
         from virtual_machine.turning import simulate_summary

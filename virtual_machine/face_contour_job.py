@@ -108,20 +108,59 @@ def cut_face_job(job: Job, out: Path, stage=None) -> dict[str, Any]:
     return doc
 
 
-def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None) -> dict[str, Any]:
-    """`skive run`: the face-contour machine cuts the slots; they are cut and measured from its recorded motion."""
+def machine_params(job: Job):
     from machine_models.face_contour_machine import FaceMachineParams
-    from virtual_machine.face_contour_cnc import cut_recorded, measure_recorded, simulate_face_contour
+
+    return FaceMachineParams().with_overrides(flatten_model(job.machine.get("model")))
+
+
+def simulate_face_job(job: Job, progress=None):
+    """`skive simulate`: the face-contour machine cuts the slots; the record and its synchronisation figures."""
+    from virtual_machine.face_contour_cnc import simulate_face_contour
+
+    slots = tuple(range(job.process["slots_cut"]))
+    record = simulate_face_contour(
+        job.coupling, machine_params(job), slots, job.process["tool_speed"], progress=progress
+    )
+    sync = record.trace_sync
+    summary = {
+        "machine_time_s": float(record.sim_time),
+        "wall_time_s": float(record.wall_time),
+        "synchronisation_peak_to_peak": {
+            "work_arcsec": float(np.ptp(sync[:, 0])),
+            "eccentric_arcsec": float(np.ptp(sync[:, 1])) if record.eccentric else None,
+            "infeed_um": float(np.ptp(sync[:, 2])),
+        },
+        "following_error_peak": {
+            axis: float(np.max(np.abs(record.trace_error[:, i])))
+            for i, axis in enumerate(("A_arcsec", "H_arcsec", "E_arcsec", "Z_um"))
+        },
+    }
+    return record, summary
+
+
+def format_simulation(summary: dict[str, Any]) -> str:
+    s = summary["synchronisation_peak_to_peak"]
+    ecc = f", eccentric - N phi {s['eccentric_arcsec']:.2f} arcsec" if s["eccentric_arcsec"] is not None else ""
+    return (
+        "FACE-CONTOUR MACHINE (seed 004): the electronic gearbox's synchronisation, peak to peak: work - a(phi) "
+        f"{s['work_arcsec']:.2f} arcsec{ecc}, infeed - z(phi) {s['infeed_um']:.2f} um; "
+        f"{summary['machine_time_s']:.2f} s of machine time in {summary['wall_time_s']:.1f} s"
+    )
+
+
+def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None, rrd: Path | None = None) -> dict[str, Any]:
+    """`skive run`: the face-contour machine cuts the slots; they are cut and measured from its recorded motion."""
+    from virtual_machine.face_contour_cnc import cut_recorded, measure_recorded
 
     stage = stage or (lambda name: None)
     c: FaceCoupling = job.coupling
     slots = tuple(range(job.process["slots_cut"]))
     tol = job.process["sweep_error"]
-    params = FaceMachineParams().with_overrides(flatten_model(job.machine.get("model")))
     durations = {}
     t0 = time.perf_counter()
     stage("machine: the face-contour machine cuts the slots (electronic gearbox)")
-    record = simulate_face_contour(c, params, slots, job.process["tool_speed"], progress=progress)
+    record, summary = simulate_face_job(job, progress)
     durations["machine"] = time.perf_counter() - t0
     stage("cut and measurement of the recorded motion")
     t0 = time.perf_counter()
@@ -131,21 +170,48 @@ def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None) -> 
     ideal = measure_exact(c, slots[:1])[0]
     doc["ideal_bottom_form_um"] = ideal.form * UM
     doc["setting_sheet"] = setting_sheet(c, tool_speed(job))
-    sync = record.trace_sync
     text = Path(path).read_text()
     doc["run"] = {
         "job": {"path": str(path), "sha256": hashlib.sha256(text.encode()).hexdigest(), "kind": job.kind},
         "seed": None,
         "durations_s": {**{k: round(v, 3) for k, v in durations.items()}, "machine_time": float(record.sim_time)},
-        "synchronisation_peak_to_peak": {
-            "work_arcsec": float(np.ptp(sync[:, 0])),
-            "eccentric_arcsec": float(np.ptp(sync[:, 1])) if record.eccentric else None,
-            "infeed_um": float(np.ptp(sync[:, 2])),
-        },
+        **{k: summary[k] for k in ("synchronisation_peak_to_peak", "following_error_peak")},
     }
     _write(out, doc, cut)
     _report(out / "report.html", path, doc, job)
+    if rrd is not None:
+        stage("recording")
+        _record(rrd, record, out / "coupling.stl")
     return doc
+
+
+def _record(rrd: Path, record, stl: Path) -> None:
+    """The axes, the synchronisation errors over machine time and the coupling."""
+    import rerun as rr
+    import trimesh
+
+    from virtual_machine.recording import _send_series
+
+    rrd.parent.mkdir(parents=True, exist_ok=True)
+    rec = rr.RecordingStream("skive_face_contour", send_properties=False)
+    rec.save(str(rrd))
+    rr.set_log_time_enabled(False, recording=rec)
+    t = np.asarray(record.trace_t, dtype=float)
+    _send_series(rec, "machine/axes", t, record.trace_q, ["A [rad]", "phi [rad]", "E [rad]", "Z [mm]"])
+    _send_series(
+        rec,
+        "machine/synchronisation",
+        t,
+        record.trace_sync,
+        ["A - a(phi) [arcsec]", "E - N phi [arcsec]", "Z - z(phi) [um]"],
+    )
+    mesh = trimesh.load(stl, force="mesh")
+    rec.log(
+        "coupling",
+        rr.Mesh3D(vertex_positions=np.asarray(mesh.vertices), triangle_indices=np.asarray(mesh.faces)),
+        static=True,
+    )
+    rec.flush()
 
 
 def format_result(doc: dict[str, Any]) -> str:
