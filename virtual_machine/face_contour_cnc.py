@@ -68,7 +68,7 @@ from machine_models.face_contour_machine import (
 )
 from machine_models.parameters import ARCSEC
 from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
-from virtual_machine.physics import SimulationDivergedError
+from virtual_machine.physics import SimulationDivergedError, divergence_message
 
 __all__ = [
     "AXES",
@@ -380,16 +380,8 @@ class FaceServo:
 
 
 def _diagnose(layout: FaceMachineLayout, params: FaceMachineParams, t: float) -> str:
-    head = f"the face-contour machine diverged at t = {t:.4f} s (MuJoCo reported bad accelerations). "
-    wh = stage_omega_h(layout, params)
-    if not wh:
-        return head + f"Every stage is rigid: reduce machine.timestep (now {params.timestep:g} s)"
-    worst = max(wh, key=wh.__getitem__)
-    what = f"machine.{worst}" if worst == "nut_stiffness" else f"machine.{worst}.stiffness"
-    return head + (
-        f"Stiffest stage: {worst} with omega*h = {wh[worst]:.2f} (explicit springs need < 2, better < 0.5); lower "
-        f"{what}, raise its damping, or reduce machine.timestep (now {params.timestep:g} s)"
-    )
+    """Which compliant stage's local mode is too fast for the time step (see ``stage_omega_h``)."""
+    return divergence_message("face-contour machine", stage_omega_h(layout, params), params.timestep, t)
 
 
 def _runaway(servo: FaceServo, tuning: FaceTuning, tool_rpm: float, h: float, t: float) -> str:

@@ -31,7 +31,7 @@ import numpy as np
 
 from machine_models.form_mill import FormMillLayout, FormMillParams, build_form_mill_spec, stage_omega_h
 from machine_models.parameters import ARCSEC
-from virtual_machine.physics import SimulationDivergedError
+from virtual_machine.physics import SimulationDivergedError, divergence_message
 
 AXES = ("A", "X", "Y", "Z", "S")  # the CNC's axes; A rad, X Y Z m, S rad
 MOTORS = ("MA", "MX", "MY", "MZ", "MS")
@@ -326,16 +326,7 @@ class FormMillServo:
 
 def _diagnose(layout: FormMillLayout, params: FormMillParams, t: float) -> str:
     """Which compliant stage's local mode is too fast for the time step (see ``stage_omega_h``)."""
-    head = f"the form-milling machine diverged at t = {t:.4f} s (MuJoCo reported bad accelerations). "
-    wh = stage_omega_h(layout, params)
-    if not wh:
-        return head + f"Every stage is rigid: reduce machine.timestep (now {params.timestep:g} s)"
-    worst = max(wh, key=wh.__getitem__)
-    what = f"machine.{worst}" if worst == "nut_stiffness" else f"machine.{worst}.stiffness"
-    return head + (
-        f"Stiffest stage: {worst} with omega*h = {wh[worst]:.2f} (explicit springs need < 2, better < 0.5); lower "
-        f"{what}, raise its damping, or reduce machine.timestep (now {params.timestep:g} s)"
-    )
+    return divergence_message("form-milling machine", stage_omega_h(layout, params), params.timestep, t)
 
 
 def simulate_form_milling(

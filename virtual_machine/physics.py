@@ -17,6 +17,20 @@ class SimulationDivergedError(RuntimeError):
     """The integration blew up; the message names the stage most likely responsible and how to fix it."""
 
 
+def divergence_message(machine: str, omega_h: dict[str, float], timestep: float, t: float) -> str:
+    """Why ``machine`` diverged at ``t``: the compliant stage whose local mode is fastest for the time step
+    (``omega_h``: omega * h per stage, as the machines' ``stage_omega_h`` give it) and what to change."""
+    head = f"the {machine} diverged at t = {t:.4f} s (MuJoCo reported bad accelerations). "
+    if not omega_h:
+        return head + f"Every stage is rigid: reduce machine.timestep (now {timestep:g} s)"
+    worst = max(omega_h, key=omega_h.__getitem__)
+    what = f"machine.{worst}" if worst == "nut_stiffness" else f"machine.{worst}.stiffness"
+    return head + (
+        f"Stiffest stage: {worst} with omega*h = {omega_h[worst]:.2f} (explicit springs need < 2, better < 0.5); "
+        f"lower {what}, raise its damping, or reduce machine.timestep (now {timestep:g} s)"
+    )
+
+
 class MachinePhysics:
     """MuJoCo model + data with the joints and actuators of the machine resolved once (no name lookups per tick)."""
 
