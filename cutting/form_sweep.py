@@ -54,8 +54,10 @@ class MillPassPoses:
     axis: np.ndarray
 
     def sorted_along_feed(self) -> MillPassPoses:
+        """The poses in the order of the centre's face position, the axes made unit vectors."""
         order = np.argsort(self.centre[:, 2], kind="stable")
-        return MillPassPoses(self.space, self.side, self.t[order], self.centre[order], self.axis[order])
+        axis = self.axis[order] / np.linalg.norm(self.axis[order], axis=1, keepdims=True)
+        return MillPassPoses(self.space, self.side, self.t[order], self.centre[order], axis)
 
 
 class MilledGear:
@@ -92,11 +94,16 @@ class MilledGear:
         return p.centre[i] * (1 - f) + p.centre[i + 1] * f, p.axis[i] * (1 - f) + p.axis[i + 1] * f
 
     def _g(self, p: MillPassPoses, q: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """The margin w - R(u) of points ``q`` at the continuous sample index ``s``."""
         c, a = self._pose(p, s)
-        a = a / np.linalg.norm(a, axis=1, keepdims=True)
+        return self._margin_at(q, c, a / np.linalg.norm(a, axis=1, keepdims=True))
+
+    def _margin_at(self, q: np.ndarray, c: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """w - R(u) of points ``q`` for the mill at centres ``c`` with unit axes ``a`` (FAR beyond its span)."""
         v = q - c
         u = np.einsum("ij,ij->i", v, a)
-        w = np.linalg.norm(v - u[:, None] * a, axis=1)
+        r = v - u[:, None] * a
+        w = np.sqrt(np.einsum("ij,ij->i", r, r))
         inside = (u >= self._u[0]) & (u <= self._u[-1])
         return np.where(inside, w - (self.mill.radius - np.interp(u, self._u, self._h)), FAR)
 
@@ -112,9 +119,9 @@ class MilledGear:
         k, stride = self._scan(index)
         best, arg = self._least(p, q, j, k, stride, n)  # coarse: every stride-th sample
         if stride > 1:  # fine: every sample between the coarse least one's neighbours
-            best, arg = self._least(p, q, arg.astype(int), stride, 1, n)
+            best, arg = self._least(p, q, arg, stride, 1, n)
         mid = np.clip(arg, 1, n - 2)
-        g0, g1, g2 = self._g(p, q, mid - 1), self._g(p, q, mid), self._g(p, q, mid + 1)
+        g0, g1, g2 = (self._margin_at(q, p.centre[i], p.axis[i]) for i in (mid - 1, mid, mid + 1))
         curv = g0 - 2 * g1 + g2
         ok = (curv > 1e-15) & (g0 < FAR / 2) & (g2 < FAR / 2)
         vertex = mid + np.where(ok, 0.5 * (g0 - g2) / np.where(ok, curv, 1.0), 0.0)
@@ -124,10 +131,10 @@ class MilledGear:
     def _least(self, p: MillPassPoses, q: np.ndarray, j: np.ndarray, k: int, stride: int, n: int):
         """The least margin over the samples j + stride * (-k..k) and where it is."""
         best = np.full(len(q), np.inf)
-        arg = np.clip(j, 1, n - 2).astype(float)
+        arg = np.clip(j, 1, n - 2)
         for off in range(-k, k + 1):
-            s = np.clip(j + off * stride, 0, n - 1).astype(float)
-            g = self._g(p, q, s)
+            s = np.clip(j + off * stride, 0, n - 1)
+            g = self._margin_at(q, p.centre[s], p.axis[s])  # at a sample: no interpolation
             better = g < best
             best, arg = np.where(better, g, best), np.where(better, s, arg)
         return best, arg
