@@ -358,8 +358,8 @@ def phi_at_radius(c: FaceCoupling, radius: np.ndarray | float, element: int | No
         return np.linalg.norm(_tip(c, x, beta, final=True)[0], axis=-1) - r
 
     g = np.linalg.norm(_tip(c, phi, beta, final=True)[0], axis=-1)[None, :] - r[:, None]
-    k, ok = _first_root(g)
-    x = _bisect(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
+    k, ok = first_sign_change(g)
+    x = bisect_roots(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
     return np.where(ok, x, np.nan)
 
 
@@ -421,9 +421,15 @@ def _pass_phis(c: FaceCoupling, beta: float, margin: float = 0.0, samples: int =
     return np.linspace(psi[lo], psi[hi], samples) - beta
 
 
-def _bisect(f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray, flo: np.ndarray) -> np.ndarray:
-    """Vectorised bisection of f on brackets [lo, hi] (f(lo) = flo)."""
-    for _ in range(BISECTION_STEPS):
+def bisect_roots(
+    f: Callable[[np.ndarray], np.ndarray],
+    lo: np.ndarray,
+    hi: np.ndarray,
+    flo: np.ndarray,
+    steps: int = BISECTION_STEPS,
+) -> np.ndarray:
+    """Vectorised bisection of f on brackets [lo, hi] (f(lo) = flo), ``steps`` halvings."""
+    for _ in range(steps):
         mid = 0.5 * (lo + hi)
         fm = f(mid)
         left = np.sign(fm) == np.sign(flo)
@@ -433,7 +439,7 @@ def _bisect(f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarra
     return 0.5 * (lo + hi)
 
 
-def _first_root(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def first_sign_change(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per row of g (points x samples), the index of the first sign change and whether there is one."""
     change = np.signbit(g[:, :-1]) != np.signbit(g[:, 1:])
     return np.argmax(change, axis=1), change.any(axis=1)
@@ -452,13 +458,13 @@ def exact_bottom(c: FaceCoupling, radii: np.ndarray) -> np.ndarray:
         tip, _ = _tip(c, phi, beta, final=True)
         u = _frame(c, phi)[0]
         g = np.einsum("ijk,jk->ij", p[:, None, :] - tip[None], u)
-        k, ok = _first_root(g)
+        k, ok = first_sign_change(g)
 
         def gap(x: np.ndarray, p: np.ndarray = p, beta: float = beta) -> np.ndarray:
             t, _ = _tip(c, x, beta, final=True)
             return np.einsum("ij,ij->i", p - t, _frame(c, x)[0])
 
-        x = _bisect(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
+        x = bisect_roots(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
         t, z = _tip(c, x, beta, final=True)
         across = np.abs(np.einsum("ij,ij->i", p - t, _frame(c, x)[1]))
         z = np.where(ok & (across <= 0.5 * c.edge_width), z, np.nan)
@@ -490,12 +496,12 @@ def exact_sides(c: FaceCoupling, radii: np.ndarray, height: float, slot: int = 0
         for row, sign in ((0, -1), (1, 1)):
             pt, valid = _side_point(c, phi, beta, height, sign)
             g = np.where(valid, np.linalg.norm(pt, axis=-1), np.nan)[None, :] - r[:, None]
-            k, ok = _first_root(np.nan_to_num(g, nan=-1.0))
+            k, ok = first_sign_change(np.nan_to_num(g, nan=-1.0))
 
             def gap(x: np.ndarray, beta: float = beta, sign: int = sign) -> np.ndarray:
                 return np.linalg.norm(_side_point(c, x, beta, height, sign)[0], axis=-1) - r
 
-            x = _bisect(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
+            x = bisect_roots(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
             q, reach = _side_point(c, x, beta, height, sign)
             ang = np.where(ok & reach, np.arctan2(q[:, 1], q[:, 0]), np.nan)
             out[row] = np.fmin(out[row], ang) if sign < 0 else np.fmax(out[row], ang)
@@ -644,7 +650,7 @@ def plate_corners(c: FaceCoupling, phi: np.ndarray, beta: float) -> np.ndarray:
     return np.stack(corners, axis=-2)
 
 
-def _steps(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def hull_steps(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each hull's start and end angle: consecutive samples, widened by OVERLAP of the step at both ends so that
     neighbouring hulls overlap (hulls that only share a plate leave zero-volume slivers in the boolean)."""
     d = OVERLAP * np.diff(phi)
@@ -653,7 +659,7 @@ def _steps(phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _chord_error(c: FaceCoupling, phi: np.ndarray, beta: float) -> float:
     """The largest distance of the plate's corners at the quarter points of each hull from its straight move."""
-    lo, hi = _steps(phi)
+    lo, hi = hull_steps(phi)
     p0, p1 = plate_corners(c, lo, beta), plate_corners(c, hi, beta)
     worst = 0.0
     for f in (0.25, 0.5, 0.75):
@@ -698,7 +704,7 @@ def slot_hulls(c: FaceCoupling, slot: int, tol: float = SWEEP_TOLERANCE) -> tupl
     for beta in c.phases:
         phi, err = pass_samples(c, beta, tol)
         worst = max(worst, err)
-        lo, hi = (plate_corners(c, x, beta) @ rot.T for x in _steps(phi))
+        lo, hi = (plate_corners(c, x, beta) @ rot.T for x in hull_steps(phi))
         hulls += [mf.Manifold.hull_points(np.vstack([a, b])) for a, b in zip(lo, hi, strict=True)]
     return hulls, worst
 
@@ -711,11 +717,18 @@ def cut_slots(c: FaceCoupling, slots: tuple[int, ...] = (0, 1), tol: float = SWE
         h, err = slot_hulls(c, k, tol)
         pieces += h
         worst = max(worst, err)
+    solid = subtract_pieces(c, pieces, tol)
+    return FaceCut(solid, tuple(slots), len(pieces), worst, tol, time.perf_counter() - t0)
+
+
+def subtract_pieces(c: FaceCoupling, pieces: list[mf.Manifold], tol: float) -> mf.Manifold:
+    """The face blank less the swept pieces (one batched boolean), evaluated now (manifold is lazy) so that a
+    caller's timing is the cut's; a failed boolean raises RuntimeError with manifold's status."""
     solid = mf.Manifold.batch_boolean([face_blank(c, tol), *pieces], mf.OpType.Subtract)
     if solid.status() != mf.Error.NoError or solid.is_empty():
         raise RuntimeError(f"the face cut failed: {solid.status()}")
-    solid.num_tri()  # evaluate now (the boolean is lazy) so the time is the cut's
-    return FaceCut(solid, tuple(slots), len(pieces), worst, tol, time.perf_counter() - t0)
+    solid.num_tri()
+    return solid
 
 
 def mesh_bottom(solid: mf.Manifold, c: FaceCoupling, radii: np.ndarray, slot: int = 0) -> np.ndarray:

@@ -51,11 +51,14 @@ from cutting.face_contour import (
     FaceCoupling,
     FaceCut,
     SlotMeasure,
+    bisect_roots,
     bottom_form,
     element_path,
-    face_blank,
+    first_sign_change,
+    hull_steps,
     measuring_radii,
     side_lines,
+    subtract_pieces,
     workpiece_angle,
 )
 from machine_models.face_contour_machine import (
@@ -68,7 +71,7 @@ from machine_models.face_contour_machine import (
 )
 from machine_models.parameters import ARCSEC
 from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
-from virtual_machine.physics import SimulationDivergedError, divergence_message
+from virtual_machine.physics import SimulationDivergedError, divergence_message, servo_substeps
 
 __all__ = [
     "AXES",
@@ -93,8 +96,6 @@ MOTORS = ("MA", "MH", "ME", "MZ")
 _A, _H, _E, _Z = range(4)
 #: bisection steps on a recorded pass (half a servo period / 2^40: far below a nanometre of tip motion)
 BISECTION_STEPS = 40
-#: neighbouring hulls of a recorded pass overlap by this fraction of a step (as cutting.face_contour)
-OVERLAP = 0.02
 
 
 @dataclass(frozen=True)
@@ -425,11 +426,7 @@ def simulate_face_contour(
     layout = FaceMachineLayout.from_coupling(coupling)
     model = build_face_machine_spec(layout, params).compile()  # raises ValueError naming bad parameters
     h = model.opt.timestep
-    substeps = round(1 / (tuning.servo_rate * h))
-    if substeps < 1 or abs(substeps * h * tuning.servo_rate - 1) > 1e-9:
-        raise ValueError(
-            f"the servo period 1/{tuning.servo_rate:g} s must be a whole multiple of machine.timestep ({h:g} s)"
-        )
+    substeps = servo_substeps(h, tuning.servo_rate)
     dt = substeps * h
     omega = tool_rpm * 2 * math.pi / 60
     window = pass_window(coupling, tuning.window_margin)
@@ -585,25 +582,6 @@ def recorded_corners(c: FaceCoupling, tip: np.ndarray, edge: np.ndarray, radial:
     return np.stack([tip - w_tip * edge, tip + w_tip * edge, top + w_top * edge, top - w_top * edge], axis=-2)
 
 
-def _bisect(f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray, flo: np.ndarray) -> np.ndarray:
-    for _ in range(BISECTION_STEPS):
-        mid = 0.5 * (lo + hi)
-        fm = f(mid)
-        left = np.sign(fm) == np.sign(flo)
-        lo, flo, hi = np.where(left, mid, lo), np.where(left, fm, flo), np.where(left, hi, mid)
-    return 0.5 * (lo + hi)
-
-
-def _first_root(g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    change = np.signbit(g[:, :-1]) != np.signbit(g[:, 1:])
-    return np.argmax(change, axis=1), change.any(axis=1)
-
-
-def _steps(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    d = OVERLAP * np.diff(t)
-    return t[:-1] - d, t[1:] + d
-
-
 def recorded_hulls(c: FaceCoupling, p: FacePassRecord, tol: float = SWEEP_TOLERANCE) -> tuple[list, float]:
     """The convex pieces of a recorded pass's swept volume (every element): hulls of consecutive plate placements
     on the splined poses, the servo period subdivided until the chord error is within ``tol`` [mm]; and that
@@ -614,7 +592,7 @@ def recorded_hulls(c: FaceCoupling, p: FacePassRecord, tol: float = SWEEP_TOLERA
         split = 1
         while True:
             t = np.linspace(p.t[0], p.t[-1], split * (len(p.t) - 1) + 1)
-            lo, hi = _steps(t)
+            lo, hi = hull_steps(t)
             c0, c1 = recorded_corners(c, *path.at(lo)), recorded_corners(c, *path.at(hi))
             err = 0.0
             for f in (0.25, 0.5, 0.75):
@@ -638,10 +616,7 @@ def cut_recorded(record: FaceContourRecord, tol: float = SWEEP_TOLERANCE) -> Fac
         h, err = recorded_hulls(c, p, tol)
         pieces += h
         worst = max(worst, err)
-    solid = mf.Manifold.batch_boolean([face_blank(c, tol), *pieces], mf.OpType.Subtract)
-    if solid.status() != mf.Error.NoError or solid.is_empty():
-        raise RuntimeError(f"the face cut of the recorded motion failed: {solid.status()}")
-    solid.num_tri()
+    solid = subtract_pieces(c, pieces, tol)
     return FaceCut(solid, record.slots, len(pieces), worst, tol, time.perf_counter() - t0)
 
 
@@ -664,8 +639,8 @@ def recorded_bottom(record: FaceContourRecord, radii: np.ndarray, slot: int = 0)
 
         u = np.stack([p.edge[j][:, 1], -p.edge[j][:, 0]], axis=-1)
         g = np.einsum("ink,nk->in", pt[:, None, :] - p.tip[j][None, :, :2], u)
-        k, ok = _first_root(g)
-        t = _bisect(gap, p.t[k], p.t[k + 1], g[np.arange(len(r)), k])
+        k, ok = first_sign_change(g)
+        t = bisect_roots(gap, p.t[k], p.t[k + 1], g[np.arange(len(r)), k], BISECTION_STEPS)
         tip, edge, _ = path.at(t)
         across = np.abs(np.einsum("ij,ij->i", pt - tip[:, :2], edge[:, :2]))
         z = np.where(ok & (across <= 0.5 * c.edge_width), tip[:, 2], np.nan)
@@ -694,12 +669,12 @@ def recorded_sides(record: FaceContourRecord, radii: np.ndarray, height: float, 
 
             pts, valid = side(p.t)
             g = np.where(valid, np.linalg.norm(pts, axis=-1), np.nan)[None, :] - r[:, None]
-            k, ok = _first_root(np.nan_to_num(g, nan=-1.0))
+            k, ok = first_sign_change(np.nan_to_num(g, nan=-1.0))
 
             def gap(t: np.ndarray, side=side) -> np.ndarray:
                 return np.linalg.norm(side(t)[0], axis=-1) - r
 
-            t = _bisect(gap, p.t[k], p.t[k + 1], g[np.arange(len(r)), k])
+            t = bisect_roots(gap, p.t[k], p.t[k + 1], g[np.arange(len(r)), k], BISECTION_STEPS)
             q, reach = side(t)
             rel = np.angle(np.exp(1j * (np.arctan2(q[:, 1], q[:, 0]) - turn)))  # about the slot's centre line
             ang = np.where(ok & reach, turn + rel, np.nan)

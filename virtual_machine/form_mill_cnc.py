@@ -31,7 +31,7 @@ import numpy as np
 
 from machine_models.form_mill import FormMillLayout, FormMillParams, build_form_mill_spec, stage_omega_h
 from machine_models.parameters import ARCSEC
-from virtual_machine.physics import SimulationDivergedError, divergence_message
+from virtual_machine.physics import SimulationDivergedError, divergence_message, servo_substeps
 
 AXES = ("A", "X", "Y", "Z", "S")  # the CNC's axes; A rad, X Y Z m, S rad
 MOTORS = ("MA", "MX", "MY", "MZ", "MS")
@@ -361,11 +361,7 @@ def simulate_form_milling(
             raise ValueError(f"MillPass z_start = {p.z_start}, z_end = {p.z_end}: must be finite and differ")
     model = build_form_mill_spec(layout, params).compile()
     h = model.opt.timestep
-    substeps = round(1 / (tuning.servo_rate * h))
-    if substeps < 1 or abs(substeps * h * tuning.servo_rate - 1) > 1e-9:
-        raise ValueError(
-            f"the servo period 1/{tuning.servo_rate:g} s must be a whole multiple of machine.timestep ({h:g} s)"
-        )
+    substeps = servo_substeps(h, tuning.servo_rate)
     dt = substeps * h
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)

@@ -17,6 +17,16 @@ class SimulationDivergedError(RuntimeError):
     """The integration blew up; the message names the stage most likely responsible and how to fix it."""
 
 
+def servo_substeps(timestep: float, servo_rate: float) -> int:
+    """Physics steps per servo tick; ValueError unless the servo period is a whole multiple of the time step."""
+    substeps = round(1 / (servo_rate * timestep))
+    if substeps < 1 or abs(substeps * timestep * servo_rate - 1) > 1e-9:
+        raise ValueError(
+            f"the servo period 1/{servo_rate:g} s must be a whole multiple of machine.timestep ({timestep:g} s)"
+        )
+    return substeps
+
+
 def divergence_message(machine: str, omega_h: dict[str, float], timestep: float, t: float) -> str:
     """Why ``machine`` diverged at ``t``: the compliant stage whose local mode is fastest for the time step
     (``omega_h``: omega * h per stage, as the machines' ``stage_omega_h`` give it) and what to change."""

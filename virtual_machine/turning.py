@@ -23,8 +23,10 @@ from typing import Any
 import numpy as np
 
 from cutting.vibration_turning import SampledTurning, TurningSetup, cut_workpiece, turned_surface_summary
+from machine_models.parameters import override
+from machine_models.thread_lathe import ThreadLatheParams
 from metrology.charts import finite
-from virtual_machine.job import Job
+from virtual_machine.job import Job, flatten_model
 
 #: settling after the spindle's run-up before the measured revolutions start [s]
 SETTLE = 0.2
@@ -78,9 +80,9 @@ def simulate_turning(job: Job, progress: Callable[[float], None] | None = None):
     from virtual_machine.simulate_thread import simulate_thread
 
     n = job.process["revolutions"]
-    lathe_runup = 0.3  # ThreadLatheParams.runup_time's default; the record says the one used
-    duration = lathe_runup + SETTLE + (n + 1) / spindle_speed(job)
-    rec = simulate_thread(job, duration=duration, vibration=job.vibration)
+    params = override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
+    duration = params.runup_time + SETTLE + (n + 1) / spindle_speed(job)
+    rec = simulate_thread(job, params, duration=duration, vibration=job.vibration)
     if progress is not None:
         progress(1.0)
     theta = rec.b1 - rec.b1[0]
