@@ -138,10 +138,6 @@ class FormMillParams:
                 "s_motor_torque",
             ),
         )
-        if self.nut_stiffness is not None and not self.nut_stiffness > 0:
-            out.append(f"nut_stiffness = {self.nut_stiffness}: must be > 0 (or None for a rigid nut)")
-        if not 0 <= self.counterbalance <= 1:
-            out.append(f"counterbalance = {self.counterbalance}: must be between 0 and 1")
         return out
 
     def stiff(self) -> FormMillParams:

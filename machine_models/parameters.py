@@ -129,8 +129,6 @@ class SkivingMachineParams:
         out = common_problems(self_, ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"))
         if not (math.isfinite(error) and abs(error) < 0.05):
             out.append(f"lead_screw_pitch_error = {error}: must be a relative error within +-0.05 (e.g. 8e-5)")
-        if not 0 <= self.counterbalance <= 1:
-            out.append(f"counterbalance = {self.counterbalance}: must be between 0 and 1")
         return out
 
     def stiff(self) -> SkivingMachineParams:
@@ -156,6 +154,11 @@ def common_problems(params, positive: tuple[str, ...]) -> list[str]:
             out.append(f"{name} = {getattr(params, name)}: must be > 0 (a body needs mass, a motor torque)")
     if params.nut_stiffness is None and params.nut_backlash > 0:
         out.append(f"nut_backlash = {params.nut_backlash}: a nut with backlash needs nut_stiffness")
+    if params.nut_stiffness is not None and not params.nut_stiffness > 0:
+        out.append(f"nut_stiffness = {params.nut_stiffness}: must be > 0 (or omitted for a rigid nut)")
+    balance = getattr(params, "counterbalance", None)  # the machines whose vertical slide has one
+    if balance is not None and not 0 <= balance <= 1:
+        out.append(f"counterbalance = {balance}: must be between 0 and 1")
     if not 0 < params.timestep <= 1e-3:
         out.append(f"timestep = {params.timestep}: must be in (0, 1e-3] s")
     if params.integrator not in ("implicitfast", "RK4", "Euler", "implicit"):
