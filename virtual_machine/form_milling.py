@@ -194,12 +194,15 @@ def cut_form_job(job: Job, out: Path, stage: Stage | None = None) -> dict[str, A
 
 
 # ---- the simulated machine ----------------------------------------------------------------------------------
-def machine_layout(job: Job):
+def machine_layout(job: Job, plan: CopyingPlan):
+    """The machine for the job's gear and the planned mill (its radius and width: the mill's mass on the spindle)."""
     from machine_models.form_mill import FormMillLayout
     from machine_models.parts import MM
 
     g = job.gear
-    return FormMillLayout.for_gear(g.tip_radius * MM, g.face_width * MM, g.teeth, job.mill["diameter"] / 2 * MM, 0.02)
+    return FormMillLayout.for_gear(
+        g.tip_radius * MM, g.face_width * MM, g.teeth, plan.mill.radius * MM, plan.mill.width * MM
+    )
 
 
 def machine_params(job: Job):
@@ -281,7 +284,7 @@ def run_form_job(
     stage("path of the profiled mill (seed 003: 15 steps, accuracy check on the ideal machine)")
     plan = plan_job(job)
     durations["plan"] = time.perf_counter() - t0
-    layout, params = machine_layout(job), machine_params(job)
+    layout, params = machine_layout(job, plan), machine_params(job)
     p = job.process
     runs = []
     record = poses = None
