@@ -60,6 +60,10 @@ class SkivingMachineParams:
     #: M2 -> table: 1:2 precision spur stage, 1e6 N m/rad (table bearing + stage, referred to the table),
     #: 20 arcsec backlash (a precision stage, DIN 3967 "reduced" class)
     work_drive: DriveStage = field(default_factory=lambda: DriveStage(0.5, 1.0e6, 20 * ARCSEC, 60.0))
+    #: rad/s^2: the CNC's limit on the table's acceleration in the run-up (virtual_machine/program.py): M2 holds
+    #: 740 and saturates at 1000 on the default job, so the ramp lengthens for fast jobs instead of losing
+    #: synchronism; a larger table accelerates slower (machine_models/sizes.py)
+    work_acceleration: float = 600.0
 
     # ---- tool spindle (B1): cutter and arbor, belt from servo motor M1 ----------------------------------
     tool_inertia: float = 0.012  # kg m^2: spindle shaft and arbor; the cutter is added from its geometry
@@ -129,6 +133,8 @@ class SkivingMachineParams:
         out = common_problems(self_, ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"))
         if not (math.isfinite(error) and abs(error) < 0.05):
             out.append(f"lead_screw_pitch_error = {error}: must be a relative error within +-0.05 (e.g. 8e-5)")
+        if not self.work_acceleration > 0:
+            out.append(f"work_acceleration = {self.work_acceleration}: must be > 0 rad/s^2 (the table's run-up)")
         return out
 
     def stiff(self) -> SkivingMachineParams:

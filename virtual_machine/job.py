@@ -19,6 +19,7 @@ from cutting.errors import InputError, Problem
 from cutting.gear import Gear, check_gear
 from cutting.modification import FlankDesign, Modification, design_problems
 from cutting.skiving import SkivingSetup, check_setup
+from machine_models.sizes import SIZE_NAMES
 
 REQUIRED = object()
 STRUCTURES = ("mechanical", "hydraulic-differential", "hydraulic-shaft", "mechatronic")
@@ -233,6 +234,13 @@ FACE_PROCESS_KEYS: dict[str, Key] = {
 
 MACHINE_KEYS: dict[str, Key] = {
     "structure": Key(str, "mechatronic", "", "kinematic structure (seed 000 figs 1-4)", _one_of(*STRUCTURES)),
+    "size": Key(
+        str,
+        None,
+        "",
+        "machine size (machine_models/sizes.py); default: the smallest that holds the gear's diameter and module",
+        _one_of(*SIZE_NAMES),
+    ),
     "synchronization": Key(
         str, "equal-coordinates", "", "electronic synchronisation scheme (seed 001)", _one_of(*SYNCHRONIZATIONS)
     ),
@@ -278,8 +286,8 @@ MACHINE_KEYS: dict[str, Key] = {
         dict,
         None,
         "SI",
-        "physical parameters of the MuJoCo machine overriding the defaults of machine_models/parameters.py "
-        "(README table), e.g. [machine.model.work_drive] backlash = 1e-4",
+        "physical parameters of the MuJoCo machine overriding those of its size (machine_models/sizes.py, "
+        "parameters.py; README table), e.g. [machine.model.work_drive] backlash = 1e-4",
     ),
 }
 
@@ -374,6 +382,20 @@ def model_problems(model: dict[str, Any] | None, kind: str) -> list[Problem]:
     params = override(base, good)
     return out + [
         Problem("machine.model", good, p, "see the machine parameter table in the README") for p in params.problems()
+    ]
+
+
+def _lathe_has_one_size(machine: dict[str, Any]) -> list[Problem]:
+    """machine.size chooses among the skiving machine's sizes; the lathe of seed 001 has one."""
+    if machine.get("size") is None:
+        return []
+    return [
+        Problem(
+            "machine.size",
+            machine["size"],
+            "the lathe of seed 001 (thread and turning jobs) comes in one size",
+            "remove machine.size (its parameters are set in [machine.model])",
+        )
     ]
 
 
@@ -565,6 +587,7 @@ def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
     machine = parsed["machine"]
     problems += model_problems(machine.get("model"), "thread" if is_thread else "gear")
     if is_thread:
+        problems += _lathe_has_one_size(machine)
         if problems:
             raise InputError(problems, source)
         return Job(source, "thread", machine, parsed["process"], thread=parsed["thread"])
@@ -696,7 +719,7 @@ def _parse_turning_job(data: dict[str, Any], source: str) -> Job:
             )
     parsed = {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in SECTIONS_TURNING.items()}
     machine = parsed["machine"]
-    problems += model_problems(machine.get("model"), "turning")
+    problems += model_problems(machine.get("model"), "turning") + _lathe_has_one_size(machine)
     vib_values = (
         parse_section("vibration", data["vibration"], VIBRATION_KEYS, problems) if "vibration" in data else None
     )

@@ -20,8 +20,8 @@ from virtual_machine.structures.mechatronic import CncState
 class ProgramSettings:
     runup: float = 0.4  # s: shortest reference generator ramp 0 -> f_ref (smooth step), axes keep their ratios
     # rad/s^2: the work spindle's largest acceleration in the run-up (the smooth step peaks at 1.5x its mean); the
-    # default machine's work drive holds 740 and saturates at 1000 (its motor's peak torque), so the ramp
-    # lengthens for fast jobs instead of losing synchronism
+    # small machine's work drive holds 740 and saturates at 1000 (its motor's peak torque), so the ramp
+    # lengthens for fast jobs instead of losing synchronism; MachineRun takes the machine's own (work_acceleration)
     runup_acceleration: float = 600.0
     following_error_limit: float = 1000.0  # um of arc on d: the CNC stops the job beyond this sync error
     settle: float = 0.1  # s: dwell at speed before the first pass

@@ -19,6 +19,7 @@ import numpy as np
 from cutting.errors import InputError, Problem
 from cutting.path_correction import PathCorrection
 from machine_models.parameters import SkivingMachineParams, override
+from machine_models.sizes import size_for, size_params
 from machine_models.skiving_machine import MM, build_spec
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
 from virtual_machine.chains import chain_ratios
@@ -103,9 +104,15 @@ class MotionRecord:
         return out
 
 
+def machine_size(job: Job) -> str:
+    """The name of the job's machine size: ``machine.size``, else the smallest size whose workpiece diameter and
+    module hold the gear (machine_models/sizes.py)."""
+    return job.machine.get("size") or size_for(job.gear).name
+
+
 def machine_params(job: Job) -> SkivingMachineParams:
-    """The default machine with the job's [machine.model] overrides."""
-    return override(SkivingMachineParams(), flatten_model(job.machine.get("model")))
+    """The job's machine: its size's parameters with the job's [machine.model] overrides on top."""
+    return override(size_params(machine_size(job)), flatten_model(job.machine.get("model")))
 
 
 def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, adaptive: bool | None = None):
@@ -225,6 +232,11 @@ class MachineRun:
     """The simulation loop as a stepper: :meth:`advance` runs the machine up to a time, so another stage (the
     cutting co-simulation) can act between calls; :meth:`record` assembles the :class:`MotionRecord`.
 
+    Without ``params`` the machine is the job's own (:func:`machine_params`: its size with the [machine.model]
+    overrides), and a job whose estimated cutting torque its motors cannot hold is refused before anything runs
+    (virtual_machine/cutting_load.py: InputError naming the motor); given ``params`` are taken as they are (tests,
+    benchmarks). Without ``settings`` the run-up follows the machine's ``work_acceleration``.
+
     ``load``, if set, gives the cutting loads of a servo tick, ``load(t, dt)``: (force [N] on the workpiece,
     point [mm], moment [N m]) in the blank frame, one per engaged tooth, each the mean over [t, t + dt]; each is
     applied to the blank and (opposite) to the cutter for the tick.
@@ -241,7 +253,12 @@ class MachineRun:
         correction: PathCorrection | None = None,
     ):
         self.job = job
-        self.params = params or machine_params(job)
+        if params is None:  # the job's own machine: refused before the run if its motors cannot hold the cut
+            from virtual_machine.cutting_load import check_machine_holds
+
+            params = machine_params(job)
+            check_machine_holds(job, params)
+        self.params = params
         self.setup = setup = job.skiving
         structure = job.machine["structure"]
         chains = chain_ratios(job) if structure != "mechatronic" else None
@@ -252,7 +269,7 @@ class MachineRun:
         self.dt = phys.model.opt.timestep * servo_substeps
         p = job.machine["command_pulses_per_rev"]
         ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
-        settings = settings or ProgramSettings()
+        settings = settings or ProgramSettings(runup_acceleration=self.params.work_acceleration)
         check_correction(job, correction)
         self.work_pulses_per_rad = p / (2 * math.pi)  # B4 command pulses of the work axis per radian
         self._ticks = program(setup, self.dt, ppm, machine, settings, correction, self.work_pulses_per_rad)

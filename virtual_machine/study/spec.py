@@ -30,7 +30,6 @@ from virtual_machine.job import (
     OPTIONAL_SECTIONS,
     REQUIRED,
     SECTIONS_GEAR,
-    flatten_model,
     parse_job,
     read_toml,
 )
@@ -123,12 +122,16 @@ def base_value(data: dict[str, Any], key: str) -> Any:
     except KeyError:
         pass
     section, _, rest = key.partition(".")
+    if key == "machine.size":  # the base job's own size, or the one its gear gets by default
+        from virtual_machine.simulate import machine_size
+
+        return machine_size(parse_job(data))
     if key.startswith(MODEL_PREFIX):
         from machine_models.parameters import SkivingMachineParams, override
+        from virtual_machine.simulate import machine_params
 
         name = key[len(MODEL_PREFIX) :]
-        model = flatten_model(data.get("machine", {}).get("model"))
-        params = override(SkivingMachineParams(), model)  # the base job's model is valid (parsed before)
+        params = machine_params(parse_job(data))  # the base job's size and model (the job was parsed before)
         try:
             override(params, {name: None})  # names only: says which part of the name is wrong
         except KeyError as exc:
