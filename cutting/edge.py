@@ -20,6 +20,7 @@ Two edges (domain.md section 1):
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -209,7 +210,10 @@ def _clear_tip_corners(
     return np.where(bad, safe + lo * (theta - safe), theta)
 
 
+@functools.lru_cache(maxsize=8)
 def make_edge(setup: SkivingSetup, kind: str, points: int = 120) -> CuttingEdge:
+    """The job's cutting edge (kept: the conjugate edge's envelope takes seconds, and a run needs it in several
+    stages; the edge is immutable)."""
     if kind not in EDGE_KINDS:
         raise ValueError(f"cutter.edge = {kind!r}: unknown edge; use 'involute' or 'conjugate'")
     return involute_edge(setup, points) if kind == "involute" else conjugate_edge(setup, points)

@@ -18,7 +18,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from cutting.threads import run_chunks
 
 NOT, UNSURE, REMOVED = 0, 1, 2
 
@@ -237,9 +239,26 @@ def _segment_enters_box(p, u, i, reach, c, axes, half) -> bool:
     return True
 
 
-@njit(cache=True, parallel=True, error_model="numpy", fastmath=FAST)
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=FAST)
 def settle_lines(
-    p, u, ds, stride, clusters, grid, balls, tab, delta, air_cov, solid_blank, items, counts, covered, flag, work
+    lo_c,
+    hi_c,
+    p,
+    u,
+    ds,
+    stride,
+    clusters,
+    grid,
+    balls,
+    tab,
+    delta,
+    air_cov,
+    solid_blank,
+    items,
+    counts,
+    covered,
+    flag,
+    work,
 ):
     """Per line (segments p + d u, d on the samples ``ds``): ``covered[i, c]``: segment c is removed for sure (by
     air or a passage); ``items[i, :counts[i]]``: (passage, lo_j, hi_j, segment) to solve exactly; ``flag[i]``: 0,
@@ -247,8 +266,9 @@ def settle_lines(
     ``work[i]``: the line's (passage, sample range) pairs, the near ones, and the fine estimates it took.
 
     ``clusters`` = (pointer, line index): nearby lines, handled passage by passage so that a passage's table is
-    read once per cluster; ``grid`` = (lo, cell, dims, cell pointer, ball index) of the balls; ``balls`` =
-    (centre, radius, passage g, subwindow, samples per subwindow, and each one's box: centre, axes, half extents);
+    read once per cluster; clusters [lo_c, hi_c) are settled here (cutting.threads runs them in parallel);
+    ``grid`` = (lo, cell, dims, cell pointer, ball index) of the balls; ``balls`` = (centre, radius, passage g,
+    subwindow, samples per subwindow, and each one's box: centre, axes, half extents);
     ``tab`` as :func:`_estimate` takes it."""
     cl_ptr, cl_line = clusters
     ball_centre, ball_radius, ball_g, ball_sub, per, box_centre, box_axes, box_half = balls
@@ -258,7 +278,7 @@ def settle_lines(
     near_cap = 4 * cap
     lost_step = 4 * (ds[-1] - ds[0]) / nseg * stride
     nco = nseg // stride
-    for c in prange(cl_ptr.shape[0] - 1):
+    for c in range(lo_c, hi_c):
         lines = cl_line[cl_ptr[c] : cl_ptr[c + 1]]
         nl = len(lines)
         cand = _cluster_balls(p, lines, reach, grid, (ball_centre, ball_radius, box_centre, box_axes, box_half))
@@ -361,20 +381,15 @@ def settle_lines(
                 covered[i, f] = False
 
 
-@njit(cache=True, parallel=True)
-def sweep_bounds(rot, origin, points, subwindows, margin):
+@njit(cache=True, nogil=True)
+def _sweep_bounds(lo_g, hi_g, rot, origin, points, subwindows, margin, centre, radius, box_centre, box_axes, box_half):
     """Per passage and subwindow of its pose table (rot (m, P, 3, 3), origin (m, P, 3)), what the outline
     ``points`` (k, 3, tooth frame) sweep: a ball (centre, radius) around their box in the work frame, and a box in
     the tooth frame of the subwindow's middle sample (centre, axes as rows, half extents); both grown by
-    ``margin`` [mm] (the bulge between samples and the outline's simplification)."""
-    m, npose = rot.shape[0], rot.shape[1]
+    ``margin`` [mm] (the bulge between samples and the outline's simplification); passages [lo_g, hi_g)."""
+    npose = rot.shape[1]
     per = (npose - 1) // subwindows
-    centre = np.empty((m, subwindows, 3))
-    radius = np.empty((m, subwindows))
-    box_centre = np.empty((m, subwindows, 3))
-    box_axes = np.empty((m, subwindows, 3, 3))
-    box_half = np.empty((m, subwindows, 3))
-    for g in prange(m):
+    for g in range(lo_g, hi_g):
         w = np.empty(3)
         for s in range(subwindows):
             mid = s * per + per // 2
@@ -401,4 +416,17 @@ def sweep_bounds(rot, origin, points, subwindows, margin):
             for a in range(3):
                 box_centre[g, s, a] = axes[0, a] * mid_local[0] + axes[1, a] * mid_local[1] + axes[2, a] * mid_local[2]
             box_half[g, s] = (bhi - blo) / 2 + margin
-    return centre, radius, box_centre, box_axes, box_half
+
+
+def sweep_bounds(rot, origin, points, subwindows, margin):
+    """:func:`_sweep_bounds` over every passage, on every core (cutting.threads)."""
+    m = rot.shape[0]
+    out = (
+        np.empty((m, subwindows, 3)),
+        np.empty((m, subwindows)),
+        np.empty((m, subwindows, 3)),
+        np.empty((m, subwindows, 3, 3)),
+        np.empty((m, subwindows, 3)),
+    )
+    run_chunks(_sweep_bounds, m, rot, origin, points, subwindows, margin, *out, smallest=16)
+    return out

@@ -19,10 +19,11 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from cutting.sampled_motion import SampledMotion, _log
 from cutting.skiving import SkivingSetup
+from cutting.threads import run_chunks
 from cutting.trajectory import PassMotion
 
 #: the kinds of compiled pose
@@ -34,7 +35,18 @@ _PER_INTERVAL = 15
 
 def compiled_pose(motion) -> tuple[int, np.ndarray] | None:
     """(kind, float parameters) that the kernels evaluate the pose of ``motion`` from, exactly as its ``pose``
-    does; None for a motion they do not know (or a subclass that changes its pose)."""
+    does; None for a motion they do not know (or a subclass that changes its pose). Kept on the motion (motions are
+    not changed once made)."""
+    cached = motion.__dict__.get("_compiled_pose", False) if hasattr(motion, "__dict__") else False
+    if cached is not False:
+        return cached
+    out = _compiled_pose(motion)
+    if hasattr(motion, "__dict__"):
+        object.__setattr__(motion, "_compiled_pose", out)
+    return out
+
+
+def _compiled_pose(motion) -> tuple[int, np.ndarray] | None:
     if isinstance(motion, PassMotion) and type(motion).pose is PassMotion.pose:
         st = motion.setup
         if type(st).cutter_pose is not SkivingSetup.cutter_pose:
@@ -80,7 +92,7 @@ def pose_table(motion, t: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     t = np.ascontiguousarray(np.atleast_1d(t), dtype=float)
     rot, org = np.empty((len(t), 9)), np.empty((len(t), 3))
-    _poses(q[0], q[1], t, rot, org)
+    run_chunks(_poses, len(t), q[0], q[1], t, rot, org, smallest=4096)
     return rot.reshape(-1, 3, 3), org
 
 
@@ -119,7 +131,7 @@ class ItemSolver:
         out = np.empty(len(line))
         p, u, ds = (np.ascontiguousarray(a, dtype=float) for a in (p, u, ds))
         ints = [np.ascontiguousarray(a, dtype=np.int64) for a in (line, g, sample, lo_j, hi_j)]
-        exact_margins(p, u, ds, *ints, self.motion, self.tables, self.outline, out)
+        run_chunks(exact_margins, len(line), p, u, ds, *ints, self.motion, self.tables, self.outline, out, smallest=64)
         self.points += len(line)
         return out
 
@@ -128,7 +140,22 @@ class ItemSolver:
         out = np.empty(len(line))
         p, u, ds, m0, m1 = (np.ascontiguousarray(a, dtype=float) for a in (p, u, ds, m0, m1))
         ints = [np.ascontiguousarray(a, dtype=np.int64) for a in (line, g, lo_j, hi_j, f)]
-        exact_roots(p, u, ds, *ints, m0, m1, tol, self.motion, self.tables, self.outline, out)
+        run_chunks(
+            exact_roots,
+            len(line),
+            p,
+            u,
+            ds,
+            *ints,
+            m0,
+            m1,
+            tol,
+            self.motion,
+            self.tables,
+            self.outline,
+            out,
+            smallest=16,
+        )
         self.roots_found += len(line)
         return out
 
@@ -282,7 +309,7 @@ def _interp(x, xp, fp):
 
 
 @njit(cache=True, error_model="numpy")
-def _outline_margin(outline, x, y):
+def outline_margin(outline, x, y):
     """Outline.margin: min(above the lower chain, below the upper, x - x0, x1 - x)."""
     lx, ly, ux, uy, x0, x1 = outline
     below = y - _interp(x, lx, ly)
@@ -291,7 +318,7 @@ def _outline_margin(outline, x, y):
 
 
 @njit(cache=True, error_model="numpy")
-def _margin(motion, tables, outline, g, lo, hi, q0, q1, q2):
+def margin_at(motion, tables, outline, g, lo, hi, q0, q1, q2):
     """SweptVolumes._margin_exact at one point: the crossing bracketed over the table samples [lo, hi]
     (_events), the instant solved by the Illinois method to 1e-10 mm (_solve_time), the outline's margin there
     (at least -1); -1 where the plane does not cross the point."""
@@ -327,48 +354,58 @@ def _margin(motion, tables, outline, g, lo, hi, q0, q1, q2):
     w0, w1, w2 = q0 - org[0], q1 - org[1], q2 - org[2]
     x = rot[0] * w0 + rot[3] * w1 + rot[6] * w2
     y = rot[1] * w0 + rot[4] * w1 + rot[7] * w2
-    m = _outline_margin(outline, x, y)
+    m = outline_margin(outline, x, y)
     return -1.0 if m < -1.0 else m
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def exact_margins(p, u, ds, line, g, sample, lo_j, hi_j, motion, tables, outline, out):
-    """``out[k]``: the margin of passage g[k] (table samples [lo_j, hi_j]) at p[line] + ds[sample] u[line]."""
-    for k in prange(len(line)):
+@njit(cache=True, nogil=True, error_model="numpy")
+def exact_margins(lo_k, hi_k, p, u, ds, line, g, sample, lo_j, hi_j, motion, tables, outline, out):
+    """``out[k]``: the margin of passage g[k] (table samples [lo_j, hi_j]) at p[line] + ds[sample] u[line], for k in
+    [lo_k, hi_k)."""
+    for k in range(lo_k, hi_k):
         i, d = line[k], ds[sample[k]]
         q0, q1, q2 = p[i, 0] + d * u[i, 0], p[i, 1] + d * u[i, 1], p[i, 2] + d * u[i, 2]
-        out[k] = _margin(motion, tables, outline, g[k], lo_j[k], hi_j[k], q0, q1, q2)
+        out[k] = margin_at(motion, tables, outline, g[k], lo_j[k], hi_j[k], q0, q1, q2)
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def exact_roots(p, u, ds, line, g, lo_j, hi_j, f, m0, m1, tol, motion, tables, outline, out):
+@njit(cache=True, error_model="numpy")
+def line_root(motion, tables, outline, g, lo, hi, p, u, i, d_lo, d_hi, m_lo, m_hi, tol):
+    """The d in [d_lo, d_hi] where passage g's margin (table samples [lo, hi]) along the line p[i] + d u[i] changes
+    sign, from the margins m_lo, m_hi at the ends: the Illinois method to ``tol`` [mm] (SweptVolumes._root). The
+    measurement's roots and the dexel workpiece's cuts are both found here."""
+    d = (d_lo + d_hi) / 2
+    for _ in range(80):
+        denom = m_hi - m_lo
+        dk = d_hi - m_hi * (d_hi - d_lo) / denom if denom != 0 else (d_lo + d_hi) / 2
+        dk = min(max(dk, min(d_lo, d_hi)), max(d_lo, d_hi))
+        q0, q1, q2 = p[i, 0] + dk * u[i, 0], p[i, 1] + dk * u[i, 1], p[i, 2] + dk * u[i, 2]
+        mk = margin_at(motion, tables, outline, g, lo, hi, q0, q1, q2)
+        d = dk
+        if (mk > 0) == (m_hi > 0):  # Illinois: halve the stale end
+            m_lo = m_lo / 2
+        else:
+            m_lo, d_lo = m_hi, d_hi
+        d_hi, m_hi = dk, mk
+        if abs(d_hi - d_lo) <= tol or abs(mk) <= 1e-12:
+            break
+    return d
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def exact_roots(lo_k, hi_k, p, u, ds, line, g, lo_j, hi_j, f, m0, m1, tol, motion, tables, outline, out):
     """``out[k]``: the d in [ds[f], ds[f + 1]] where passage g[k]'s margin along the line changes sign, from the
-    margins m0, m1 at the ends: the Illinois method to ``tol`` [mm] as SweptVolumes._root."""
-    for k in prange(len(line)):
-        i = line[k]
-        d_lo, d_hi, m_lo, m_hi = ds[f[k]], ds[f[k] + 1], m0[k], m1[k]
-        d = (d_lo + d_hi) / 2
-        for _ in range(80):
-            denom = m_hi - m_lo
-            dk = d_hi - m_hi * (d_hi - d_lo) / denom if denom != 0 else (d_lo + d_hi) / 2
-            dk = min(max(dk, min(d_lo, d_hi)), max(d_lo, d_hi))
-            q0, q1, q2 = p[i, 0] + dk * u[i, 0], p[i, 1] + dk * u[i, 1], p[i, 2] + dk * u[i, 2]
-            mk = _margin(motion, tables, outline, g[k], lo_j[k], hi_j[k], q0, q1, q2)
-            d = dk
-            if (mk > 0) == (m_hi > 0):  # Illinois: halve the stale end
-                m_lo = m_lo / 2
-            else:
-                m_lo, d_lo = m_hi, d_hi
-            d_hi, m_hi = dk, mk
-            if abs(d_hi - d_lo) <= tol or abs(mk) <= 1e-12:
-                break
-        out[k] = d
+    margins m0, m1 at the ends (:func:`line_root`), for k in [lo_k, hi_k)."""
+    for k in range(lo_k, hi_k):
+        d_lo, d_hi = ds[f[k]], ds[f[k] + 1]
+        out[k] = line_root(
+            motion, tables, outline, g[k], lo_j[k], hi_j[k], p, u, line[k], d_lo, d_hi, m0[k], m1[k], tol
+        )
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def _poses(kind, w, t, rot, org):
-    """The motion's frame at every time t: rows of the rotation (9 per pose) and the origin."""
-    for k in prange(len(t)):
+@njit(cache=True, nogil=True, error_model="numpy")
+def _poses(lo_k, hi_k, kind, w, t, rot, org):
+    """The motion's frame at the times t[lo_k:hi_k]: rows of the rotation (9 per pose) and the origin."""
+    for k in range(lo_k, hi_k):
         if kind == IDEAL:
             r, o = _ideal(w, 0, t[k], True)
         else:

@@ -16,6 +16,7 @@ near the line on that estimate are solved exactly.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -31,6 +32,7 @@ from cutting.exact_solve import ItemSolver, pose_table
 from cutting.gear import Gear
 from cutting.removal import passage_range
 from cutting.sweep import outline_points, simplify_outline
+from cutting.threads import run_chunks
 from cutting.trajectory import PassMotion
 
 #: a line's crossing is solved to this [mm] (and the rake-plane instant to 1e-10 mm of the plane's distance)
@@ -185,15 +187,38 @@ class PassTable:
         rot = (rot.reshape(n, SAMPLES, 3, 3) @ _rot_z(angle)[:, None]).copy()
         origin = origin.reshape(n, SAMPLES, 3)
         # balls and boxes from the outline simplified to 20 um; the margin covers that and the bulge between samples
-        coarse = outline_points(simplify_outline(outline, 0.02)[0])
+        coarse = _coarse_outline(np.ascontiguousarray(outline, dtype=float).tobytes(), len(outline))
         bounds = sweep_bounds(rot, origin, np.ascontiguousarray(coarse, dtype=float), SUBWINDOWS, 0.1)
         m = np.arange(n) if m is None else m
         return cls(motion, m, t, rot, origin, angle, *bounds)
+
+    def rows(self, a: int, b: int) -> PassTable:
+        """The passages a .. b - 1 of this table (same motion)."""
+        sl = slice(a, b)
+        return PassTable(
+            self.motion,
+            self.m[sl],
+            self.t[sl],
+            self.rot[sl],
+            self.origin[sl],
+            self.angle[sl],
+            self.ball_centre[sl],
+            self.ball_radius[sl],
+            self.box_centre[sl],
+            self.box_axes[sl],
+            self.box_half[sl],
+        )
 
     def exact_pose(self, passage: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The tooth frame of the passages at times t, from the motion itself."""
         rot, origin = self.motion.pose(t)
         return rot @ _rot_z(self.angle[passage]), origin
+
+
+@functools.lru_cache(maxsize=16)
+def _coarse_outline(outline: bytes, n: int) -> np.ndarray:
+    """The outline simplified to 20 um, as the balls and boxes bound it (kept: a run asks for it per passage)."""
+    return outline_points(simplify_outline(np.frombuffer(outline).reshape(n, 2), 0.02)[0])
 
 
 class SweptVolumes:
@@ -564,7 +589,10 @@ class SweptVolumes:
         tab = (ct.table, ct.sdf, *map(float, ct.sdf_lo), RASTER_CELL, -RASTER_PAD)
         clusters = _clusters(p)
         out = (items, counts, covered, flag, work)
-        settle_lines(p, u, ds, stride, clusters, grid, balls, tab, ESTIMATE_ERROR, air_cov, solid, *out)
+        n_clusters = len(clusters[0]) - 1
+        run_chunks(
+            settle_lines, n_clusters, p, u, ds, stride, clusters, grid, balls, tab, ESTIMATE_ERROR, air_cov, solid, *out
+        )
         self.work += [n, *work.sum(axis=0), counts.sum(), (flag == 1).sum()]
         return items, counts, covered, flag
 
@@ -684,8 +712,13 @@ def _clusters(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     code = np.zeros(len(p), np.uint64)
     for axis in range(3):
         x = q[:, axis]
-        for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F),
-                            (4, 0x10C30C30C30C30C3), (2, 0x1249249249249249)):  # fmt: skip
+        for shift, mask in (
+            (32, 0x1F00000000FFFF),
+            (16, 0x1F0000FF0000FF),
+            (8, 0x100F00F00F00F00F),
+            (4, 0x10C30C30C30C30C3),
+            (2, 0x1249249249249249),
+        ):
             x = (x | (x << np.uint64(shift))) & np.uint64(mask)
         code |= x << np.uint64(axis)
     order = np.argsort(code, kind="stable")

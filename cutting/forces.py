@@ -53,27 +53,43 @@ class EngagementLoad:
     def mean(self, a: float, b: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The load averaged over [a, b] [s] (a servo tick): the mean force, the force-weighted mean point and the
         mean moment about that point, so that the tick gets the engagement's impulse and angular impulse even when
-        the engagement is shorter than the tick. None if they do not overlap."""
-        if not len(self.t) or b <= self.t[0] or a >= self.t[-1] or b <= a:
+        the engagement is shorter than the tick. None if they do not overlap. (Called every servo tick: the
+        samples inside [a, b] are taken as they are, only its ends interpolated.)"""
+        t = self.t
+        if not len(t) or b <= t[0] or a >= t[-1] or b <= a:
             return None
-        lo, hi = max(a, self.t[0]), min(b, self.t[-1])
-        inner = self.t[(self.t > lo) & (self.t < hi)]
-        ts = np.concatenate([[lo], inner, [hi]])
-        f = np.column_stack([np.interp(ts, self.t, self.force[:, k]) for k in range(3)])
-        p = np.column_stack([np.interp(ts, self.t, self.point[:, k]) for k in range(3)])
-        m = np.column_stack([np.interp(ts, self.t, self.moment[:, k]) for k in range(3)])
+        lo, hi = max(a, t[0]), min(b, t[-1])
+        rows = self._rows
+        i0, i1 = int(np.searchsorted(t, lo, "right")), int(np.searchsorted(t, hi, "left"))
+        ts = np.concatenate([[lo], t[i0:i1], [hi]])
+        y = np.concatenate([self._at(lo)[None], rows[i0:i1], self._at(hi)[None]])
+        f, p, m = y[:, 0:3], y[:, 3:6], y[:, 6:9]
         w = np.diff(ts)
 
-        def integral(y: np.ndarray) -> np.ndarray:  # trapezoid rule over ts
-            return ((y[1:] + y[:-1]) / 2 * w[:, None]).sum(axis=0)
+        def integral(v: np.ndarray) -> np.ndarray:  # trapezoid rule over ts
+            return ((v[1:] + v[:-1]) / 2 * w[:, None]).sum(axis=0)
 
-        mag = np.linalg.norm(f, axis=1)[:, None]
+        mag = np.sqrt((f * f).sum(axis=1))[:, None]
         weight = float(integral(mag)[0])
         if weight <= 0:
             return None
         point = integral(mag * p) / weight
         moment = integral(m + np.cross(p - point, f) * 1e-3)
         return integral(f) / (b - a), point, moment / (b - a)
+
+    @property
+    def _rows(self) -> np.ndarray:
+        rows = self.__dict__.get("_stacked")
+        if rows is None:
+            rows = self.__dict__["_stacked"] = np.concatenate([self.force, self.point, self.moment], axis=1)
+        return rows
+
+    def _at(self, x: float) -> np.ndarray:
+        """The samples interpolated linearly at x (within the samples)."""
+        t = self.t
+        j = min(max(int(np.searchsorted(t, x, "right")) - 1, 0), len(t) - 2)
+        f = (x - t[j]) / (t[j + 1] - t[j]) if t[j + 1] > t[j] else 0.0
+        return self._rows[j] + f * (self._rows[j + 1] - self._rows[j])
 
     def shifted(self, dt: float) -> EngagementLoad:
         """The same load ``dt`` seconds later (the prediction for the next tooth: one cutter pitch on)."""
@@ -106,10 +122,14 @@ def engagement_load(
     inside: Callable[[np.ndarray], np.ndarray],
     rake_deg: float = 0.0,
     samples: int = 41,
+    thickness: float | None = None,
 ) -> EngagementLoad:
     """The load of one engagement: ``pose`` of the cutting tooth over [t0, t1], ``edge`` its points (n, 3) in the
     cutter frame (the cutting edge, an open polyline), ``volume`` [mm^3] the chip the removal took, ``inside``
     the blank's envelope (points -> bool). ``rake_deg``: the cutter's rake angle (0: rake face on the end plane).
+    ``thickness`` [mm]: the chip's mean uncut thickness where the removal measured it (the dexel chip's, normal
+    to the cut surface over its footprint); it sets kc(h), while the force along the edge stays scaled so that the
+    engagement's work is kc(h) V. Without it, h is the volume over the area the engaged edge sweeps.
     """
     times = np.linspace(t0, t1, samples)
     length, mid, vel = engaged_speed(pose, edge, times, inside)
@@ -119,12 +139,13 @@ def engagement_load(
     if volume <= 0 or swept <= 0:
         zero = np.zeros((0, 3))
         return EngagementLoad(np.zeros(0), zero, zero, zero, max(volume, 0.0), 0.0, 0.0)
-    h = volume / swept
-    kc = material.kc(h) * rake_factor(rake_deg)
+    h = volume / swept  # the layer the engaged edge would take if it cut all along
+    h_chip = thickness if thickness is not None and thickness > 0 else h
+    kc = material.kc(h_chip) * rake_factor(rake_deg)
     unit = vel / np.maximum(speed, 1e-12)[..., None]
     per_element = kc * h * length[..., None] * unit  # [N] on the workpiece, along each element's velocity
     force = per_element.sum(axis=1)
     weight = length.sum(axis=1)
     point = (length[..., None] * mid).sum(axis=1) / np.maximum(weight, 1e-12)[:, None]
     moment = np.cross(mid - point[:, None, :], per_element).sum(axis=1) * 1e-3  # N mm -> N m
-    return EngagementLoad(times, force, point, moment, volume, h, kc)
+    return EngagementLoad(times, force, point, moment, volume, h_chip, kc)

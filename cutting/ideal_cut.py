@@ -5,12 +5,14 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import manifold3d as mf
 import numpy as np
 import trimesh
 
+from cutting.dexel_cut import cut_dexel
+from cutting.dexel_lines import DexelSpacing
 from cutting.edge import CuttingEdge, make_edge
 from cutting.engine import cut_passes
 from cutting.holder import check_holder_side
@@ -27,6 +29,11 @@ class CutReport:
     pass_seconds: list[float]
     stock_triangles: int
     pass_triangles: list[int]
+    removal: dict = field(default_factory=lambda: {"kind": "manifold"})  # how the removal went (dexel: its figures)
+
+
+#: the removals: the dexel workpiece (default), or manifold3d booleans passage by passage (the reference)
+REMOVALS = ("dexel", "manifold")
 
 
 def default_workers() -> int:
@@ -43,26 +50,50 @@ def cut_ideal(
     workers: int | None = None,
     slab: float = DEFAULT_SLAB,
     motions: list | None = None,
+    removal: str = "dexel",
+    spacing: DexelSpacing | None = None,
 ) -> CutReport:
     """Cut every pass with the ideal motion, or along ``motions`` (e.g. a simulated machine's sampled passes,
-    cutting.sampled_motion). ``progress(pass_index, done, total)`` reports tooth passages."""
+    cutting.sampled_motion). ``progress(pass_index, done, total)`` reports tooth passages. ``removal``: "dexel"
+    (``spacing``: the lines, default the gear's) or "manifold" (``finishing_tol``/``roughing_tol``: the tubes' sweep
+    errors, ``workers``, ``slab``); the dexel solid is stated to be within ``finishing_tol`` of the exact surface."""
     t_start = time.perf_counter()
     edge = make_edge(setup, edge_kind)
     motions = ideal_passes(setup) if motions is None else motions
     check_holder_side(motions, edge, setup.cutter.face_width, setup.holder_diameter_value)
+    if removal not in REMOVALS:
+        raise ValueError(f"removal {removal!r}: use one of {', '.join(REMOVALS)}")
+    if removal == "dexel":
+        spacing = spacing or DexelSpacing.for_gear(setup.gear, setup.axial_feed)
+        dexel = cut_dexel(setup.gear, edge, motions, spacing, finishing_tol, progress)
+        _check_solid(dexel.result, setup)
+        solid_tris = dexel.result.gear.num_tri()
+        return CutReport(
+            dexel.result,
+            edge,
+            time.perf_counter() - t_start,
+            dexel.pass_seconds,
+            solid_tris,
+            [solid_tris] * len(motions),
+            dexel.summary(),
+        )
     tols = [finishing_tol if m.index == len(setup.passes) - 1 else roughing_tol for m in motions]
     run = cut_passes(setup.gear, edge, motions, tols, workers or default_workers(), slab, progress)
     result = run.result
+    _check_solid(result, setup)
+    return CutReport(
+        result, edge, time.perf_counter() - t_start, run.pass_seconds, run.stock_triangles, run.pass_triangles
+    )
+
+
+def _check_solid(result: CutResult, setup: SkivingSetup) -> None:
     if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
         raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
     if result.gear.genus() != expected_genus(setup.gear):
         raise RuntimeError(
             f"the removal left a solid of genus {result.gear.genus()} (a gear has {expected_genus(setup.gear)}): "
-            "voids or tunnels where the stock's cells meet; report it with the job (the cells' union is at fault)"
+            "voids or tunnels in the solid; report it with the job"
         )
-    return CutReport(
-        result, edge, time.perf_counter() - t_start, run.pass_seconds, run.stock_triangles, run.pass_triangles
-    )
 
 
 def to_trimesh(solid: mf.Manifold) -> trimesh.Trimesh:

@@ -17,6 +17,7 @@ import manifold3d as mf
 import numpy as np
 
 from cutting.edge import CuttingEdge
+from cutting.exact_solve import pose_table
 from cutting.flank import twist_rate
 from cutting.gear import Gear
 from cutting.skiving import rot_z
@@ -28,7 +29,8 @@ from cutting.trajectory import PassMotion
 @dataclass
 class Chip:
     """One tooth engagement: pass, cutter tooth, time at the mesh [s], removed volume [mm^3], and the window
-    [start, end] [s] in which the tooth was in the blank's envelope (times of the pass's motion)."""
+    [start, end] [s] in which the tooth was in the blank's envelope (times of the pass's motion); the dexel removal
+    adds the chip's thickness, contact length and centroid."""
 
     pass_index: int
     cutter_tooth: int
@@ -37,6 +39,12 @@ class Chip:
     sweeps: int
     start: float = 0.0
     end: float = 0.0
+    #: from the dexel removal (cutting.dexel.DexelChip): uncut chip thickness normal to the nominal boundary, largest
+    #: and mean over the chip [mm], the profile length it covers [mm], and its centroid [mm]; None from manifold
+    thickness_max: float | None = None
+    thickness_mean: float | None = None
+    contact_length: float | None = None
+    centroid: tuple[float, float, float] | None = None
 
 
 @dataclass
@@ -317,10 +325,23 @@ def tooth_pose(motion: PassMotion, m: int):
     local = rot_z(2 * math.pi * ((-m) % z0) / z0)
 
     def pose(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        rot, trans = motion.pose(t)
+        rot, trans = pose_table(motion, t) or motion.pose(t)  # compiled where the motion has it: the same values
         return rot @ local, trans
 
     return pose
+
+
+def blank_window(gear: Gear, pose, points: np.ndarray, t0: float, t1: float, probes: int = 65):
+    """The part of a passage's window [t0, t1] [s] in which the tooth's ``points`` (cutter frame, moved by
+    ``pose``) can meet the blank (its envelope: radius and face), one probe wider: (t0, t1, the points at the probes
+    in it), or None when the tooth stays clear of the blank."""
+    probe = np.linspace(t0, t1, probes)
+    w = place(points, *pose(probe))
+    hit = np.nonzero(in_blank_envelope(gear, w).any(axis=1))[0]
+    if hit.size == 0:
+        return None
+    lo, hi = max(hit[0] - 1, 0), min(hit[-1] + 1, len(probe) - 1)
+    return float(probe[lo]), float(probe[hi]), w[lo : hi + 1]
 
 
 def in_blank_envelope(gear: Gear, w: np.ndarray, margin: float = 0.0) -> np.ndarray:
@@ -365,9 +386,6 @@ class PassCutter:
         """Points within 0.1 mm of the blank (a facet wholly farther away cannot reach it)."""
         return in_blank_envelope(self.gear, w, 0.1)
 
-    def in_blank(self, w: np.ndarray) -> np.ndarray:
-        return in_blank_envelope(self.gear, w)
-
     def window(self, m: int, motion) -> tuple[float, float]:
         """Times [s] of the passage's engagement window: the cutter within the half angle of pitch ``m``."""
         t0 = max(motion.time_at_angle(m * self.pitch - self.half), 0.0)
@@ -384,19 +402,14 @@ class PassCutter:
         t0, t1 = self.window(m, motion)
         if t1 <= t0:
             return None
-        # keep the part of the window in which the tooth can meet the blank (radius and face), one sample wider
-        probe = np.linspace(t0, t1, 65)
-        w_probe = place(pts, *pose(probe))
-        hit = np.nonzero(self.in_blank(w_probe).any(axis=1))[0]
-        if hit.size == 0:
+        found = blank_window(self.gear, pose, pts, t0, t1)
+        if found is None:
             return None
-        lo, hi = max(hit[0] - 1, 0), min(hit[-1] + 1, len(probe) - 1)
-        t0, t1 = probe[lo], probe[hi]
+        t0, t1, w_probe = found
         chip = Chip(self.index, j, float(tm), 0.0, 0, float(t0), float(t1))
         # a worker owning a share of the spaces samples only the passages that can reach its cells; every point
         # moves by at most ``pad`` between probes (1.5 x the longest chord, for the arc)
-        w_probe = w_probe[lo : hi + 1]
-        pad = 1.5 * float(np.linalg.norm(np.diff(w_probe, axis=0), axis=2).max()) if hi > lo else 0.0
+        pad = 1.5 * float(np.linalg.norm(np.diff(w_probe, axis=0), axis=2).max()) if len(w_probe) > 1 else 0.0
         if not stock.may_reach_owned(w_probe, in_blank_envelope(self.gear, w_probe, 0.1 + pad), pad):
             result.chips.append(chip)
             return chip

@@ -31,7 +31,7 @@ UM = 1e3
 def small_cut():
     """z 16, mn 1, b 2, cutter z0 11, one full-depth pass at 0.2 mm/rev, conjugate edge, cut at a 1.5 um mesh."""
     st = SkivingSetup(Gear(16, 1.0, 20 * DEG, 0.0, 2.0), Gear(11, 1.0, 20 * DEG, 20 * DEG, 5.0), 2000, 0.2, (2.25,))
-    report = cut_ideal(st, "conjugate", 1.5e-3, 1.5e-3, workers=1)
+    report = cut_ideal(st, "conjugate", 1.5e-3, 1.5e-3, workers=1, removal="manifold")
     mesh = check_mesh(to_trimesh(report.result.gear))
     doc, mesh_doc = measure_cut(
         st.gear, report.edge, ideal_passes(st), mesh, MeasureOptions(), report.result.sweep_error

@@ -22,6 +22,13 @@ MESH_TOLERANCE_HELP = (
 )
 
 
+REMOVAL_HELP = (
+    "How the cut removes material: 'dexel' (the blank as lines cut exactly passage by passage, the solid made once "
+    "at the end) or 'manifold' (the reference: every passage's swept tube subtracted by manifold3d)."
+)
+REMOVALS = ("dexel", "manifold")
+
+
 class _NullStream:
     """Where progress goes when stdout carries JSON and stderr should stay quiet too."""
 
@@ -134,6 +141,7 @@ def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) 
     help="Cut along a simulated pose trajectory (trajectory.npz of `skive simulate`) instead of the ideal motion.",
 )
 @click.option("--mesh-tolerance", type=click.FloatRange(min=0.0, min_open=True), metavar="UM", help=MESH_TOLERANCE_HELP)
+@click.option("--removal", type=click.Choice(REMOVALS), default="dexel", show_default=True, help=REMOVAL_HELP)
 def cut(
     job: Path | None,
     out: Path,
@@ -141,11 +149,14 @@ def cut(
     workers: int | None,
     trajectory: Path | None,
     mesh_tolerance: float | None,
+    removal: str,
 ) -> None:
     from cutting.gear_file import write_gear_stl
     from cutting.ideal_cut import cut_ideal, default_workers
     from cutting.trajectory import ideal_passes
     from metrology.charts import finite, write_charts
+    from virtual_machine.formatting import chip_record, format_removal
+    from virtual_machine.job import dexel_spacing
     from virtual_machine.run import measure_written_cut, with_mesh_tolerance
 
     path = job or default_job_path()
@@ -191,7 +202,15 @@ def cut(
             _fail(exc)
     try:
         report = cut_ideal(
-            st, kind, j.process["sweep_error"], j.process["roughing_sweep_error"], progress, workers, motions=motions
+            st,
+            kind,
+            j.process["sweep_error"],
+            j.process["roughing_sweep_error"],
+            progress,
+            workers,
+            motions=motions,
+            removal=removal,
+            spacing=dexel_spacing(j),
         )
     except InputError as exc:
         _fail(exc)
@@ -219,10 +238,8 @@ def cut(
         "pass_seconds": report.pass_seconds,
         "pass_stock_triangles": report.pass_triangles,
         "machine_seconds": list(st.pass_times),
-        "chips": [
-            {"pass": c.pass_index, "cutter_tooth": c.cutter_tooth, "time_s": c.time, "volume_mm3": c.volume}
-            for c in r.chips
-        ],
+        "removal": report.removal,
+        "chips": [chip_record(c) for c in r.chips],
     }
     if plan is not None:
         from virtual_machine.modification_path import path_summary
@@ -234,11 +251,7 @@ def cut(
     click.echo(format_measurement(doc, str(out / "gear.stl")))
     if plan is not None:
         click.echo(format_path(doc["modification_path"]))
-    click.echo(
-        f"\ncut: {len(r.chips)} tooth passages, {r.sweeps} sweeps, {r.subtractions} subtractions, sweep error <= "
-        f"{r.pass_sweep_error.get(len(st.passes) - 1, 0.0) * 1e3:.2f} um in the finishing pass, "
-        f"{report.seconds:.1f} s wall for {sum(st.pass_times):.1f} s of machine time"
-    )
+    click.echo(format_removal(result["cut"], len(st.passes), sum(st.pass_times)))
     click.echo(format_gear_stl(result["cut"]["gear_stl"]))
 
 
@@ -295,7 +308,10 @@ def _finite(obj: object) -> object:
 @click.option("--rrd", type=click.Path(dir_okay=False, path_type=Path), help="Also write the Rerun recording here.")
 @click.option("--workers", type=click.IntRange(1, 64), help="Removal processes (default: one per core, at most 8).")
 @click.option("--mesh-tolerance", type=click.FloatRange(min=0.0, min_open=True), metavar="UM", help=MESH_TOLERANCE_HELP)
-def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh_tolerance: float | None) -> None:
+@click.option("--removal", type=click.Choice(REMOVALS), default="dexel", show_default=True, help=REMOVAL_HELP)
+def run(
+    job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh_tolerance: float | None, removal: str
+) -> None:
     from virtual_machine.program import program_duration
     from virtual_machine.run import run_job
 
@@ -342,7 +358,7 @@ def run(job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh
 
     try:
         tol = None if mesh_tolerance is None else mesh_tolerance * 1e-3
-        doc = run_job(path, out, rrd, progress, announce, workers, tol)
+        doc = run_job(path, out, rrd, progress, announce, workers, tol, removal)
     except (InputError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError) as exc:
         bar.close()
         _fail(exc)
@@ -585,7 +601,7 @@ def simulate(
     t0 = time.perf_counter()
     try:
         rec = run(j, duration=duration, progress=progress)
-    except (SimulationDivergedError, LostSynchronismError, NotImplementedError) as exc:
+    except (InputError, SimulationDivergedError, LostSynchronismError, NotImplementedError) as exc:
         bar.close()
         _fail(exc)
     bar.close()

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import manifold3d as mf
 import numpy as np
 
+from cutting.dexel_cut import removal_summary
 from cutting.edge import CuttingEdge, make_edge
 from cutting.forces import EngagementLoad, engagement_load
 from cutting.holder import check_holder_side
@@ -41,8 +42,8 @@ from cutting.sampled_motion import SampledMotion
 from cutting.sweep import outline_points, simplify_outline, split_sides
 from cutting.trajectory import ideal_passes
 from machine_models.parameters import SkivingMachineParams
-from virtual_machine.cosim_removal import InlineRemoval, ParallelRemoval, Samples
-from virtual_machine.job import Job
+from virtual_machine.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
+from virtual_machine.job import Job, dexel_spacing
 from virtual_machine.simulate import SEGMENTS, MachineRun, MotionRecord, relative_pose
 
 FEED = SEGMENTS.index("feed")
@@ -112,6 +113,9 @@ class CoSimulation:
     load_rows: np.ndarray | None = None  # per servo tick: t [s], resultant on the workpiece [N] (3), torque [N m]
     snapshots: list[tuple[float, np.ndarray, np.ndarray]] = field(default_factory=list)  # t, vertices, triangles
     edge: CuttingEdge | None = None  # the cutting edge the removal swept
+    removal: str = "dexel"  # "dexel" or "manifold"
+    lag: int = 0  # passages the machine ran ahead of the newest chip
+    dexel: dict | None = None  # the dexel removal's figures (cutting.dexel_cut.removal_summary)
 
     def chip_change(self) -> float:
         """Median relative change of the chip volume between consecutive engagements of a pass: the size of the
@@ -128,13 +132,27 @@ class _Stroke:
 
     def __init__(self, index: int, half: float):
         self.index, self.half = index, half
-        self.t: list[float] = []
-        self.q: list[list[float]] = []
+        self._rows = np.zeros((1024, 6))  # t and the five axes, grown by doubling (a stroke has ~10^4 samples)
+        self.n = 0
         self.next_m: int | None = None
         self.first_m = 0
         self.snapshots = 0  # taken so far
         self.total: int | None = None  # passages the ideal pass has
         self.ended = False
+
+    def append(self, row) -> None:
+        if self.n == len(self._rows):
+            self._rows = np.concatenate([self._rows, np.zeros_like(self._rows)])
+        self._rows[self.n] = row[:6]
+        self.n += 1
+
+    @property
+    def t(self) -> np.ndarray:
+        return self._rows[: self.n, 0]
+
+    @property
+    def q(self) -> np.ndarray:
+        return self._rows[: self.n, 1:6]
 
 
 def cosimulate(
@@ -147,13 +165,16 @@ def cosimulate(
     snapshots_per_pass: int = 0,
     workers: int = 1,
     correction: PathCorrection | None = None,
+    removal: str = "dexel",
 ) -> CoSimulation:
     """Run the job's machine and cut its gear from the motion it really makes, with the chips' forces acting on
     the machine (``forces=False``: the cut follows the machine, no force acts back). ``progress(machine_time,
     passages)`` is called as passages finish. ``snapshots_per_pass``: meshes of the stock taken evenly through
     each pass (the last at its end), for the recording. ``workers`` > 1 cuts in that many processes; the machine
     then runs at most :func:`max_lag` passages ahead of the finished chips. ``correction``: the finishing pass's
-    path corrections of a flank modification (virtual_machine/modification_path.py), made by the CNC."""
+    path corrections of a flank modification (virtual_machine/modification_path.py), made by the CNC. ``removal``:
+    "dexel" (the default: the dexel workpiece, cut a few passages at a time in this process; ``workers`` is moot)
+    or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes)."""
     setup = job.skiving
     kind = edge_kind or job.cutter_options["edge"]
     edge = make_edge(setup, kind)
@@ -165,14 +186,20 @@ def cosimulate(
     ]
     mat = material(job.process["material"])
     run = MachineRun(job, params, servo_substeps, correction=correction)
-    lag = max_lag(workers)
+    lag = max_lag(workers, removal)
     predictor = ForcePredictor(lag)
     run.load = predictor if forces else (lambda t, dt: ())  # no force, but the work accounting runs alike
-    removal = (
-        InlineRemoval(setup.gear, edge, plans, tols)
-        if workers <= 1
-        else ParallelRemoval(setup.gear, edge, plans, tols, workers)
-    )
+    if removal == "dexel":
+        cutter = DexelRemoval(setup.gear, edge, plans, dexel_spacing(job), job.process["sweep_error"])
+    elif removal == "manifold":
+        cutter = (
+            InlineRemoval(setup.gear, edge, plans, tols)
+            if workers <= 1
+            else ParallelRemoval(setup.gear, edge, plans, tols, workers)
+        )
+    else:
+        raise ValueError(f"removal {removal!r}: use 'dexel' or 'manifold'")
+    removal_kind, removal = removal, cutter
     # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
     # finest facets of the sweep
     edge_pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
@@ -181,7 +208,7 @@ def cosimulate(
     halves = [engagement_half_angle(plan, edge) for plan in plans]
     chunk = pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
     in_blank = functools.partial(in_blank_envelope, setup.gear)
-    sim = CoSimulation(None, removal.result, material=mat, edge=edge)  # the record is assembled at the end
+    sim = CoSimulation(None, removal.result, material=mat, edge=edge, removal=removal_kind, lag=lag)
     pending: dict[tuple[int, int], tuple[Samples, float]] = {}
     count = [0]
 
@@ -203,8 +230,18 @@ def cosimulate(
             return
         motion = SampledMotion(setup, index, *samples)
         load = engagement_load(
-            tooth_pose(motion, m), edge_pts, chip.start, chip.end, chip.volume, mat, in_blank
+            tooth_pose(motion, m),
+            edge_pts,
+            chip.start,
+            chip.end,
+            chip.volume,
+            mat,
+            in_blank,
+            thickness=chip.thickness_mean,
         ).shifted(t0_stroke)
+        if not len(load.t):  # a sliver at the blank's edge where no edge element is inside the envelope: no force
+            predictor.clear()
+            return
         sim.loads.append(AppliedLoad(index, m, load))
         # the mesh zone's motion in the blank frame: the cutter centre's turn about and travel along the axis
         trans = samples[2]
@@ -225,14 +262,13 @@ def cosimulate(
                 if segment == FEED:
                     if current is None or current.index != index:
                         current = _Stroke(index, halves[index])
-                    current.t.append(row[0])
-                    current.q.append(list(row[1:6]))
+                    current.append(row)
                 elif current is not None:
                     current.ended = True
             seen = len(rows)
             if current is not None and not alive:
                 current.ended = True  # the program ends in the last feed stroke
-            if current is not None and len(current.t) >= 8:
+            if current is not None and current.n >= 8:
                 c0 = time.perf_counter()
                 applied = count[0]
                 for m, samples, t0_stroke in _ready_passages(current, setup, pitch):
@@ -272,6 +308,8 @@ def cosimulate(
             f"{expected_genus(setup.gear)}): report it with the job"
         )
     t_wait += time.perf_counter() - c0
+    if isinstance(removal, DexelRemoval):
+        sim.dexel = removal_summary(removal.workpiece, removal.land_touched)
     sim.seconds = {
         "total": time.perf_counter() - t_start,
         "cut": t_wait,  # the removal in this process, or the wait for the workers
@@ -283,9 +321,19 @@ def cosimulate(
     return sim
 
 
-def max_lag(workers: int) -> int:
-    """Passages the machine may run ahead of the finished chips: none inline; with workers, two per worker
-    (enough to keep them busy, as a passage's booleans fall mostly to the worker owning its tooth space)."""
+#: passages the machine runs ahead of the dexel removal's newest chip: none. The chips and the cut would not depend
+#: on a batch, but the forces would act later, and a delay of a few passages (~4 ms on spur_external, a third of the
+#: tool spindle's 80 Hz speed loop) lets the cut's torque feed back into it until the motor saturates: the reason
+#: why spur_external stopped with the two-worker manifold removal (README)
+DEXEL_LAG = 0
+
+
+def max_lag(workers: int, removal: str = "manifold") -> int:
+    """Passages the machine may run ahead of the finished chips: the dexel removal's batch; manifold: none inline,
+    with workers two per worker (enough to keep them busy, as a passage's booleans fall mostly to the worker
+    owning its tooth space)."""
+    if removal == "dexel":
+        return DEXEL_LAG
     return 0 if workers <= 1 else 2 * workers
 
 
@@ -304,8 +352,8 @@ def _snapshot(sim: CoSimulation, removal, stroke: _Stroke, t: float, per_pass: i
 def _ready_passages(stroke: _Stroke, setup, pitch: float):
     """The passages of ``stroke`` whose window the samples now cover (all that remain once it has ended), each
     with its samples (a slice around the window, time from the stroke's start) and the stroke's start time."""
-    t = np.asarray(stroke.t)
-    q = np.asarray(stroke.q)
+    t = stroke.t
+    q = stroke.q
     q = np.column_stack([q[:, 0], q[:, 1], q[:, 2] / 1e-3, q[:, 3] / 1e-3, q[:, 4]])  # P3, X in mm
     phi = q[:, 0]
     half = stroke.half

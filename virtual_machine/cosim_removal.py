@@ -1,6 +1,8 @@
 """The removal side of the co-simulation: tooth passages submitted as the machine makes them, chips returned.
 
-Two backends with one interface. :class:`InlineRemoval` cuts each passage at once in this process.
+Three backends with one interface. :class:`DexelRemoval` (the default) cuts the passages on the dexel workpiece,
+a batch at a time, in this process (the kernel runs on every core). The manifold removal (the reference) has
+:class:`InlineRemoval`, which cuts each passage at once in this process, and
 :class:`ParallelRemoval` gives each worker process a share of the tooth spaces (as cutting.engine does): every
 worker receives every passage and cuts the cells it owns, so a passage's chip is the sum of the workers' parts and
 is finished when the slowest worker has done it. Workers take the passages in order (one queue each), so chips
@@ -18,15 +20,116 @@ from collections.abc import Sequence
 import manifold3d as mf
 import numpy as np
 
+from cutting.dexel import DexelWorkpiece
+from cutting.dexel_cut import chip_of
+from cutting.dexel_lines import DexelSpacing, gear_phase
+from cutting.dexel_solid import dexel_solid
 from cutting.edge import CuttingEdge
+from cutting.exact_sweep import PassTable
 from cutting.gear import Gear
-from cutting.removal import Chip, CutResult, PassCutter, Stock, from_arrays, to_arrays
+from cutting.removal import (
+    Chip,
+    CutResult,
+    PassCutter,
+    Stock,
+    blank_window,
+    engagement_half_angle,
+    from_arrays,
+    to_arrays,
+    tooth_pose,
+)
 from cutting.sampled_motion import SampledMotion
+from cutting.sweep import outline_points, simplify_outline
 from cutting.trajectory import PassMotion
 
 #: the samples of one passage: t [s from the stroke's start], rot, trans [mm], cutter angle, carriage, centre distance
 Samples = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 Finished = tuple[int, int, Chip | None]  # pass index, passage, chip (None: the tooth stayed clear of the blank)
+
+
+def _merged(pending: list[tuple[int, int, Samples]]):
+    """The pending passages as (pass, (samples over the union of theirs, passages)), consecutive passages of one pass
+    whose sample slices overlap put together."""
+    groups: list[tuple[int, list, list[int]]] = []
+    for index, m, samples in pending:
+        if groups and groups[-1][0] == index and samples[0][0] <= groups[-1][1][0][-1]:
+            cols = groups[-1][1]
+            new = samples[0] > cols[0][-1]
+            groups[-1][1][:] = [np.concatenate([c, s[new]]) for c, s in zip(cols, samples, strict=True)]
+            groups[-1][2].append(m)
+        else:
+            groups.append((index, list(samples), [m]))
+    return [(index, (tuple(cols), ms)) for index, cols, ms in groups]
+
+
+class DexelRemoval:
+    """Cuts on the dexel workpiece in this process: the passages submitted since the last call are cut together
+    when a chip is asked for (each line takes them in time order, so the batch does not change the cut)."""
+
+    def __init__(
+        self, gear: Gear, edge: CuttingEdge, plans: Sequence[PassMotion], spacing: DexelSpacing, tolerance: float
+    ):
+        self.workpiece: DexelWorkpiece | None = None  # made at the first passage: its fans follow the motion's phase
+        self._spacing = spacing
+        self.result = CutResult(None, sweep_error=tolerance)
+        self.result.pass_sweep_error = {plan.index: tolerance for plan in plans}
+        self._plans, self._edge, self._gear = plans, edge, gear
+        self._halves = {plan.index: engagement_half_angle(plan, edge) for plan in plans}
+        self._points = outline_points(simplify_outline(edge.outline, 0.02)[0])  # for the blank window
+        self._pending: list[tuple[int, int, Samples]] = []
+        self.land_touched = 0  # land rays the cut touched (cutting.dexel_solid.tube_ends), as of the last solid
+
+    def submit(self, index: int, m: int, samples: Samples) -> None:
+        if self.workpiece is None:
+            phase = gear_phase(SampledMotion(self._plans[index].setup, index, *samples))
+            self.workpiece = DexelWorkpiece.for_gear(self._gear, self._edge, self._spacing, phase=phase)
+        self._pending.append((index, m, samples))
+
+    def finished(self, block: bool = False) -> list[Finished]:
+        """Every passage submitted so far, cut (``block`` is moot: the cut happens here). Consecutive passages of a
+        stroke share one motion over the union of their samples (the same poses: each interval's interpolation
+        reads only its neighbouring samples, which every slice holds around its window)."""
+        pending, self._pending = self._pending, []
+        z0 = self._plans[0].setup.cutter.teeth
+        pitch = 2 * np.pi / z0
+        tables, keys, windows = [], [], []
+        out: list[Finished] = []
+        for index, group in _merged(pending):
+            motion = SampledMotion(self._plans[index].setup, index, *group[0])
+            half = self._halves[index]
+            ms = np.array(group[1])
+            t0 = np.maximum(np.asarray(motion.time_at_angle(ms * pitch - half), dtype=float), 0.0)
+            t1 = np.minimum(np.asarray(motion.time_at_angle(ms * pitch + half), dtype=float), motion.duration)
+            live = t1 > t0  # a window outside the stroke has nothing to cut
+            out += [(index, int(m), None) for m in ms[~live]]
+            if not live.any():
+                continue
+            ms, t0, t1 = ms[live], t0[live], t1[live]
+            angle = 2 * np.pi * ((-ms) % z0) / z0
+            tables.append(PassTable.from_windows(motion, t0, t1, angle, self._edge.outline, ms))
+            for m, a, b in zip(ms, t0, t1, strict=True):
+                # the part of the window the tooth spends in the blank's envelope: where the force acts (every
+                # passage is cut whatever this says: the cut is exact, the window only approximate)
+                found = blank_window(self._gear, tooth_pose(motion, int(m)), self._points, float(a), float(b))
+                keys.append((index, int(m), motion))
+                windows.append(found[:2] if found is not None else (float(a), float(b)))
+        chips = self.workpiece.cut(tables) if tables else []
+        for (index, m, motion), dexel, (start, end) in zip(keys, chips, windows, strict=True):
+            chip = chip_of(dexel, motion.setup, motion, start, end)
+            self.result.chips.append(chip)
+            out.append((index, m, chip))
+        return out
+
+    def solid(self) -> mf.Manifold:
+        if self.workpiece is None:  # nothing was cut: the blank
+            self.workpiece = DexelWorkpiece.for_gear(self._gear, self._edge, self._spacing)
+        solid, self.land_touched = dexel_solid(self.workpiece)
+        return solid
+
+    def close(self) -> CutResult:
+        self.finished()
+        self.result.gear = self.solid()
+        return self.result
 
 
 class InlineRemoval:

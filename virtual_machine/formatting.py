@@ -144,3 +144,36 @@ def format_gear_stl(stl: dict) -> str:
     if not stl["watertight"]:
         line += "; NOT watertight after writing in float32: report it with the job (the mesh measurement may fail)"
     return line
+
+
+def chip_record(chip) -> dict:
+    """One chip as measurement.json holds it (the dexel removal adds thickness, contact length and centroid)."""
+    out = {"pass": chip.pass_index, "cutter_tooth": chip.cutter_tooth, "time_s": chip.time, "volume_mm3": chip.volume}
+    if chip.thickness_max is not None:
+        out.update(
+            thickness_max_um=chip.thickness_max * 1e3,
+            thickness_mean_um=chip.thickness_mean * 1e3,
+            contact_length_mm=chip.contact_length,
+            centroid_mm=list(chip.centroid),
+        )
+    return out
+
+
+def format_removal(cut: dict, passes: int, machine_s: float) -> str:
+    """One line on how the cut removed its material."""
+    removal = cut.get("removal") or {"kind": "manifold"}
+    head = f"\ncut: {cut['passages']} tooth passages"
+    tail = f", {cut['seconds']:.1f} s wall for {machine_s:.1f} s of machine time"
+    if removal["kind"] == "dexel":
+        sp = removal["spacing_mm"]
+        return (
+            f"{head} cut from {removal['lines']:,} dexel lines ({removal['rays_per_fan']} rays per fan at "
+            f"{sp['profile'] * 1e3:.0f} um, {removal['slices']} slices at {sp['face'] * 1e3:.0f} um, refined to "
+            f"{sp['fine'] * 1e3:.1f} um at the faces and tip corners), {removal['crossings']:,} exact crossings; "
+            f"solid in {removal['solid_seconds']:.1f} s{tail}"
+        )
+    err = cut["pass_sweep_error_um"][passes - 1] if cut.get("pass_sweep_error_um") else 0.0
+    return (
+        f"{head}, {cut['sweeps']} sweeps, {cut['subtractions']} subtractions, sweep error <= {err:.2f} um in the "
+        f"finishing pass{tail}"
+    )

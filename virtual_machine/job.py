@@ -131,8 +131,17 @@ PROCESS_KEYS: dict[str, Key] = {
     "material": Key(str, "16MnCr5", "", "workpiece material (cutting forces, later issues)"),
     "clearance": Key(float, 1.0, "mm", "axial approach and overrun added to the engagement zone", _at_least(0.0)),
     # defaults from benchmarks/bench_mesh_tolerance.py (README "The manifold solid's tolerance")
-    "sweep_error": Key(float, 0.010, "mm", "chord error allowed in the swept volumes of the finishing pass", _positive),
-    "roughing_sweep_error": Key(float, 0.020, "mm", "chord error allowed in the roughing passes", _positive),
+    "sweep_error": Key(
+        float,
+        0.010,
+        "mm",
+        "the solid's tolerance against the exact surface (manifold: the finishing pass's chord error)",
+        _positive,
+    ),
+    "roughing_sweep_error": Key(float, 0.020, "mm", "chord error allowed in the roughing passes (manifold)", _positive),
+    # defaults from benchmarks/bench_dexel.py (README "The dexel workpiece")
+    "dexel_profile_spacing": Key(float, None, "mm", "dexel rays along the space's profile (default 0.1 mn)", _positive),
+    "dexel_face_spacing": Key(float, None, "mm", "dexel slices along the face (default 0.2 mn)", _positive),
     "stl_tolerance": Key(
         float, 0.010, "mm", "how far simplifying gear.stl may move its surface (0: the solid as cut)", _at_least(0.0)
     ),
@@ -885,6 +894,14 @@ def load_gear_section(path: str | Path) -> tuple[Gear, dict[str, Any]]:
     if problems:
         raise InputError(problems, str(path))
     return gear, {**measurement, "design": modification}
+
+
+def dexel_spacing(job: Job):
+    """The dexel lines of a skiving job: the process's spacings, else the gear's defaults (cutting.dexel_lines)."""
+    from cutting.dexel_lines import DexelSpacing
+
+    p = job.process
+    return DexelSpacing.for_gear(job.gear, p["axial_feed"], p.get("dexel_profile_spacing"), p.get("dexel_face_spacing"))
 
 
 def default_job_path() -> Path:

@@ -31,14 +31,14 @@ from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions
 from metrology.workpiece import UnmeasurableError
-from virtual_machine.cosim import CoSimulation, cosimulate, max_lag
+from virtual_machine.cosim import CoSimulation, cosimulate
 from virtual_machine.formatting import format_sheet
 from virtual_machine.job import Job, load_job
 from virtual_machine.motion_io import summary
 from virtual_machine.report import run_chart, write_report
 from virtual_machine.setup_sheet import setup_sheet
 
-#: blank snapshots per pass in the recording
+#: blank snapshots per pass in the recording (manifold removal; the dexel removal makes its solid once per pass)
 SNAPSHOTS_PER_PASS = 3
 
 
@@ -60,24 +60,25 @@ def run_job(
     stage: Callable[[str], None] | None = None,
     workers: int | None = None,
     mesh_tolerance: float | None = None,
+    removal: str = "dexel",
 ) -> dict[str, Any]:
     """Run the job at ``path``; write its files into ``out``; return the measurement document with ``run``.
     ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage;
-    ``workers``: removal processes (default one per core); ``mesh_tolerance`` [mm]: the finishing pass's sweep
-    error (default the job's process.sweep_error)."""
+    ``workers``: the manifold removal's processes (default one per core); ``mesh_tolerance`` [mm]: the solid's
+    tolerance (default the job's process.sweep_error); ``removal``: "dexel" or "manifold" (the reference)."""
     announce = stage or (lambda name: None)
     durations: dict[str, float] = {}
     job = with_mesh_tolerance(load_job(path), mesh_tolerance)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     workers = workers or default_workers()
-    snapshots = SNAPSHOTS_PER_PASS if rrd else 0
+    snapshots = (SNAPSHOTS_PER_PASS if removal == "manifold" else 1) if rrd else 0
     modification_path = None
     if job.modification is None:
         announce("machine and cut")
-        sim = cosimulate(job, progress=progress, snapshots_per_pass=snapshots, workers=workers)
+        sim = cosimulate(job, progress=progress, snapshots_per_pass=snapshots, workers=workers, removal=removal)
     else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one
-        sim, modification_path = _modification_runs(job, announce, snapshots, workers)
+        sim, modification_path = _modification_runs(job, announce, snapshots, workers, removal)
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
@@ -113,7 +114,7 @@ def run_job(
     return doc
 
 
-def _modification_runs(job: Job, announce, snapshots: int, workers: int) -> tuple[CoSimulation, dict]:
+def _modification_runs(job: Job, announce, snapshots: int, workers: int, removal: str) -> tuple[CoSimulation, dict]:
     """The path of the job's flank modification: planned on the ideal machine (J, feed-forward, accuracy check),
     then iterated on the simulated machine, one co-simulation per iteration; the best one is the run."""
     from virtual_machine.modification_path import iterate_on_machine, path_summary, plan_path
@@ -125,7 +126,7 @@ def _modification_runs(job: Job, announce, snapshots: int, workers: int) -> tupl
     def run(correction):
         count[0] += 1
         announce(f"machine and cut along the path, iteration {count[0]}")
-        return cosimulate(job, snapshots_per_pass=snapshots, workers=workers, correction=correction)
+        return cosimulate(job, snapshots_per_pass=snapshots, workers=workers, correction=correction, removal=removal)
 
     made = iterate_on_machine(job, plan, run)
     return made.sim, path_summary(plan, made)
@@ -207,7 +208,7 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             "mc": mat.mc,
             "source": mat.source,
             "granularity": "one tooth engagement: each engagement feels the load of the newest chip already cut, "
-            f"at most {max_lag(sim.seconds['workers']) + 1} engagements earlier plus the engagements in the cut",
+            f"at most {sim.lag + 1} engagements earlier plus the engagements in the cut",
             "peak_force_N": float(force.max()),
             "peak_work_torque_Nm": float(np.abs(rows[:, 4]).max()) if len(rows) else 0.0,
             "chip_energy_J": float(sum(a.load.energy for a in loads)),
@@ -220,6 +221,7 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
         else "the job's [modification] made by the finishing pass's path (radial and tangential corrections), "
         "iterated on this machine; the deviations are measured against the design (modification_path)",
         "cut": {
+            "removal": sim.dexel or {"kind": "manifold"},
             "edge": job.cutter_options["edge"],
             "passages": len(cut.chips),
             "chip_volume_mm3": float(sum(c.volume for c in cut.chips)),

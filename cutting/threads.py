@@ -1,0 +1,46 @@
+"""Compiled kernels on every core: a nogil numba function over chunks of its index range, in a thread pool.
+
+The kernels (the exact measurement's, the dexel workpiece's) are loops over independent items (probe lines,
+dexel cells, poses). Written as ``kernel(lo, hi, *args)`` with ``nogil=True`` they run on every core from plain
+threads. numba's own ``parallel=True`` would do the same, but its parfor compilation costs several times the
+kernel's own (and compiles each callee twice), which a user pays on the first run after an install.
+"""
+
+from __future__ import annotations
+
+import itertools
+import os
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+
+_pool: ThreadPoolExecutor | None = None
+
+
+def threads() -> int:
+    """Threads the kernels use: the cores this process may run on (NUMBA_NUM_THREADS caps it), at most 8."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    cap = int(os.environ.get("NUMBA_NUM_THREADS", "0") or 0)
+    return max(1, min(cores, 8, cap or cores))
+
+
+def run_chunks(kernel, n: int, *args, smallest: int = 1) -> None:
+    """``kernel(lo, hi, *args)`` over [0, n) in chunks of at least ``smallest`` items, four per thread so that
+    uneven items balance; inline when there is one thread or too little work to share."""
+    if n <= 0:
+        return
+    k = threads()
+    chunks = min(4 * k, n // max(smallest, 1))
+    if k == 1 or chunks < 2:
+        kernel(0, n, *args)
+        return
+    global _pool
+    if _pool is None:
+        _pool = ThreadPoolExecutor(max_workers=k, thread_name_prefix="skive-kernel")
+    edges = np.linspace(0, n, chunks + 1).astype(np.int64)
+    futures = [_pool.submit(kernel, int(a), int(b), *args) for a, b in itertools.pairwise(edges) if b > a]
+    for f in futures:
+        f.result()  # re-raises a kernel's error here
