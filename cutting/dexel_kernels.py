@@ -194,9 +194,10 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
     d = a
     speed = 1.0
     while d < b:
-        step = max(fine, (abs(e0) - dl0) / speed)  # cannot reach the outline
-        if ok0 and abs(e0) < NEAR:
-            step = max(step, 2.0 * abs(e0) / speed + fine)  # aims past it: a clean crossing is solved at once
+        safe = max(fine, (abs(e0) - dl0) / speed)  # cannot reach the outline
+        jump = 2.0 * abs(e0) / speed + fine if ok0 and abs(e0) < NEAR else 0.0  # aims past it: a clean crossing
+        # outside the outline, the rest of the range at once first: a track that leaves the outline settles it
+        step = b - d if ok0 and not inside and abs(e0) > dl0 else max(safe, jump)
         unsure = False
         crossing = False
         while True:
@@ -221,7 +222,12 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
             if step <= fine:
                 unsure = True
                 break
-            step = max(fine, step / 4)
+            if step > max(safe, jump):  # the long attempt failed: the steps that can settle or cross
+                step = max(safe, jump)
+            elif step > safe and jump > 0:
+                step = safe
+            else:
+                step = max(fine, step / 4)
         if crossing:
             ma = _table_margin(tab, outline, g, lo, hi, p, u, i, d)
             mb = _table_margin(tab, outline, g, lo, hi, p, u, i, d1)

@@ -76,6 +76,7 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
                     f" (the study keeps cases/{case_id}/measurement.json; `skive run cases/{case_id}/job.toml` "
                     "writes the case's gear.stl again)"
                 )
+            error = error.replace(str(job), f"cases/{case_id}/job.toml")  # the job as the study keeps it
     return {"id": case_id, "status": status, "error": error, "wall_s": time.perf_counter() - t0, "measurement": doc}
 
 
@@ -245,7 +246,8 @@ def write_csv(out: Path, study: Study, cases: Sequence[Case], results: dict[str,
                 continue
             values = [_cell(r["values"].get(v.key)) for v in study.varies]
             measured = [_cell(r["measured"].get(m)) for m in MEASURED]
-            error = r["error"].splitlines()[0] if r["error"] else ""
+            # the message on one line (an input error lists its problems below its head), without a traceback
+            error = " ".join(line.strip() for line in r["error"].split("\nTraceback")[0].splitlines())
             writer.writerow([c.id, c.job_hash, *values, *measured, _cell(r["wall_s"]), r["status"], error])
     tmp.replace(path)
     return path
