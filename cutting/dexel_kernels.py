@@ -38,7 +38,9 @@ TRACK_BOW = 1.05
 #: table samples: some 0.01 um; ten times that kept as margin)
 POSE_ERROR = 1e-4
 #: the crossing on the table is found to this [mm] before the exact polish (the table is within ~1e-5 mm of it)
-TABLE_TOL = 1e-7
+TABLE_TOL = 1e-6
+#: after a Newton step from the table's crossing, a secant correction below this [mm] leaves an error of its square
+NEWTON_SETTLED = 1e-7
 #: within this distance [mm] of the outline a march aims its step past it, to solve a clean crossing at once
 NEAR = 0.05
 #: material intervals a line can hold (a passage splitting one more time than this is reported)
@@ -134,12 +136,15 @@ def _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, ma, mb, to
     the table's margin, then the exact margin's secant steps until the crossing moves less than ``tol``."""
     d_lo, d_hi, m_lo, m_hi = a, b, ma, mb
     d = (a + b) / 2
-    for _ in range(60):  # on the table (cheap): to well below its own error
+    slope = (mb - ma) / (b - a) if b != a else 0.0
+    for _ in range(60):  # on the table (cheap): to about its own error
         den = m_hi - m_lo
         d = d_hi - m_hi * (d_hi - d_lo) / den if den != 0 else (d_lo + d_hi) / 2
         d = min(max(d, min(a, b)), max(a, b))
         m = _table_margin(tab, outline, g, lo, hi, p, u, i, d)
         work[1] += 1
+        if d != d_hi:
+            slope = (m - m_hi) / (d - d_hi)  # the margin's slope along the line, from the last two
         if (m > 0) == (m_hi > 0):
             m_lo = m_lo / 2
         else:
@@ -147,16 +152,24 @@ def _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, ma, mb, to
         d_hi, m_hi = d, m
         if abs(d_hi - d_lo) <= max(tol, TABLE_TOL) or m == 0:
             break
-    # polish on the motion: secant steps of the exact margin from the table's crossing (the two differ by the
-    # pose's interpolation, a smooth offset of ~1e-5 mm: one or two steps reach tol)
-    h = max(1e-6, 1e3 * tol)
+    # polish on the motion: the table's crossing differs from the exact one by the pose's interpolation (a smooth
+    # offset of ~1e-5 mm), so a Newton step with the table's slope and a secant step land within ~1e-12 mm; more
+    # secant steps only where they do not (then until the crossing moves less than tol)
     x0 = d
     f0 = _exact(motion, tables, outline, g, lo, hi, p, u, i, x0)
     work[2] += 1
-    x1 = x0 + h if (f0 > 0) == (ma > 0) else x0 - h  # towards the side of the other sign
+    x1 = x0 - f0 / slope if slope != 0 and math.isfinite(slope) else x0 + max(1e-6, 1e3 * tol)
     x1 = min(max(x1, min(a, b)), max(a, b))
+    if abs(x1 - x0) <= tol:
+        work[3] += 1
+        return x1
     f1 = _exact(motion, tables, outline, g, lo, hi, p, u, i, x1)
     work[2] += 1
+    if f1 != f0:
+        x2 = min(max(x1 - f1 * (x1 - x0) / (f1 - f0), min(a, b)), max(a, b))
+        if abs(x2 - x1) <= NEWTON_SETTLED:  # the second step corrects the first by the error squared: done
+            work[3] += 1
+            return x2
     for _ in range(8):
         if f1 == f0 or abs(x1 - x0) <= tol:
             break

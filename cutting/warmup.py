@@ -1,0 +1,47 @@
+"""Compile every numba kernel a run needs, once, by cutting and probing a tiny gear.
+
+The kernels (cutting/exact_kernels.py, exact_solve.py, dexel_kernels.py) are cached beside their modules
+(``cache=True``): the editable install runs this module (build_backend/skive_build.py), so the first ``skive run``
+after the install loads them instead of compiling them (about a minute on two cores). Run it by hand after changing a
+kernel: ``python -m cutting.warmup``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from cutting.dexel_cut import cut_dexel
+from cutting.dexel_lines import DexelSpacing
+from cutting.edge import make_edge
+from cutting.exact_sweep import SweptVolumes
+from cutting.gear import Gear
+from cutting.sampled_motion import ideal_samples
+from cutting.skiving import SkivingSetup
+from cutting.trajectory import ideal_passes
+
+DEG = math.pi / 180
+
+
+def warm() -> float:
+    """Cut a tiny gear with the dexel workpiece (ideal and sampled motion) and probe its exact swept surface;
+    returns the seconds it took."""
+    t0 = time.perf_counter()
+    setup = SkivingSetup(Gear(16, 1.0, 20 * DEG, 0.0, 1.0), Gear(11, 1.0, 20 * DEG, 20 * DEG, 5.0), 2000, 0.4, (2.25,))
+    edge = make_edge(setup, "conjugate")
+    motions = ideal_passes(setup)
+    spacing = DexelSpacing.for_gear(setup.gear, setup.axial_feed, 0.3, 0.5)
+    for m in (motions, [ideal_samples(motions[0], 2000.0)]):
+        cut_dexel(setup.gear, edge, m, spacing, 0.01)
+    sv = SweptVolumes(setup.gear, edge, motions)
+    angle = np.linspace(0.0, 2 * math.pi, 8, endpoint=False)
+    r = setup.gear.reference_radius
+    points = np.column_stack([r * np.cos(angle), r * np.sin(angle), np.zeros(8)])
+    sv.probe(points, np.column_stack([-np.sin(angle), np.cos(angle), np.zeros(8)]), 0.3)
+    return time.perf_counter() - t0
+
+
+if __name__ == "__main__":
+    print(f"skive: the numba kernels are compiled and cached ({warm():.0f} s)")
