@@ -14,20 +14,22 @@ Two edges (domain.md section 1):
   pushed as far towards the workpiece flank as the ideal motion allows without ever entering it:
   theta*(rho) = the extreme over the tooth passage of theta_t(rho), the angle at which the point at
   (rho, theta) lies exactly on the workpiece's nominal flank at instant t. The extreme is found on a
-  dense time grid and refined by a bounded scalar search, so the edge is the exact envelope (no union of
-  jagged sections to smooth).
+  dense time grid and refined by a bracketed search (golden section), so the edge is the exact envelope (no
+  union of jagged sections to smooth). Both steps treat all radii of a flank at once (numpy arrays over
+  radii x instants): done radius by radius, the Python overhead made the edge cost seconds per run.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
+from numpy.typing import ArrayLike
 
-from cutting.flank import SIDES, base_tangent_deviation, flank_points
+from cutting.flank import SIDES, Side, base_tangent_deviation, flank_points
 from cutting.skiving import SkivingSetup
 
 EDGE_KINDS = ("involute", "conjugate")
@@ -89,7 +91,7 @@ def _assemble(kind: str, radii: np.ndarray, theta: dict[str, np.ndarray], r_low:
     return CuttingEdge(kind, outline, radii, theta, r_low, float(radii[-1]))
 
 
-def _mate(setup: SkivingSetup, side: str) -> str:
+def _mate(setup: SkivingSetup, side: Side) -> Side:
     """The workpiece flank that the cutter flank ``side`` generates (checked at the mesh position)."""
     c = setup.cutter
     xi = math.sqrt(max(c.reference_radius**2 - c.base_radius**2, 0.0)) / c.base_radius
@@ -100,33 +102,184 @@ def _mate(setup: SkivingSetup, side: str) -> str:
     return min(e, key=e.get)
 
 
-def _on_flank(setup: SkivingSetup, rho: float, th_start: float, mate: str, phi0: np.ndarray, band: tuple[float, float]):
-    """theta_t for each cutter angle: the angle at which the rake-plane point at radius rho lies exactly on the
-    workpiece's nominal ``mate`` flank; with a validity mask and d(deviation)/d(theta) there (Newton)."""
+#: Newton on the flank condition: iteration cap, convergence threshold on the step [rad], largest step [rad] (keeps
+#: a far start from jumping to another tooth), and the finite-difference increment of the derivative [rad].
+NEWTON_ITERATIONS = 30
+NEWTON_TOL = 1e-14
+NEWTON_MAX_STEP = 0.05
+NEWTON_H = 1e-7
+
+#: The refinement of the most restrictive instant: golden-section search to this width in the cutter angle [rad].
+REFINE_XATOL = 1e-12
+_INV_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+def _on_flank(
+    setup: SkivingSetup,
+    rho: ArrayLike,
+    th_start: ArrayLike,
+    mate: Side,
+    phi0: ArrayLike,
+    band: tuple[float, float],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """theta_t for each (radius, cutter angle): the angle at which the rake-plane point at radius rho lies exactly on
+    the workpiece's nominal ``mate`` flank (Newton from ``th_start``); with a validity mask and d(deviation)/d(theta)
+    there.
+
+    ``rho``, ``th_start`` and ``phi0`` broadcast together, so one call solves a whole grid (radii (m, 1) against angles
+    (1, n)) or one angle per radius ((m,) each): the arithmetic is that of one point at a time, the Python overhead is
+    paid once. Each point stops when its own step is below NEWTON_TOL (the others go on), as a call for that point
+    alone would.
+
+    Valid: the contact lies strictly inside the flank's radial band and within a quarter cutter pitch of ``th_start``.
+    Work is saved where the outcome is already known, without changing it:
+
+    - a point that cannot be valid is not solved, or dropped once it cannot come back (theta and the derivative are
+      nan there): the work-frame radius moves by at most rho * |d theta| (a rotation keeps lengths, the projection on
+      the transverse plane does not lengthen them) and one Newton step moves theta by at most NEWTON_MAX_STEP;
+    - a point whose clipped steps bounce over a jump of the deviation (nearest tooth changing) until its state repeats
+      exactly would do so to the last iteration: it ends on one of the two states, chosen by the iterations left.
+    """
     g = setup.gear
-    rot, t = setup.cutter_pose(np.atleast_1d(phi0))
+    phi = np.asarray(phi0, dtype=float)
+    shape = np.broadcast_shapes(np.shape(rho), np.shape(th_start), phi.shape)
+    rot, t = setup.cutter_pose(phi.ravel())  # the pose once per distinct angle
+    # the rake-plane point (rho cos th, rho sin th, 0) is rho cos th * ex + rho sin th * ey + t in the work frame;
+    # coordinate-major (3, angles) arrays keep each coordinate contiguous
+    ex, ey, t = rot[:, :, 0].T.copy(), rot[:, :, 1].T.copy(), t.T.copy()
+    window = 0.25 * 2 * np.pi / setup.cutter.teeth
 
-    def deviation(th: np.ndarray) -> np.ndarray:
-        q = np.stack([rho * np.cos(th), rho * np.sin(th), np.zeros_like(th)], -1)
-        return base_tangent_deviation(g, np.einsum("nij,nj->ni", rot, q) + t, mate)
-
-    th = np.full(rot.shape[0], th_start)
-    h = 1e-7
-    for _ in range(30):
-        e = deviation(th)
-        de = (deviation(th + h) - e) / h
-        step = np.clip(np.where(np.abs(de) > 1e-12, e / np.where(de == 0, 1.0, de), 0.0), -0.05, 0.05)
-        th = th - step
-        if np.all(np.abs(step) < 1e-14):
-            break
-    q = np.stack([rho * np.cos(th), rho * np.sin(th), np.zeros_like(th)], -1)
-    w = np.einsum("nij,nj->ni", rot, q) + t
-    r = np.hypot(w[:, 0], w[:, 1])
-    # contact strictly inside the flank: at its ends the "envelope" is the tooth's corner, not the flank
-    valid = (
-        (r > band[0] + 1e-6) & (r < band[1] - 1e-6) & (np.abs(th - th_start) < 0.25 * 2 * np.pi / setup.cutter.teeth)
+    # whatever theta within the window, the radius stays within rho * window of the radius at the start (computed
+    # by broadcasting: no copy of the poses per point)
+    rho_b, start_b = np.asarray(rho, dtype=float), np.asarray(th_start, dtype=float)
+    grid = (2, *phi.shape)
+    x0, y0 = _work_point(
+        rho_b * np.cos(start_b),
+        rho_b * np.sin(start_b),
+        ex[:2].reshape(grid),
+        ey[:2].reshape(grid),
+        t[:2].reshape(grid),
     )
-    return th, valid, de
+    reach = rho_b * window
+    r0 = np.broadcast_to(np.hypot(x0, y0), shape)
+    todo = np.flatnonzero((r0 + reach > band[0]) & (r0 - reach < band[1]))
+    # the candidates: the point is cos th * u + sin th * v + c in the work frame
+    rho_all = np.broadcast_to(rho_b, shape).ravel()
+    pose = np.broadcast_to(np.arange(phi.size).reshape(phi.shape), shape).ravel()[todo]
+    start = np.broadcast_to(start_b, shape).ravel()[todo]
+    rho_todo = rho_all[todo]
+    u, v, c = rho_todo * np.take(ex, pose, axis=1), rho_todo * np.take(ey, pose, axis=1), np.take(t, pose, axis=1)
+
+    th, de = start.copy(), np.full(todo.size, np.nan)
+    live = np.arange(todo.size)
+    th_prev, de_prev = np.full(todo.size, np.nan), np.full(todo.size, np.nan)  # the live points' previous state
+    offsets = np.array([[0.0], [NEWTON_H]])
+    for it in range(NEWTON_ITERATIONS):
+        if live.size == 0:
+            break
+        pair = th[live] + offsets
+        w = _work_point(np.cos(pair), np.sin(pair), *(np.take(a, live, axis=1) for a in (u, v, c)))
+        e, e_h = base_tangent_deviation(g, np.stack(w, -1), mate)
+        d = (e_h - e) / NEWTON_H
+        step = np.clip(
+            np.where(np.abs(d) > 1e-12, e / np.where(d == 0, 1.0, d), 0.0), -NEWTON_MAX_STEP, NEWTON_MAX_STEP
+        )
+        now, new = th[live], th[live] - step
+        th[live], de[live] = new, d
+        left = NEWTON_ITERATIONS - 1 - it  # iterations still to come
+        converged = np.abs(step) < NEWTON_TOL
+        cycle = ~converged & (new == th_prev[live])
+        back = live[cycle & (left % 2 == 1)]  # an odd number left: the cycle ends on the state before this one
+        th[back], de[back] = now[cycle & (left % 2 == 1)], de_prev[back]
+        # a point more than a quarter pitch from its start is invalid: give up on those that cannot come back in time
+        lost = np.abs(new - start[live]) >= window + NEWTON_MAX_STEP * left + 1e-9
+        th[live[lost]] = np.nan
+        keep = ~(converged | cycle | lost)
+        th_prev[live], de_prev[live] = now, d
+        live = live[keep]
+
+    theta, deriv, valid = np.full(rho_all.size, np.nan), np.full(rho_all.size, np.nan), np.zeros(rho_all.size, bool)
+    theta[todo], deriv[todo] = th, np.where(np.isnan(th), np.nan, de)
+    x, y = _work_point(np.cos(th), np.sin(th), u[:2], v[:2], c[:2])
+    # contact strictly inside the flank: at its ends the "envelope" is the tooth's corner, not the flank
+    r = np.hypot(x, y)
+    valid[todo] = (r > band[0] + 1e-6) & (r < band[1] - 1e-6) & (np.abs(th - start) < window)
+    return theta.reshape(shape), valid.reshape(shape), deriv.reshape(shape)
+
+
+def _work_point(
+    cos: np.ndarray, sin: np.ndarray, u: np.ndarray, v: np.ndarray, c: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """The work-frame coordinates cos * u + sin * v + c, one array per row of u, v, c (coordinate-major: contiguous)."""
+    return tuple(cos * uk + sin * vk + ck for uk, vk, ck in zip(u, v, c, strict=True))
+
+
+def _golden_section_min(
+    f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray, xatol: float
+) -> np.ndarray:
+    """The least value of ``f`` found on each interval [lo, hi] by golden-section search, all intervals at once.
+
+    ``f`` maps an array of abscissae (one per interval) to the values there, so each step is one vectorized call:
+    this replaces a scalar bounded search per interval, whose cost was Python overhead. The search stops when every
+    bracket is narrower than ``xatol``; it returns the best value evaluated (the interior points only, like a bounded
+    scalar search). For a unimodal f it finds the minimum; where f jumps up (a contact leaving the flank) it closes
+    on the jump from the low side.
+    """
+    a, b = np.array(lo, dtype=float), np.array(hi, dtype=float)
+    c, d = b - _INV_GOLDEN * (b - a), a + _INV_GOLDEN * (b - a)
+    fc, fd = f(c), f(d)
+    best = np.minimum(fc, fd)
+    width = float(np.max(b - a, initial=0.0))
+    steps = math.ceil(math.log(xatol / width) / math.log(_INV_GOLDEN)) if width > xatol else 0
+    for _ in range(steps):
+        left = fc < fd  # the minimum is in [a, d]: d becomes b, c the upper interior point
+        a, b = np.where(left, a, c), np.where(left, d, b)
+        kept_x, kept_f = np.where(left, c, d), np.where(left, fc, fd)
+        new_x = np.where(left, b - _INV_GOLDEN * (b - a), a + _INV_GOLDEN * (b - a))
+        new_f = f(new_x)
+        c, fc = np.where(left, new_x, kept_x), np.where(left, new_f, kept_f)
+        d, fd = np.where(left, kept_x, new_x), np.where(left, kept_f, new_f)
+        best = np.minimum(best, new_f)
+    return best
+
+
+def _envelope_bound(
+    setup: SkivingSetup,
+    radii: np.ndarray,
+    th0: np.ndarray,
+    mate: Side,
+    sgn: float,
+    phi_grid: np.ndarray,
+    band: tuple[float, float],
+    xatol: float = REFINE_XATOL,
+) -> np.ndarray:
+    """sgn * theta*(rho) for each radius: the most restrictive theta_t over the tooth passage (+inf where none bounds).
+
+    ``th0``: the involute edge at ``radii`` (the Newton start); ``sgn``: the direction in which the cutter tooth grows
+    thicker. The extreme is taken on ``phi_grid`` for all radii at once and refined between the grid's neighbours of
+    each radius' most restrictive instant by one golden-section search over all radii.
+    """
+    th_t, valid, de = _on_flank(setup, radii[:, None], th0[:, None], mate, phi_grid[None, :], band)
+    # the deviation is > 0 on the space side of the flank: where it falls as the cutter tooth thickens (theta moving
+    # by +sgn), the point moves into the tooth: theta_t bounds the edge there
+    active = valid & (sgn * de < 0)
+    cand = np.where(active, sgn * th_t, np.inf)
+    k = np.argmin(cand, axis=1)  # the most restrictive instant on the grid, refined in between
+    grid_best = cand[np.arange(len(radii)), k]
+    out = np.full(len(radii), np.inf)
+    has = np.isfinite(grid_best)
+    if not has.any():
+        return out
+    rho, start = radii[has], th0[has]
+
+    def bound(phi: np.ndarray) -> np.ndarray:
+        th, ok, d = _on_flank(setup, rho, start, mate, phi, band)
+        return np.where(ok & (sgn * d < 0), sgn * th, 1e9)  # finite: keeps the comparisons ordered
+
+    lo = phi_grid[np.maximum(k[has] - 1, 0)]
+    hi = phi_grid[np.minimum(k[has] + 1, len(phi_grid) - 1)]
+    out[has] = np.minimum(grid_best[has], _golden_section_min(bound, lo, hi, xatol))  # 1e9 where none was found
+    return out
 
 
 def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) -> CuttingEdge:
@@ -139,27 +292,10 @@ def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) ->
     band = (g.tip_radius, g.root_radius) if g.internal else (g.base_radius, g.tip_radius)
     theta: dict[str, np.ndarray] = {}
     for side in SIDES:
-        mate = _mate(setup, side)
         sgn = 1.0 if side == "left" else -1.0  # the direction in which the cutter tooth grows thicker
         th0 = inv_edge.theta[side]
-        out = th0.copy()
-        for i, rho in enumerate(radii):
-            th_t, valid, de = _on_flank(setup, rho, th0[i], mate, phi_grid, band)
-            # the deviation is > 0 on the space side of the flank: where it falls as the cutter tooth
-            # thickens (theta moving by +sgn), the point moves into the tooth: theta_t bounds the edge there
-            active = valid & (sgn * de < 0)
-            if not active.any():
-                continue
-            cand = np.where(active, sgn * th_t, np.inf)
-            k = int(np.argmin(cand))  # the most restrictive instant on the grid, refined in between
-
-            def bound(phi: float, rho: float = rho, start: float = th0[i], mate: str = mate, sgn: float = sgn) -> float:
-                th, ok, d = _on_flank(setup, rho, start, mate, np.array([phi]), band)
-                return float(sgn * th[0]) if ok[0] and sgn * d[0] < 0 else 1e9  # finite: keeps Brent stable
-
-            lo, hi = phi_grid[max(k - 1, 0)], phi_grid[min(k + 1, steps - 1)]
-            best = minimize_scalar(bound, bounds=(lo, hi), method="bounded", options={"xatol": 1e-12})
-            out[i] = sgn * min(cand[k], best.fun)  # best.fun = 1e9 where no bound was found
+        bound = _envelope_bound(setup, radii, th0, _mate(setup, side), sgn, phi_grid, band)
+        out = np.where(np.isfinite(bound), sgn * bound, th0)  # no instant bounds the edge: keep the involute
         # Below the generating zone the "envelope" comes from the workpiece's tip corner and departs from the
         # involute by far more than the crossing error: keep the involute there (it never meets the flank).
         out = np.where(np.abs(out - th0) * radii > CONJUGATE_MAX_DEPARTURE, th0, out)
@@ -176,7 +312,7 @@ def tooth_intrusion(setup: SkivingSetup, pts: np.ndarray, phi_grid: np.ndarray) 
     g = setup.gear
     rot, t = setup.cutter_pose(phi_grid)
     q = np.column_stack([pts, np.zeros(len(pts))])
-    w = np.einsum("sij,nj->sni", rot, q) + t[:, None, :]
+    w = np.matmul(rot, q.T).transpose(0, 2, 1) + t[:, None, :]  # (angles, points, 3); a batched matmul: einsum is slow
     r = np.hypot(w[..., 0], w[..., 1])
     pitch = 2 * math.pi / g.teeth
     centre = 2 * math.pi / g.lead * w[..., 2] if g.helix_angle else 0.0
@@ -212,8 +348,8 @@ def _clear_tip_corners(
 
 @functools.lru_cache(maxsize=8)
 def make_edge(setup: SkivingSetup, kind: str, points: int = 120) -> CuttingEdge:
-    """The job's cutting edge (kept: the conjugate edge's envelope takes seconds, and a run needs it in several
-    stages; the edge is immutable)."""
+    """The job's cutting edge (kept: the conjugate edge's envelope takes a fifth of a second, and a run needs it in
+    several stages; the edge is immutable)."""
     if kind not in EDGE_KINDS:
         raise ValueError(f"cutter.edge = {kind!r}: unknown edge; use 'involute' or 'conjugate'")
     return involute_edge(setup, points) if kind == "involute" else conjugate_edge(setup, points)

@@ -4,8 +4,9 @@ import math
 
 import numpy as np
 import pytest
+from scipy.optimize import minimize_scalar
 
-from cutting.edge import conjugate_edge, involute_edge, make_edge, tooth_intrusion
+from cutting.edge import _envelope_bound, _mate, _on_flank, conjugate_edge, involute_edge, make_edge, tooth_intrusion
 from cutting.gear import Gear
 from cutting.skiving import SkivingSetup
 
@@ -79,3 +80,46 @@ def test_spur_cutter_on_helical_internal_gear_is_already_conjugate():
 def test_edge_kind_is_checked():
     with pytest.raises(ValueError, match="unknown edge"):
         make_edge(probe_setup(), "parabolic")
+
+
+def scalar_envelope_bound(st, rho, th0, mate, sgn, phi, band) -> tuple[float, float]:
+    """One radius as the edge was first built: the grid's extreme, then a bounded scalar search around it.
+
+    Returns (grid extreme, refined extreme) of sgn * theta_t (inf where no instant bounds). The search runs on the
+    angle from the bracket's start: scipy's tolerance adds sqrt(eps) * |x| to xatol, which at |phi0| ~ 0.3 rad
+    stops ~5e-9 rad short of a contact leaving the flank (~1 nm on the edge).
+    """
+    th, ok, de = _on_flank(st, rho, th0, mate, phi, band)
+    cand = np.where(ok & (sgn * de < 0), sgn * th, np.inf)
+    k = int(np.argmin(cand))
+    if not np.isfinite(cand[k]):
+        return np.inf, np.inf
+    lo, hi = phi[max(k - 1, 0)], phi[min(k + 1, len(phi) - 1)]
+
+    def bound(u: float) -> float:
+        t, valid, d = _on_flank(st, rho, th0, mate, np.array([lo + u]), band)
+        return float(sgn * t[0]) if valid[0] and sgn * d[0] < 0 else 1e9
+
+    best = minimize_scalar(bound, bounds=(0.0, hi - lo), method="bounded", options={"xatol": 1e-12})
+    return cand[k], min(cand[k], best.fun)
+
+
+def test_vectorized_refinement_matches_a_scalar_bounded_search(probe_edges):
+    """One golden-section search over all radii finds the bound that a bounded scalar search finds radius by radius."""
+    st, ie, _ = probe_edges
+    g = st.gear
+    phi = np.linspace(-0.5 * math.pi, 0.5 * math.pi, 1500)
+    band = (g.base_radius, g.tip_radius)
+    idx = np.array([0, 12, 24, 42, 54])  # below the generating zone (no bound), at its lower end, over it
+    for side, sgn in (("left", 1.0), ("right", -1.0)):
+        mate = _mate(st, side)
+        vec = _envelope_bound(st, ie.radii[idx], ie.theta[side][idx], mate, sgn, phi, band)
+        refined_by = []
+        for j, i in enumerate(idx):
+            grid, scalar = scalar_envelope_bound(st, ie.radii[i], ie.theta[side][i], mate, sgn, phi, band)
+            if np.isinf(scalar):
+                assert vec[j] == np.inf
+                continue
+            assert abs(vec[j] - scalar) * ie.radii[i] < 1e-9  # mm
+            refined_by.append((grid - scalar) * ie.radii[i])
+        assert np.isinf(vec[0]) and max(refined_by) > 1e-6  # the refinement matters: > 1 um at the zone's lower end
