@@ -28,19 +28,28 @@ def threads() -> int:
 
 
 def run_chunks(kernel, n: int, *args, smallest: int = 1) -> None:
-    """``kernel(lo, hi, *args)`` over [0, n) in chunks of at least ``smallest`` items, four per thread so that
-    uneven items balance; inline when there is one thread or too little work to share."""
+    """``kernel(lo, hi, *args)`` over [0, n) in chunks of at least ``smallest`` items, taken by the threads as they
+    become free (many chunks per thread, so that uneven items balance; this thread works too); inline when there is
+    one thread or too little work to share."""
     if n <= 0:
         return
     k = threads()
-    chunks = min(4 * k, n // max(smallest, 1))
+    chunks = min(16 * k, n // max(smallest, 1))
     if k == 1 or chunks < 2:
         kernel(0, n, *args)
         return
     global _pool
     if _pool is None:
-        _pool = ThreadPoolExecutor(max_workers=k, thread_name_prefix="skive-kernel")
-    edges = np.linspace(0, n, chunks + 1).astype(np.int64)
-    futures = [_pool.submit(kernel, int(a), int(b), *args) for a, b in itertools.pairwise(edges) if b > a]
+        _pool = ThreadPoolExecutor(max_workers=k - 1, thread_name_prefix="skive-kernel")
+    edges = np.linspace(0, n, chunks + 1).astype(np.int64).tolist()
+    taken = itertools.count()  # next() on it is atomic under the GIL: each chunk goes to one thread
+
+    def work() -> None:
+        while (c := next(taken)) < chunks:
+            if edges[c + 1] > edges[c]:
+                kernel(edges[c], edges[c + 1], *args)
+
+    futures = [_pool.submit(work) for _ in range(k - 1)]
+    work()
     for f in futures:
         f.result()  # re-raises a kernel's error here
