@@ -41,3 +41,15 @@ def test_setup_reports_bad_jobs_and_exits_2(tmp_path):
     assert res.exit_code == 2 and "no such file" in res.output
     res = CliRunner().invoke(main, ["setup", str(JOBS / "thread_m12.toml"), "--structure", "hydraulic-shaft"])
     assert res.exit_code == 2 and "thread group" in res.output
+
+
+def test_run_of_a_thread_job_measures_the_lead_the_lathe_cut(tmp_path):
+    """skive run on seed 001's thread job: the lathe's stroke, and measurement.json with the lead of the thread the
+    carriage's path cuts (master-slave: the slave lags its master by about one pulse, a constant lead offset)."""
+    res = CliRunner().invoke(main, ["run", str(JOBS / "thread_m12.toml"), "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    doc = json.loads((tmp_path / "measurement.json").read_text())
+    lead = doc["thread"]
+    assert lead["lead_mm"] == 1.75 and lead["form"] == "master-slave"
+    assert 0 < lead["peak_to_peak_um"] < 1.0 and abs(lead["drift_um"]) < 0.1  # a steady lead
+    assert abs(lead["mean_um"]) < 10.0  # the slave's lag of about a pulse

@@ -318,8 +318,9 @@ def run(
     path = job or default_job_path()
     try:
         j = load_job(path)
-        if j.kind == "thread":
-            raise InputError(Problem("job", j.kind, "skive run cuts gears", "use `skive simulate` for a thread job"))
+        if j.kind == "thread":  # seed 001's lathe: the stroke, and the thread's lead measured on the path it made
+            _simulate_thread(j, path, None, out, False, measurement=True)
+            return
         if j.kind == "face_contour":
             from virtual_machine.face_contour_job import format_result, run_face_job
 
@@ -647,8 +648,12 @@ def simulate(
     )
 
 
-def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: bool) -> None:
-    """skive simulate for a thread job (seed 001): one threading stroke on the lathe, its lead error."""
+def _simulate_thread(
+    j, path: Path, duration: float | None, out: Path, as_json: bool, measurement: bool = False
+) -> None:
+    """skive simulate for a thread job (seed 001): one threading stroke on the lathe, its lead error; for skive run
+    (``measurement``) also measurement.json: the lead of the thread the carriage's path cuts, as a thread measuring
+    machine reports it (its deviation along the thread, mean, peak to peak, drift)."""
     import time
 
     import numpy as np
@@ -691,6 +696,9 @@ def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: 
         "travel_mm": travel,
     }
     (out / "simulation.json").write_text(json.dumps(doc, indent=2))
+    if measurement:
+        lead = {"lead_mm": rec.lead, "form": rec.form, **(doc["lead_error_on_thread"] or {}), "drift_um": drift}
+        (out / "measurement.json").write_text(json.dumps({"thread": lead, "run": doc}, indent=2))
     if as_json:
         click.echo(json.dumps(doc, indent=2))
         return
@@ -702,7 +710,8 @@ def _simulate_thread(j, path: Path, duration: float | None, out: Path, as_json: 
             f"lead error on the thread: mean {s['mean_um']:.3f} um, p-p {s['peak_to_peak_um']:.3f} um, "
             f"drift {drift:+.3f} um over {abs(travel):.1f} mm"
         )
-    click.echo(f"written: {out / 'thread_motion.npz'}, {out / 'simulation.json'}, {out / 'scene.xml'}")
+    files = ["thread_motion.npz", "simulation.json", *(["measurement.json"] if measurement else []), "scene.xml"]
+    click.echo("written: " + ", ".join(str(out / f) for f in files))
 
 
 if __name__ == "__main__":
