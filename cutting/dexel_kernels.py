@@ -206,6 +206,7 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
     start = a
     d = a
     speed = 1.0
+    have_b, ok_b, e_b, dl_b, x_b, y_b = False, False, 0.0, 0.0, 0.0, 0.0
     while d < b:
         safe = max(fine, (abs(e0) - dl0) / speed)  # cannot reach the outline
         jump = 2.0 * abs(e0) / speed + fine if ok0 and abs(e0) < NEAR else 0.0  # aims past it: a clean crossing
@@ -217,8 +218,13 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
             if step >= b - d:
                 step = b - d
             d1 = d + step
-            ok1, e1, dl1, x1, y1 = _estimate(tab, g, lo, hi, p, u, i, d1)
-            work[0] += 1
+            if d1 == b and have_b:  # the range's end, estimated before
+                ok1, e1, dl1, x1, y1 = ok_b, e_b, dl_b, x_b, y_b
+            else:
+                ok1, e1, dl1, x1, y1 = _estimate(tab, g, lo, hi, p, u, i, d1)
+                work[0] += 1
+                if d1 == b:
+                    have_b, ok_b, e_b, dl_b, x_b, y_b = True, ok1, e1, dl1, x1, y1
             if ok0 and ok1:
                 delta = max(dl0, dl1)
                 chord = TRACK_BOW * math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2)
