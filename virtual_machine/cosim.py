@@ -25,7 +25,7 @@ import numpy as np
 
 from cutting.dexel_cut import removal_summary
 from cutting.edge import CuttingEdge, make_edge
-from cutting.forces import EngagementLoad, engagement_load
+from cutting.forces import EngagementLoad, engagement_load, repeated_means
 from cutting.holder import check_holder_side
 from cutting.materials import Material, material
 from cutting.path_correction import PathCorrection
@@ -49,11 +49,6 @@ from virtual_machine.simulate import SEGMENTS, MachineRun, MotionRecord, relativ
 FEED = SEGMENTS.index("feed")
 
 
-def _rot_z(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 class ForcePredictor:
     """The cutting loads acting at a time: the latest engagement's load (machine time, blank frame) repeated every
     cutter pitch ``period`` [s]; each repetition is turned by the work's rotation and moved by the feed over its
@@ -75,21 +70,16 @@ class ForcePredictor:
         ld = self.latest
         if ld is None or not len(ld.t) or self.period <= 0:
             return []
-        out = []
         first = max(1, math.ceil((t - ld.t[-1]) / self.period))
         # the engagements up to one window plus two pitches on (plus the lag): later ones get the load of a newer
         # chip, and a prediction that old is stale (the cutter may have left the blank)
         horizon = math.ceil((ld.t[-1] - ld.t[0]) / self.period) + 2 + self.lag
         last = min(math.floor((t + dt - ld.t[0]) / self.period), horizon)
-        for j in range(first, last + 1):
-            delay = j * self.period
-            fp = ld.mean(t - delay, t + dt - delay)
-            if fp is None:
-                continue
-            turn = _rot_z(self.turn_rate * delay)
-            force, point, moment = fp
-            out.append((turn @ force, turn @ point + np.array([0.0, 0.0, self.feed_rate * delay]), turn @ moment))
-        return out
+        if last < first:
+            return []
+        out = np.empty((last - first + 1, 9))
+        k = repeated_means(ld.t, ld.rows, t, t + dt, first, last, self.period, self.turn_rate, self.feed_rate, out)
+        return [(row[0:3], row[3:6], row[6:9]) for row in out[:k]]
 
 
 @dataclass
@@ -228,7 +218,9 @@ def cosimulate(
         if chip is None or chip.volume <= 0:
             predictor.clear()  # the tooth took nothing: none of the next engagements is predicted to cut
             return
-        motion = SampledMotion(setup, index, *samples)
+        # the motion the removal cut the passage along (the dexel removal keeps it), else made from the samples
+        motion = removal.motions.pop(key, None) if hasattr(removal, "motions") else None
+        motion = motion or SampledMotion(setup, index, *samples, checked=True)
         load = engagement_load(
             tooth_pose(motion, m),
             edge_pts,

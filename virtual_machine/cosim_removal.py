@@ -77,11 +77,13 @@ class DexelRemoval:
         self._halves = {plan.index: engagement_half_angle(plan, edge) for plan in plans}
         self._points = outline_points(simplify_outline(edge.outline, 0.02)[0])  # for the blank window
         self._pending: list[tuple[int, int, Samples]] = []
+        #: (pass, passage) -> the motion its chip was cut along, until the co-simulation takes it for the force
+        self.motions: dict[tuple[int, int], SampledMotion] = {}
         self.land_touched = 0  # land rays the cut touched (cutting.dexel_solid.tube_ends), as of the last solid
 
     def submit(self, index: int, m: int, samples: Samples) -> None:
         if self.workpiece is None:
-            phase = gear_phase(SampledMotion(self._plans[index].setup, index, *samples))
+            phase = gear_phase(SampledMotion(self._plans[index].setup, index, *samples, checked=True))
             self.workpiece = DexelWorkpiece.for_gear(self._gear, self._edge, self._spacing, phase=phase)
         self._pending.append((index, m, samples))
 
@@ -95,7 +97,8 @@ class DexelRemoval:
         tables, keys, windows = [], [], []
         out: list[Finished] = []
         for index, group in _merged(pending):
-            motion = SampledMotion(self._plans[index].setup, index, *group[0])
+            # the machine's own relative poses (cosim.relative_pose): rotations by construction
+            motion = SampledMotion(self._plans[index].setup, index, *group[0], checked=True)
             half = self._halves[index]
             ms = np.array(group[1])
             t0 = np.maximum(np.asarray(motion.time_at_angle(ms * pitch - half), dtype=float), 0.0)
@@ -118,6 +121,8 @@ class DexelRemoval:
             chip = chip_of(dexel, motion.setup, motion, start, end)
             self.result.chips.append(chip)
             out.append((index, m, chip))
+            if chip.volume > 0:
+                self.motions[index, m] = motion
         return out
 
     def solid(self) -> mf.Manifold:
