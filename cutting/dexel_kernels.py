@@ -150,7 +150,8 @@ def _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, ma, mb, to
         else:
             m_lo, d_lo = m_hi, d_hi
         d_hi, m_hi = d, m
-        if abs(d_hi - d_lo) <= max(tol, TABLE_TOL) or m == 0:
+        # within the table's own error (its bracket that narrow, or its margin that small): the polish goes on
+        if abs(d_hi - d_lo) <= max(tol, TABLE_TOL) or abs(m) <= TABLE_TOL:
             break
     # polish on the motion: the table's crossing differs from the exact one by the pose's interpolation (a smooth
     # offset of ~1e-5 mm), so a Newton step with the table's slope and a secant step land within ~1e-12 mm; more
