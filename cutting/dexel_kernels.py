@@ -41,6 +41,8 @@ POSE_ERROR = 1e-4
 TABLE_TOL = 1e-6
 #: after a Newton step from the table's crossing, a secant correction below this [mm] leaves an error of its square
 NEWTON_SETTLED = 1e-7
+#: a first Newton step no longer than this [mm] (the table's own error) is the crossing (see _crossing)
+NEWTON_ONE_STEP = 2e-5
 #: within this distance [mm] of the outline a march aims its step past it, to solve a clean crossing at once
 NEAR = 0.05
 #: material intervals a line can hold (a passage splitting one more time than this is reported)
@@ -161,7 +163,9 @@ def _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, ma, mb, to
     work[2] += 1
     x1 = x0 - f0 / slope if slope != 0 and math.isfinite(slope) else x0 + max(1e-6, 1e3 * tol)
     x1 = min(max(x1, min(a, b)), max(a, b))
-    if abs(x1 - x0) <= tol:
+    if abs(x1 - x0) <= NEWTON_ONE_STEP:
+        # the table's crossing was within its own error (~1e-5 mm) of the exact one and the two margins' slopes
+        # differ by the interpolation's derivative (~1e-4 relative): one step leaves ~1e-9 mm
         work[3] += 1
         return x1
     f1 = _exact(motion, tables, outline, g, lo, hi, p, u, i, x1)
