@@ -133,12 +133,21 @@ def _margin_sign(tab, motion, tables, outline, g, lo, hi, p, u, i, d, work):
 
 
 @njit(cache=True, error_model="numpy")
-def _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, ma, mb, tol, work):
+def _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, ma, mb, tol, work, guess=math.nan):
     """The d in [a, b] where the margin changes sign (ma, mb of opposite signs at the ends): the Illinois method on
-    the table's margin, then the exact margin's secant steps until the crossing moves less than ``tol``."""
+    the table's margin (from ``guess`` if it lies inside: where the estimated distances cross), then the exact
+    margin's Newton and secant steps until the crossing moves less than ``tol``."""
     d_lo, d_hi, m_lo, m_hi = a, b, ma, mb
     d = (a + b) / 2
     slope = (mb - ma) / (b - a) if b != a else 0.0
+    if min(a, b) < guess < max(a, b):
+        mg = _table_margin(tab, outline, g, lo, hi, p, u, i, guess)
+        work[1] += 1
+        slope = (mg - ma) / (guess - a)
+        if (mg > 0) == (ma > 0):  # the bracket [guess, b], the guess its newest end
+            d_lo, m_lo, d_hi, m_hi = b, mb, guess, mg
+        else:
+            d_lo, m_lo, d_hi, m_hi = a, ma, guess, mg
     for _ in range(60):  # on the table (cheap): to about its own error
         den = m_hi - m_lo
         d = d_hi - m_hi * (d_hi - d_lo) / den if den != 0 else (d_lo + d_hi) / 2
@@ -257,7 +266,8 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
             mb = _table_margin(tab, outline, g, lo, hi, p, u, i, d1)
             work[1] += 2
             if (ma > 0) == inside and (mb > 0) != inside:
-                r = _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, d, d1, ma, mb, tol, work)
+                guess = d + (d1 - d) * e0 / (e0 - e1)  # where the estimated distances cross
+                r = _crossing(tab, motion, tables, outline, g, lo, hi, p, u, i, d, d1, ma, mb, tol, work, guess)
                 if inside and n_out < out_lo.shape[0]:
                     out_lo[n_out], out_hi[n_out] = start, r
                     n_out += 1
