@@ -336,7 +336,13 @@ def blank_window(gear: Gear, pose, points: np.ndarray, t0: float, t1: float, pro
     ``pose``) can meet the blank (its envelope: radius and face), one probe wider: (t0, t1, the points at the probes
     in it), or None when the tooth stays clear of the blank."""
     probe = np.linspace(t0, t1, probes)
-    w = place(points, *pose(probe))
+    return blank_window_of(gear, points, probe, *pose(probe))
+
+
+def blank_window_of(gear: Gear, points: np.ndarray, probe: np.ndarray, rot: np.ndarray, trans: np.ndarray):
+    """:func:`blank_window` from the tooth's poses (rot, trans) at the probe times ``probe`` (a pass table's rows
+    have them already)."""
+    w = place(points, rot, trans)
     hit = np.nonzero(in_blank_envelope(gear, w).any(axis=1))[0]
     if hit.size == 0:
         return None

@@ -129,6 +129,8 @@ class _Stroke:
         self.snapshots = 0  # taken so far
         self.total: int | None = None  # passages the ideal pass has
         self.ended = False
+        self.step: float | None = None  # cutter angle per sample (_ready_passages)
+        self.step_n = 0  # samples when it was taken
 
     def append(self, row) -> None:
         if self.n == len(self._rows):
@@ -343,24 +345,29 @@ def _snapshot(sim: CoSimulation, removal, stroke: _Stroke, t: float, per_pass: i
 
 def _ready_passages(stroke: _Stroke, setup, pitch: float):
     """The passages of ``stroke`` whose window the samples now cover (all that remain once it has ended), each
-    with its samples (a slice around the window, time from the stroke's start) and the stroke's start time."""
-    t = stroke.t
-    q = stroke.q
-    q = np.column_stack([q[:, 0], q[:, 1], q[:, 2] / 1e-3, q[:, 3] / 1e-3, q[:, 4]])  # P3, X in mm
-    phi = q[:, 0]
+    with its samples (a slice around the window, time from the stroke's start) and the stroke's start time.
+    Each call reads only the samples of the passages it yields (a stroke has ~10^4 of them)."""
+    rows = stroke._rows
+    n = stroke.n
+    phi = rows[:n, 1]  # P3 cutter angle (rad), growing along the stroke
     half = stroke.half
     if stroke.next_m is None:
         stroke.next_m = stroke.first_m = math.ceil((phi[0] - half) / pitch)
-    step = float(np.median(np.diff(phi)))  # cutter angle per sample
+    if stroke.step is None or n >= 2 * stroke.step_n:  # cutter angle per sample, re-taken as the stroke grows
+        stroke.step, stroke.step_n = float(np.median(np.diff(phi[-min(n, 512) :]))), max(n, 8)
+    step = stroke.step
     # a window is covered once the samples reach past its end (four samples more for the interpolation)
     last = math.floor((phi[-1] + half) / pitch) if stroke.ended else math.floor((phi[-1] - half - 4 * step) / pitch)
     while stroke.next_m <= last:
         m = stroke.next_m
         lo = np.searchsorted(phi, m * pitch - half - 4 * step)
         hi = np.searchsorted(phi, m * pitch + half + 4 * step) + 1
-        lo, hi = max(lo - 1, 0), min(hi, len(t))
+        lo, hi = max(lo - 1, 0), min(hi, n)
         if hi - lo < 4:
-            lo, hi = max(0, hi - 4), max(hi, min(len(t), 4))
-        rot, trans = relative_pose(setup, q[lo:hi])
+            lo, hi = max(0, hi - 4), max(hi, min(n, 4))
+        t = rows[lo:hi, 0]
+        q = rows[lo:hi, 1:6].copy()
+        q[:, 2:4] /= 1e-3  # carriage P3 and radial X in mm
+        rot, trans = relative_pose(setup, q)
         stroke.next_m += 1
-        yield m, (t[lo:hi] - t[0], rot, trans, phi[lo:hi], q[lo:hi, 2], q[lo:hi, 3]), float(t[0])
+        yield m, (t - rows[0, 0], rot, trans, q[:, 0], q[:, 2], q[:, 3]), float(rows[0, 0])

@@ -32,11 +32,10 @@ from cutting.removal import (
     CutResult,
     PassCutter,
     Stock,
-    blank_window,
+    blank_window_of,
     engagement_half_angle,
     from_arrays,
     to_arrays,
-    tooth_pose,
 )
 from cutting.sampled_motion import SampledMotion
 from cutting.sweep import outline_points, simplify_outline
@@ -109,11 +108,13 @@ class DexelRemoval:
                 continue
             ms, t0, t1 = ms[live], t0[live], t1[live]
             angle = 2 * np.pi * ((-ms) % z0) / z0
-            tables.append(PassTable.from_windows(motion, t0, t1, angle, self._edge.outline, ms))
-            for m, a, b in zip(ms, t0, t1, strict=True):
+            table = PassTable.from_windows(motion, t0, t1, angle, self._edge.outline, ms)
+            tables.append(table)
+            for k, (m, a, b) in enumerate(zip(ms, t0, t1, strict=True)):
                 # the part of the window the tooth spends in the blank's envelope: where the force acts (every
-                # passage is cut whatever this says: the cut is exact, the window only approximate)
-                found = blank_window(self._gear, tooth_pose(motion, int(m)), self._points, float(a), float(b))
+                # passage is cut whatever this says: the cut is exact, the window only approximate); probed at
+                # the table's poses (the tooth's, over the window)
+                found = blank_window_of(self._gear, self._points, table.t[k], table.rot[k], table.origin[k])
                 keys.append((index, int(m), motion))
                 windows.append(found[:2] if found is not None else (float(a), float(b)))
         chips = self.workpiece.cut(tables) if tables else []
