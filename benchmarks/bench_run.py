@@ -1,18 +1,21 @@
 """Benchmark (run on demand): skive run end to end on a job, each stage's share, against the cut alone.
 
     python benchmarks/bench_run.py                      # the default job, with a recording
-    python benchmarks/bench_run.py --job assets/jobs/spur_external.toml --no-rrd
-    options: --workers N (default: one per core), --skip-cut (no cut-alone comparison)
+    python benchmarks/bench_run.py --job assets/jobs/spur_external.toml --no-rrd --skip-cut
+    options: --workers N (the manifold removal's processes; default: one per core), --removal dexel|manifold,
+             --skip-cut (no cut-alone comparison)
 
-Prints the wall time of each stage of the run (machine and cut, measurement, report, recording) and its share,
-the split of the co-simulation (physics, controllers, removal or the wait for its workers), the machine time,
-and then the cut alone of the same job (ideal motion, same workers, with its measurement, like `skive cut`):
-the issue's bar is run <= 2x cut alone.
+Prints the wall time of each stage of the run (machine and cut, measurement, report, recording), its share and
+its ratio to the machine time, the split of the co-simulation (physics, controllers, removal), the peak memory of
+this process (the dexel removal cuts here; the manifold reference's workers are not counted), the issue's bar for
+the job (issue 26: default job <= 10 s after the first run, spur_external <= 2 min and <= 4 GiB, helical_internal
+<= 4 min), and then the cut alone of the same job (ideal motion, with its measurement, like `skive cut`).
 """
 
 from __future__ import annotations
 
 import argparse
+import resource
 import tempfile
 import time
 from pathlib import Path
@@ -20,8 +23,15 @@ from pathlib import Path
 from cutting.gear_file import write_gear_stl
 from cutting.ideal_cut import cut_ideal, default_workers
 from cutting.trajectory import ideal_passes
-from virtual_machine.job import default_job_path, load_job
+from virtual_machine.job import default_job_path, dexel_spacing, load_job
 from virtual_machine.run import measure_written_cut, run_job
+
+#: issue 26's bars per job file name: wall seconds (after the first run), peak memory [GiB]
+BARS = {"default.toml": (10.0, None), "spur_external.toml": (120.0, 4.0), "helical_internal.toml": (240.0, None)}
+
+
+def peak_rss_gib() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2
 
 
 def main() -> None:
@@ -30,18 +40,27 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=default_workers())
     ap.add_argument("--no-rrd", action="store_true")
     ap.add_argument("--skip-cut", action="store_true")
+    ap.add_argument("--removal", choices=("dexel", "manifold"), default="dexel")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
         t0 = time.perf_counter()
-        doc = run_job(a.job, out, None if a.no_rrd else out / "run.rrd", workers=a.workers)
+        doc = run_job(a.job, out, None if a.no_rrd else out / "run.rrd", workers=a.workers, removal=a.removal)
         wall = time.perf_counter() - t0
     run = doc["run"]
     d = run["durations_s"]
-    print(f"skive run {a.job} ({a.workers} workers): {wall:.1f} s wall for {d['machine']:.2f} s of machine time")
+    machine = d["machine"]
+    print(
+        f"skive run {a.job} ({a.removal} removal): {wall:.1f} s wall for {machine:.2f} s of machine time "
+        f"({wall / machine:.1f}x); peak memory {peak_rss_gib():.2f} GiB"
+    )
     for stage, seconds in d.items():
         if stage != "machine":
-            print(f"  {stage:18s} {seconds:8.1f} s  {seconds / wall:6.1%}")
+            print(f"  {stage:18s} {seconds:8.1f} s  {seconds / wall:6.1%}  {seconds / machine:6.2f}x machine time")
+    bar, memory = BARS.get(Path(a.job).name, (None, None))
+    if bar is not None:
+        verdict = "met" if wall <= bar else "NOT met"
+        print(f"  issue 26's bar: {bar:.0f} s ({verdict})" + (f", {memory:.0f} GiB" if memory else ""))
     split = run["wall_split_s"]
     print(
         f"  co-simulation: physics {split['physics']:.1f} s, controllers {split['control']:.1f} s, removal (or the "
@@ -62,6 +81,8 @@ def main() -> None:
         job.process["sweep_error"],
         job.process["roughing_sweep_error"],
         workers=a.workers,
+        removal=a.removal,
+        spacing=dexel_spacing(job),
     )
     with tempfile.TemporaryDirectory() as tmp:  # as `skive cut` does: gear.stl, the exact surface, the mesh beside
         stl = write_gear_stl(report.result.gear, Path(tmp) / "gear.stl", job.process["stl_tolerance"])
