@@ -185,20 +185,67 @@ def engagement_load(
     engagement's work is kc(h) V. Without it, h is the volume over the area the engaged edge sweeps.
     """
     times = np.linspace(t0, t1, samples)
-    length, mid, vel = engaged_speed(pose, edge, times, inside)
-    speed = np.linalg.norm(vel, axis=2)
-    swept_rate = (length * speed).sum(axis=1)  # chip area swept per second [mm^2/s]
-    swept = float(((swept_rate[1:] + swept_rate[:-1]) / 2 * np.diff(times)).sum())  # trapezoid rule [mm^2]
+    step = 1e-3 * (times[-1] - times[0]) / max(len(times) - 1, 1)
+    # the edge at the times and a central difference's step either side: one pose call (the co-simulation makes
+    # one of these per engagement, so the sums below are compiled)
+    placed = place(edge, *pose(np.concatenate([times, times - step, times + step])))
+    ins = inside(placed[:samples]).astype(float)
+    swept, unit_force, point, unit_moment = _engagement_sums(np.ascontiguousarray(placed), ins, times, step)
     if volume <= 0 or swept <= 0:
         zero = np.zeros((0, 3))
         return EngagementLoad(np.zeros(0), zero, zero, zero, max(volume, 0.0), 0.0, 0.0)
     h = volume / swept  # the layer the engaged edge would take if it cut all along
     h_chip = thickness if thickness is not None and thickness > 0 else h
     kc = material.kc(h_chip) * rake_factor(rake_deg)
-    unit = vel / np.maximum(speed, 1e-12)[..., None]
-    per_element = kc * h * length[..., None] * unit  # [N] on the workpiece, along each element's velocity
-    force = per_element.sum(axis=1)
-    weight = length.sum(axis=1)
-    point = (length[..., None] * mid).sum(axis=1) / np.maximum(weight, 1e-12)[:, None]
-    moment = np.cross(mid - point[:, None, :], per_element).sum(axis=1) * 1e-3  # N mm -> N m
+    # each element pushes kc h dl along its velocity: the resultant and moment are kc h times the unit sums
+    force = kc * h * unit_force  # [N] on the workpiece
+    moment = kc * h * unit_moment * 1e-3  # N mm -> N m
     return EngagementLoad(times, force, point, moment, volume, h_chip, kc)
+
+
+@njit(cache=True, error_model="numpy")
+def _engagement_sums(placed, ins, times, step):
+    """For :func:`engagement_load` (as :func:`engaged_speed` and the sums over its elements): the chip area the
+    engaged edge sweeps [mm^2] (trapezoid rule over ``times``) and per time the sum of dl * (unit velocity), the
+    engaged edge's centroid (length-weighted element midpoints) and the moment of the dl * unit velocity about it
+    [mm^2]. ``placed``: the edge at times, at times - step, at times + step (3 n, k, 3); ``ins``: (n, k) 1.0 where a
+    point at ``times`` is inside the blank's envelope."""
+    n, k = ins.shape
+    force = np.zeros((n, 3))
+    point = np.zeros((n, 3))
+    moment = np.zeros((n, 3))
+    rate = np.zeros(n)
+    length = np.empty(k - 1)
+    mid = np.empty((k - 1, 3))
+    fe = np.empty((k - 1, 3))
+    for i in range(n):
+        weight = 0.0
+        for j in range(k - 1):
+            share = (ins[i, j] + ins[i, j + 1]) / 2  # an element half in the blank counts half
+            dx = placed[i, j + 1, 0] - placed[i, j, 0]
+            dy = placed[i, j + 1, 1] - placed[i, j, 1]
+            dz = placed[i, j + 1, 2] - placed[i, j, 2]
+            length[j] = math.sqrt(dx * dx + dy * dy + dz * dz) * share
+            for c in range(3):
+                mid[j, c] = (placed[i, j, c] + placed[i, j + 1, c]) / 2
+                after = placed[2 * n + i, j, c] + placed[2 * n + i, j + 1, c]
+                before = placed[n + i, j, c] + placed[n + i, j + 1, c]
+                fe[j, c] = (after - before) / (4 * step)  # the element's velocity, scaled below
+            speed = math.sqrt(fe[j, 0] ** 2 + fe[j, 1] ** 2 + fe[j, 2] ** 2)
+            rate[i] += length[j] * speed
+            for c in range(3):
+                fe[j, c] *= length[j] / max(speed, 1e-12)
+                force[i, c] += fe[j, c]
+                point[i, c] += length[j] * mid[j, c]
+            weight += length[j]
+        for c in range(3):
+            point[i, c] /= max(weight, 1e-12)
+        for j in range(k - 1):
+            r0, r1, r2 = mid[j, 0] - point[i, 0], mid[j, 1] - point[i, 1], mid[j, 2] - point[i, 2]
+            moment[i, 0] += r1 * fe[j, 2] - r2 * fe[j, 1]
+            moment[i, 1] += r2 * fe[j, 0] - r0 * fe[j, 2]
+            moment[i, 2] += r0 * fe[j, 1] - r1 * fe[j, 0]
+    swept = 0.0
+    for i in range(n - 1):
+        swept += (rate[i + 1] + rate[i]) / 2 * (times[i + 1] - times[i])
+    return swept, force, point, moment

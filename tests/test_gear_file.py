@@ -57,18 +57,18 @@ def surface_radii(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def test_simplification_moves_the_surface_less_than_its_tolerance(tmp_path):
-    # a sphere of 20 mm, finely tessellated: its facets dip s0 below the sphere; simplified within 5 um, the file's
-    # surface may dip at most s0 + 5 um, and the file is much lighter
+    # a sphere of 20 mm, finely tessellated: its facets dip s0 below the sphere; simplified within 5 um (manifold
+    # asked for half of it: gear_file.SIMPLIFY_SHARE), the file's surface may dip at most s0 + 5 um, and it is lighter
     radius, tol = 20.0, 0.005
     sphere = mf.Manifold.sphere(radius, 640)
     m = sphere.to_mesh64()
     s0 = radius - surface_radii(np.asarray(m.vert_properties)[:, :3], np.asarray(m.tri_verts)).min()
     written = write_gear_stl(sphere, tmp_path / "gear.stl", tol)
     assert written.watertight and written.solid_triangles == sphere.num_tri()
-    assert len(written.mesh.faces) < 0.6 * sphere.num_tri()
+    assert len(written.mesh.faces) < 0.8 * sphere.num_tri()  # measured 0.78
     radii = surface_radii(np.asarray(written.mesh.vertices), np.asarray(written.mesh.faces))
     assert radius - radii.min() <= s0 + tol + 1e-5  # [mm]: plus float32 rounding at 20 mm
-    assert radius - radii.min() > s0 + 0.2 * tol  # the simplification did use its tolerance
+    assert radius - radii.min() > s0 + 0.2 * tol  # the simplification did use its tolerance (0.42)
     assert radii.max() <= radius + 1e-5  # vertices are the solid's own (on the sphere)
     assert written.summary()["simplification_um"] == pytest.approx(5.0)
 
