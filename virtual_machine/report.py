@@ -58,8 +58,8 @@ def _run_chart(path: Path, record, load_rows: np.ndarray, chips: list[tuple[floa
         twin.plot(t, load_rows[:, 4], lw=0.5, color="tab:green", label="torque about the work axis [N m]")
         twin.set_ylabel("torque [N m]")
         twin.legend(loc="upper left")
-    ax[1].set_ylabel("cutting force [N]")
-    ax[1].legend(loc="upper right")
+        ax[1].legend(loc="upper right")
+    ax[1].set_ylabel("cutting force [N]")  # a run without forces leaves this panel empty: no legend
     if chips:
         tc, vc = np.array(chips).T
         ax[2].plot(tc, vc, ".", ms=2, color="tab:purple")
