@@ -87,6 +87,10 @@ class DexelWorkpiece:
         self.work = np.zeros(5, np.int64)
         # per line of a cell: |cos| between the line and the nominal surface's normal, and its cell on it [mm]
         self._cos, self._arc_cell = lines.ray_cos, lines.ray_cell
+        # a gear's fans: the rays' angles and their sense, for the kernel's choice of the rays a ball can reach
+        fan = isinstance(lines, DexelLines)
+        self._ray_alpha = np.ascontiguousarray(lines.alpha, dtype=float) if fan else np.zeros(0)
+        self._alpha_sign = float(lines.inward) if fan else 0.0
 
     # ---- state -----------------------------------------------------------------------------------------------
     @classmethod
@@ -172,6 +176,8 @@ class DexelWorkpiece:
             ln.dz[cells % ln.slices],
             ln.plane_normal,
             ln.plane_offset(cells),
+            self._ray_alpha,
+            self._alpha_sign,
             self.mat_lo,
             self.mat_hi,
             self.mat_n,

@@ -374,6 +374,28 @@ def _box_range(p, u, i, d0, d1, c, axes, half):
     return lo, hi
 
 
+@njit(cache=True, error_model="numpy")
+def _fan_rays(ray_alpha, alpha_sign, u0x, u0y, wx, wy, rs):
+    """The rays [lo, hi] of a fan that can meet a circle of radius ``rs`` in its plane, at (wx, wy) from the fan's
+    centre: the rays' angles ``ray_alpha`` increase; a ray's direction turns from ray 0's (u0x, u0y) by
+    alpha_sign (alpha - alpha_0). A superset (the angular window is widened a little, and taken on both sides of
+    the turn's +-pi seam); hi < lo when none can."""
+    n = ray_alpha.shape[0]
+    dist = math.sqrt(wx * wx + wy * wy)
+    if dist <= rs:
+        return 0, n - 1
+    half = math.asin(rs / dist) + 1e-9
+    turn = math.atan2(u0x * wy - u0y * wx, u0x * wx + u0y * wy)  # from ray 0 to the centre, about the plane normal
+    lo, hi = n, -1
+    for seam in (-2 * math.pi, 0.0, 2 * math.pi):
+        aim = ray_alpha[0] + alpha_sign * (turn + seam)
+        a = np.searchsorted(ray_alpha, aim - half)  # first ray at or after the window's start
+        b = np.searchsorted(ray_alpha, aim + half, side="right") - 1  # last ray at or before its end
+        if a <= b:
+            lo, hi = min(lo, a), max(hi, b)
+    return lo, hi
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def cut_cells(
     lo_k,
@@ -390,6 +412,8 @@ def cut_cells(
     slice_dz,
     plane_n,
     plane_d,
+    ray_alpha,
+    alpha_sign,
     mat_lo,
     mat_hi,
     mat_n,
@@ -412,7 +436,9 @@ def cut_cells(
     w0 (d2 - d1) + w1 (d2^2 - d1^2) / 2 of volume (parallel lines: w0, a fan's rays: w1); ``ray_cos``,
     ``ray_arc``: per ray of a fan, |cos| to the nominal boundary's normal and its arc cell [mm]; ``slice_dz`` per
     cell's slice [mm];
-    ``plane_n``, ``plane_d``: the plane every cell's lines lie in (n . x = d_k: a slice); ``mat_lo``, ``mat_hi``,
+    ``plane_n``, ``plane_d``: the plane every cell's lines lie in (n . x = d_k: a slice); ``ray_alpha``,
+    ``alpha_sign``: a fan's ray angles and their sense (:func:`_fan_rays`; an empty ``ray_alpha``: lines that are not
+    fans, every line of a cell is tried); ``mat_lo``, ``mat_hi``,
     ``mat_n``: the material intervals (n, MAX_PIECES), updated; ``boxes`` = (ball centre
     (G, S, 3), ball radius (G, S), box centre (G, S, 3), axes (G, S, 3, 3), half (G, S, 3), samples per subwindow);
     ``tab`` = (packed table, the rasters of :func:`_distance`); ``motion``, ``tables``, ``outline``: the exact
@@ -421,6 +447,7 @@ def cut_cells(
     table margins, exact margins, crossings, (line, passage) pairs of cell k."""
     ball_c, ball_r, box_c, box_a, box_h, per = boxes
     nsub = box_c.shape[1]
+    fans = ray_alpha.shape[0] == rays  # the lines of a cell are a fan from one centre (its plane's normal is z)
     table = tab[0]
     for k in range(lo_k, hi_k):
         rem_lo = np.empty(MAX_PIECES)
@@ -429,6 +456,8 @@ def cut_cells(
         wk = np.zeros(5, np.int64)
         dz = slice_dz[k]
         reach = np.empty(nsub, np.bool_)
+        ray_lo = np.empty(nsub, np.int64)
+        ray_hi = np.empty(nsub, np.int64)
         first_line = cells[k] * rays
         for pr in range(cell_ptr[k], cell_ptr[k + 1]):
             g = cell_g[pr]
@@ -436,12 +465,34 @@ def cut_cells(
                 out[pr, c] = 0.0
             # the subwindows whose boxes reach the fan's plane (the cell's lines share it, normal u_slice)
             any_reach = False
+            ray_first, ray_last = rays, -1
             for s in range(nsub):
                 reach[s] = _box_meets_plane(box_c[g, s], box_a[g, s], box_h[g, s], plane_n, plane_d[k])
+                ray_lo[s], ray_hi[s] = 0, rays - 1
+                if reach[s] and fans:
+                    # a fan: only the rays whose direction meets the ball's section in the fan's plane can reach it
+                    c = ball_c[g, s]
+                    off = c[0] * plane_n[0] + c[1] * plane_n[1] + c[2] * plane_n[2] - plane_d[k]
+                    rs2 = ball_r[g, s] ** 2 - off * off
+                    if rs2 < 0:
+                        reach[s] = False
+                    else:
+                        ray_lo[s], ray_hi[s] = _fan_rays(
+                            ray_alpha,
+                            alpha_sign,
+                            u[first_line, 0],
+                            u[first_line, 1],
+                            c[0] - p[first_line, 0],
+                            c[1] - p[first_line, 1],
+                            math.sqrt(rs2),
+                        )
+                        reach[s] = ray_lo[s] <= ray_hi[s]
+                if reach[s]:
+                    ray_first, ray_last = min(ray_first, ray_lo[s]), max(ray_last, ray_hi[s])
                 any_reach = any_reach or reach[s]
             if not any_reach:
                 continue
-            for ray in range(rays):
+            for ray in range(ray_first, ray_last + 1):
                 i = first_line + ray
                 n_mat = mat_n[i]
                 if n_mat == 0:
@@ -452,7 +503,9 @@ def cut_cells(
                 d_lo, d_hi = math.inf, -math.inf
                 m_first, m_last = mat_lo[i, 0], mat_hi[i, n_mat - 1]
                 for s in range(nsub):
-                    if not reach[s] or not _ball_hit(p, u, i, m_first, m_last, ball_c[g, s], ball_r[g, s]):
+                    if not reach[s] or ray < ray_lo[s] or ray > ray_hi[s]:
+                        continue
+                    if not _ball_hit(p, u, i, m_first, m_last, ball_c[g, s], ball_r[g, s]):
                         continue
                     a, b = _box_range(p, u, i, m_first, m_last, box_c[g, s], box_a[g, s], box_h[g, s])
                     if a <= b:
