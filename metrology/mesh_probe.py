@@ -43,6 +43,9 @@ _PAIRS_PER_CHUNK = 1_000_000  # (line, triangle) pairs handled at once: some 100
 _MAX_K = 256  # most centres asked per piece at first (more come by asking again)
 _DIRECT = 32.0  # pieces longer than this many tier radii are halved where a sphere is near, shorter ones cut
 _WORKERS = -1  # threads of the k-d tree queries
+#: queries of fewer points run on one thread: scipy starts and joins its threads on every call (~1-2 ms of a
+#: measurement's ~1600 queries on spur_external's gear.stl, 2.5 of its 6 s), more than a small query takes
+_PARALLEL_QUERY = 4096
 # Ray direction of inside(): oblique to every axis and axis diagonal; its largest component goes along the
 # shortest extent of the mesh (short rays).
 _INSIDE_DIRECTION = np.array([0.8979, 0.3371, 0.2832])
@@ -354,7 +357,8 @@ class MeshWorkpiece:
             # long (rays through the part): halve, keeping the halves of pieces that have a sphere within reach
             mid = 0.5 * (p0 + p1)
             reach = hl + R + slack
-            dist, _ = tier.tree.query(o[pl] + mid[:, None] * D[pl], distance_upper_bound=reach.max(), workers=_WORKERS)
+            at = o[pl] + mid[:, None] * D[pl]
+            dist, _ = tier.tree.query(at, distance_upper_bound=reach.max(), workers=_workers(len(at)))
             near = dist <= reach
             pl, a, b, mid = pl[near], p0[near], p1[near], mid[near]
             pl = np.concatenate([pl, pl])
@@ -380,7 +384,7 @@ class MeshWorkpiece:
             first = True
             while todo.size:
                 k = min(k, size)
-                dist, j = tier.tree.query(mids[todo], k=k, distance_upper_bound=bound, workers=_WORKERS)
+                dist, j = tier.tree.query(mids[todo], k=k, distance_upper_bound=bound, workers=_workers(len(todo)))
                 dist, j = dist.reshape(len(todo), k), j.reshape(len(todo), k)
                 full = np.isfinite(dist[:, -1]) & (k < size)  # maybe more within reach: ask again, k x 4
                 if first:
@@ -407,6 +411,11 @@ class MeshWorkpiece:
                 for s0 in range(0, key.size, _PAIRS_PER_CHUNK):
                     part = key[s0 : s0 + _PAIRS_PER_CHUNK]
                     yield part // n_faces, part % n_faces
+
+
+def _workers(points: int) -> int:
+    """Threads for a k-d tree query of ``points`` points (the results do not depend on it)."""
+    return _WORKERS if points >= _PARALLEL_QUERY else 1
 
 
 class _Shear:
