@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from cutting.materials import Material, rake_factor
-from cutting.sweep import PoseFunction, place
+from cutting.sweep import PoseFunction, place, place_few
 
 
 @dataclass
@@ -188,9 +188,9 @@ def engagement_load(
     step = 1e-3 * (times[-1] - times[0]) / max(len(times) - 1, 1)
     # the edge at the times and a central difference's step either side: one pose call (the co-simulation makes
     # one of these per engagement, so the sums below are compiled)
-    placed = place(edge, *pose(np.concatenate([times, times - step, times + step])))
+    placed = place_few(edge, *pose(np.concatenate([times, times - step, times + step])))
     ins = inside(placed[:samples]).astype(float)
-    swept, unit_force, point, unit_moment = _engagement_sums(np.ascontiguousarray(placed), ins, times, step)
+    swept, unit_force, point, unit_moment = _engagement_sums(placed, ins, times, step)
     if volume <= 0 or swept <= 0:
         zero = np.zeros((0, 3))
         return EngagementLoad(np.zeros(0), zero, zero, zero, max(volume, 0.0), 0.0, 0.0)

@@ -22,7 +22,7 @@ from cutting.flank import twist_rate
 from cutting.gear import Gear
 from cutting.skiving import rot_z
 from cutting.solids import blank
-from cutting.sweep import ZippedSweep, outline_points, place, sample_blocks, simplify_outline, split_sides
+from cutting.sweep import ZippedSweep, outline_points, place, place_few, sample_blocks, simplify_outline, split_sides
 from cutting.trajectory import PassMotion
 
 
@@ -342,7 +342,7 @@ def blank_window(gear: Gear, pose, points: np.ndarray, t0: float, t1: float, pro
 def blank_window_of(gear: Gear, points: np.ndarray, probe: np.ndarray, rot: np.ndarray, trans: np.ndarray):
     """:func:`blank_window` from the tooth's poses (rot, trans) at the probe times ``probe`` (a pass table's rows
     have them already)."""
-    w = place(points, rot, trans)
+    w = place_few(points, rot, trans)
     hit = np.nonzero(in_blank_envelope(gear, w).any(axis=1))[0]
     if hit.size == 0:
         return None

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import manifold3d as mf
 import numpy as np
+from numba import njit
 
 #: pose(t) -> (R (n, 3, 3), p (n, 3)): the cutter frame in the work frame at times t
 PoseFunction = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -29,6 +30,29 @@ def outline_points(outline: np.ndarray) -> np.ndarray:
 def place(points: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> np.ndarray:
     """Points (n, 3) in every pose: shape (m, n, 3)."""
     return np.matmul(rot, points.T).transpose(0, 2, 1) + trans[:, None, :]  # batched BLAS: 10x an einsum
+
+
+def place_few(points: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> np.ndarray:
+    """:func:`place` for a few poses and points (a passage's window, the engaged edge): compiled, where numpy's
+    batched matmul costs ~100 us per call on such small operands. The same products, summed in another order (the
+    values agree to rounding)."""
+    return _place(
+        np.ascontiguousarray(points, dtype=float),
+        np.ascontiguousarray(rot, dtype=float),
+        np.ascontiguousarray(trans, dtype=float),
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def _place(points, rot, trans):
+    m, n = rot.shape[0], points.shape[0]
+    out = np.empty((m, n, 3))
+    for i in range(m):
+        for j in range(n):
+            x, y, z = points[j, 0], points[j, 1], points[j, 2]
+            for c in range(3):
+                out[i, j, c] = rot[i, c, 0] * x + rot[i, c, 1] * y + rot[i, c, 2] * z + trans[i, c]
+    return out
 
 
 def sample_window(

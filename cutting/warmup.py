@@ -21,6 +21,7 @@ from cutting.forces import EngagementLoad, _engagement_sums, repeated_means
 from cutting.gear import Gear
 from cutting.sampled_motion import ideal_samples
 from cutting.skiving import SkivingSetup
+from cutting.sweep import place_few
 from cutting.trajectory import ideal_passes
 
 DEG = math.pi / 180
@@ -46,7 +47,7 @@ def warm() -> float:
     load = EngagementLoad(t, np.ones((5, 3)), np.ones((5, 3)), np.zeros((5, 3)), 1.0, 0.05, 3000.0)
     repeated_means(load.t, load.rows, 2e-3, 2.25e-3, 1, 3, 0.8e-3, 10.0, 1.0, np.empty((3, 9)))
     # and an engagement's load from its chip (the edge at 3 x 5 instants, 4 points)
-    _engagement_sums(np.zeros((15, 4, 3)), np.ones((5, 4)), t, 1e-6)
+    _engagement_sums(place_few(np.zeros((4, 3)), np.zeros((15, 3, 3)), np.zeros((15, 3))), np.ones((5, 4)), t, 1e-6)
     return time.perf_counter() - t0
 
 
