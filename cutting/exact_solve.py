@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
-from cutting.sampled_motion import SampledMotion, _log
+from cutting.sampled_motion import SampledMotion
 from cutting.skiving import SkivingSetup
 from cutting.threads import run_chunks
 from cutting.trajectory import PassMotion
@@ -63,24 +63,60 @@ def _compiled_pose(motion) -> tuple[int, np.ndarray] | None:
 def _sampled_parameters(motion: SampledMotion) -> np.ndarray:
     """[n, t (n), rot (n, 9), trans (n, 3), per interval i (n - 1, 15)]: what SampledMotion.pose derives from the
     samples around interval i (the logs of R_i^T R_neighbours, the finite-difference tangents), so that the kernel
-    only evaluates the Hermite curves and Rodrigues' formula. Same expressions, so the same values."""
-    t, rot, p = motion.t, motion.rot, motion.trans
-    n = len(t)
-    i = np.arange(n - 1)
-    i0, i2, i3 = np.maximum(i - 1, 0), i + 1, np.minimum(i + 2, n - 1)
-    ri_t = np.swapaxes(rot[i], -1, -2)
-    v0, v2, v3 = _log(ri_t @ rot[i0]), _log(ri_t @ rot[i2]), _log(ri_t @ rot[i3])
-    per = np.concatenate(
-        [
-            v2,
-            (v2 - v0) / (t[i2] - t[i0])[:, None],
-            (v3 - 0.0) / (t[i3] - t[i])[:, None],
-            (p[i2] - p[i0]) / (t[i2] - t[i0])[:, None],
-            (p[i3] - p[i]) / (t[i3] - t[i])[:, None],
-        ],
-        axis=1,
-    )
-    return np.concatenate([[float(n)], t, rot.reshape(-1), p.reshape(-1), per.reshape(-1)]).astype(float)
+    only evaluates the Hermite curves and Rodrigues' formula. The same expressions (compiled: a co-simulation makes
+    one per passage), so the same values to rounding."""
+    t = np.ascontiguousarray(motion.t, dtype=float)
+    rot = np.ascontiguousarray(motion.rot, dtype=float).reshape(-1, 9)
+    p = np.ascontiguousarray(motion.trans, dtype=float)
+    return _sampled_parameters_of(t, rot, p)
+
+
+@njit(cache=True, error_model="numpy")
+def _log9(r):
+    """sampled_motion._log of one rotation (a row-major 9-tuple)."""
+    cos = min(max((r[0] + r[4] + r[8] - 1) / 2, -1.0), 1.0)
+    angle = math.acos(cos)
+    scale = angle / (2 * math.sin(max(angle, 1e-12))) if angle > 1e-12 else 0.5
+    return (r[7] - r[5]) * scale, (r[2] - r[6]) * scale, (r[3] - r[1]) * scale
+
+
+@njit(cache=True, error_model="numpy")
+def _sampled_parameters_of(t, rot, p):
+    n = t.shape[0]
+    out = np.empty(1 + 13 * n + _PER_INTERVAL * (n - 1))
+    out[0] = n
+    out[1 : 1 + n] = t
+    out[1 + n : 1 + 10 * n] = rot.ravel()
+    out[1 + 10 * n : 1 + 13 * n] = p.ravel()
+    for i in range(n - 1):
+        i0, i2, i3 = max(i - 1, 0), i + 1, min(i + 2, n - 1)
+        ri = rot[i]
+        logs = []
+        for k in (i0, i2, i3):
+            rk = rot[k]
+            # R_i^T R_k, row-major
+            m = (
+                ri[0] * rk[0] + ri[3] * rk[3] + ri[6] * rk[6],
+                ri[0] * rk[1] + ri[3] * rk[4] + ri[6] * rk[7],
+                ri[0] * rk[2] + ri[3] * rk[5] + ri[6] * rk[8],
+                ri[1] * rk[0] + ri[4] * rk[3] + ri[7] * rk[6],
+                ri[1] * rk[1] + ri[4] * rk[4] + ri[7] * rk[7],
+                ri[1] * rk[2] + ri[4] * rk[5] + ri[7] * rk[8],
+                ri[2] * rk[0] + ri[5] * rk[3] + ri[8] * rk[6],
+                ri[2] * rk[1] + ri[5] * rk[4] + ri[8] * rk[7],
+                ri[2] * rk[2] + ri[5] * rk[5] + ri[8] * rk[8],
+            )
+            logs.append(_log9(m))
+        v0, v2, v3 = logs[0], logs[1], logs[2]
+        e = 1 + 13 * n + _PER_INTERVAL * i
+        d02, d13 = t[i2] - t[i0], t[i3] - t[i]
+        for c in range(3):
+            out[e + c] = v2[c]
+            out[e + 3 + c] = (v2[c] - v0[c]) / d02
+            out[e + 6 + c] = (v3[c] - 0.0) / d13
+            out[e + 9 + c] = (p[i2, c] - p[i0, c]) / d02
+            out[e + 12 + c] = (p[i3, c] - p[i, c]) / d13
+    return out
 
 
 def pose_table(motion, t: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
