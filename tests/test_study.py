@@ -266,6 +266,57 @@ def test_monte_carlo_variance_shares(tmp_path) -> None:
     assert pitch.stacked == pytest.approx(np.percentile(fp, 95)) and pitch.base == pytest.approx(fp.mean())
 
 
+# ---- the case store: cases a study takes instead of running them -------------------------------------------------
+
+
+def stored_result(helix: float) -> dict:
+    """A finished case's result as a worker returns it, with a measurement that has every results.csv column."""
+    from virtual_machine.study.runner import FLANK_COLUMNS, SIDES
+
+    doc: dict = {block: {side: {} for side in SIDES} for block in ("profile", "helix", "pitch")}
+    for block, name in FLANK_COLUMNS:
+        for side, sign in zip(SIDES, (-1, 1), strict=True):
+            doc[block][side][name] = sign * helix if name.startswith("f_Hbeta") else 1.5
+    doc["runout"] = {"F_r": 2.0}
+    doc["iso1328"] = {"class": {"overall": 5}}
+    doc["run"] = {"synchronisation": {"sync_error_in_cut": {"rms_um": 0.25}}}
+    return {"id": "x", "status": "ok", "error": "", "wall_s": 12.0, "measurement": doc}
+
+
+def test_a_study_takes_the_cases_its_case_store_holds(tmp_path) -> None:
+    """A study file's ``cache = "DIR"``: a case whose job the store holds is not run; its stored result is the
+    case's, and result.json, the report and the study run say it was reused. The store is keyed by the job's
+    content: the default job file as written (comments, its own layout) is the study's base case. A failed case is
+    not stored."""
+    from virtual_machine.study.cache import CaseCache, content_key
+
+    path = study_file(tmp_path, 'cache = "store"\n[[vary]]\nkey = "machine.encoder_lines"\nvalues = [1000]\n')
+    study = load_study(path)
+    assert study.cache == (tmp_path / "store").resolve()
+    base, coarse = cases(study)
+    text = DEFAULT.read_text()
+    assert base.job_text != text and content_key(base.job_text) == content_key(text)
+    assert content_key(coarse.job_text) != content_key(text)
+    store = CaseCache(study.cache)
+    assert store.put(text, stored_result(3.0)) and store.put(coarse.job_text, stored_result(4.5))
+    assert not store.put(text + "# again\n", {**stored_result(9.0), "status": "failed"}) and len(store) == 2
+    outcome = pipeline.run(path, tmp_path / "out", target=6)  # nothing to run: no cluster starts
+    assert outcome.run.reused == ["c000", "c001"] and outcome.run.ran == [] and outcome.run.workers == 0
+    table = rows(outcome.run.csv)
+    assert [(r["case"], r["status"], r["f_Hbeta_right"]) for r in table] == [
+        ("c000", "ok", "3.0"),
+        ("c001", "ok", "4.5"),
+    ]
+    record = json.loads((tmp_path / "out" / "cases" / "c001" / "result.json").read_text())
+    assert record["reused"] and record["job_hash"] == coarse.job_hash and record["measured"]["class"] == 5
+    sensitivity = column_sensitivity(outcome.study, outcome.run.results, "f_Hbeta_right")
+    assert sensitivity["machine.encoder_lines"] == pytest.approx((4.5 - 3.0) / (1000 - 5000))
+    assert "2 reused from the case store" in outcome.report.read_text()
+    with pytest.raises(InputError) as err:
+        load_study(study_file(tmp_path, 'cache = 3\n[[vary]]\nkey = "machine.encoder_lines"\nvalues = [1000]\n'))
+    assert "cache" in err.value.keys
+
+
 # ---- studies on Dask ----------------------------------------------------------------------------------------------
 
 

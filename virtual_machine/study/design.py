@@ -5,7 +5,10 @@ before any case runs, and named by its position in the design and the hash of it
   a value equal to the base is the base case and is not run twice;
 - grid: every combination (full factorial), in the order of the [[vary]] tables;
 - monte-carlo: ``samples`` draws from numpy's PCG64 seeded with ``seed``, part by part in the order of the
-  [[vary]] tables, so the same study file gives the same cases on any machine and with any number of workers.
+  [[vary]] tables, so the same study file gives the same cases on any machine and with any number of workers;
+- a case with every part at its base value is the base job itself (its keys as the base job has them, written
+  there or left at their defaults: the same content, so a case store shares it with any other run of that job);
+  in any other case every varied key is written.
 """
 
 from __future__ import annotations
@@ -85,11 +88,13 @@ def cases(study: Study) -> list[Case]:
     width = max(3, len(str(len(rows))))
     out, problems = [], []
     start = 0 if study.method == "one-at-a-time" else 1  # c000 is the base case
+    base = {v.key: v.base for v in study.varies}
     for i, values in enumerate(rows):
         case_id = f"c{i + start:0{width}d}"
         data = study.base_data
-        for key, value in values.items():
-            data = set_key(data, key, value)
+        if any(not _same(value, base[key]) for key, value in values.items()):  # else: the base job itself
+            for key, value in values.items():
+                data = set_key(data, key, value)
         text = tomli_w.dumps(data)
         try:
             parse_job(data, f"{study.path} case {case_id}")

@@ -12,6 +12,7 @@ from pathlib import Path
 from metrology import tolerances as iso
 from virtual_machine.job import parse_job
 from virtual_machine.study.budget import Budget, error_budget
+from virtual_machine.study.cache import CaseCache
 from virtual_machine.study.design import cases as study_cases
 from virtual_machine.study.runner import StudyRun, run_study
 from virtual_machine.study.spec import Study, load_study
@@ -46,8 +47,10 @@ def run(
     progress: StudyProgress | None = None,
     on_case=None,
     retry_failed: bool = False,
+    cache: Path | None = None,
 ) -> StudyOutcome:
-    """Every check first (InputError before any case runs), then the cases, then the budget and the report."""
+    """Every check first (InputError before any case runs), then the cases, then the budget and the report.
+    ``cache``: the case store the study shares with others (default: the study file's ``cache``, else none)."""
     from virtual_machine.study.report import write_study_report
 
     study = load_study(path)
@@ -61,11 +64,12 @@ def run(
         if on_case is not None:
             on_case(case_id, record, done, failed, total)
 
-    result = run_study(study, cases, out, workers, scheduler, hook, retry_failed)
+    store = cache if cache is not None else study.cache
+    result = run_study(study, cases, out, workers, scheduler, hook, retry_failed, CaseCache(store) if store else None)
     budget = error_budget(study, result.results, gear_data(study), target)
     (out / "budget.json").write_text(json.dumps(budget_json(budget), indent=2))
     report = write_study_report(
-        out / "report.html", study, result.results, budget, len(cases), result.wall_s, result.workers
+        out / "report.html", study, result.results, budget, len(cases), result.wall_s, result.workers, store
     )
     return StudyOutcome(study, result, budget, len(cases), report)
 

@@ -32,12 +32,14 @@ def write_study_report(
     total_cases: int,
     wall_s: float,
     workers: int,
+    cache: Path | None = None,
 ) -> Path:
-    """Write the study's page to ``path`` (records: case id -> result.json of the finished cases)."""
+    """Write the study's page to ``path`` (records: case id -> result.json of the finished cases; ``cache``: the
+    case store the study took its reused cases from)."""
     title = f"skive study: {study.name}"
     body = [
         f"<h1>{_e(title)}</h1>",
-        _summary(study, records, total_cases, wall_s, workers),
+        _summary(study, records, total_cases, wall_s, workers, cache),
         "<h2>What was varied</h2>",
         _varies_table(study),
         "<h2>Which part limits the class</h2>",
@@ -60,19 +62,25 @@ def write_study_report(
 # --- sections ---------------------------------------------------------------------------------------------------
 
 
-def _summary(study: Study, records: dict[str, dict[str, Any]], total: int, wall_s: float, workers: int) -> str:
+def _summary(
+    study: Study, records: dict[str, dict[str, Any]], total: int, wall_s: float, workers: int, cache: Path | None
+) -> str:
     ok = sum(r.get("status") == "ok" for r in records.values())
     failed = len(records) - ok
+    reused = sorted(cid for cid, r in records.items() if r.get("reused"))
     parts = [
         f"Method <b>{_e(study.method)}</b>",
         f"base job <code>{_e(str(study.base_path))}</code>",
         f"cases: {ok} ok, {failed} failed, {total} in the design"
         + (f" ({total - len(records)} not finished)" if len(records) < total else ""),
-        f"workers: {workers}" if workers else "no case ran now (every case had finished before)",
+        f"workers: {workers}" if workers else "no case ran now (every case had finished before or was reused)",
         f"wall time {_e(_duration(wall_s))}",
     ]
     if study.method == "monte-carlo":
         parts.append(f"{study.samples} samples, seed {study.seed}")
+    if reused:
+        store = f" <code>{_e(str(cache))}</code>" if cache else ""
+        parts.append(f"{len(reused)} reused from the case store{store} (not run again): {_e(', '.join(reused))}")
     return "<p>" + "; ".join(parts) + ".</p>"
 
 
@@ -225,7 +233,7 @@ def _cases_table(study: Study, records: dict[str, dict[str, Any]]) -> str:
             [
                 cid,
                 *(_value(values.get(v.key)) for v in study.varies),
-                r.get("status", "-"),
+                r.get("status", "-") + (" (reused)" if r.get("reused") else ""),
                 _value(measured.get("class")),
                 _num(measured.get("sync_rms_um"), ".2f"),
                 _num(r.get("wall_s"), ".1f"),

@@ -11,6 +11,9 @@ gear cannot be measured, anything else) is recorded with its error; the others g
 
 Each case cuts with one removal process (the Dask worker is the unit of parallelism), so its result does not
 depend on how many workers the study has: the same study gives the same table with 1 or N workers.
+
+With a case store (:mod:`virtual_machine.study.cache`), a case whose job the store holds is not run: its stored
+result is written as the case's (result.json says ``"reused": true``), and every case that finishes is stored.
 """
 
 from __future__ import annotations
@@ -23,10 +26,11 @@ import tempfile
 import time
 import traceback
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from virtual_machine.study.cache import CaseCache
 from virtual_machine.study.design import Case
 from virtual_machine.study.spec import Study
 
@@ -107,8 +111,9 @@ def measured_row(doc: dict[str, Any]) -> dict[str, Any]:
 
 @dataclass
 class StudyRun:
-    """What a study run leaves: every finished case's result (id -> result.json), the cases it ran now, the
-    wall time, and the paths written."""
+    """What a study run leaves: every finished case's result (id -> result.json), the cases it ran now, those it
+    did not (``skipped``: finished before, or ``reused`` from the case store), the wall time, and the paths
+    written."""
 
     results: dict[str, dict[str, Any]]
     ran: list[str]
@@ -116,6 +121,7 @@ class StudyRun:
     wall_s: float
     workers: int
     csv: Path
+    reused: list[str] = field(default_factory=list)
 
 
 def run_study(
@@ -126,14 +132,23 @@ def run_study(
     scheduler: str | None = None,
     on_case: CaseHook | None = None,
     retry_failed: bool = False,
+    cache: CaseCache | None = None,
 ) -> StudyRun:
     """Run every case not finished yet on Dask (``retry_failed``: and those that failed before); write the case
-    files and results.csv as each case finishes."""
+    files and results.csv as each case finishes. ``cache``: take the cases it holds from it instead of running
+    them, and store every case that finishes in it."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     out.mkdir(parents=True, exist_ok=True)
     results = {c.id: r for c in cases if (r := finished(out, c, retry_failed)) is not None}
     pending = [c for c in cases if c.id not in results]
+    reused: list[str] = []
+    for c in list(pending):
+        stored = cache.get(c.job_text) if cache is not None else None
+        if stored is not None:
+            results[c.id] = write_case(out, c, {**stored, "id": c.id}, reused=True)
+            reused.append(c.id)
+            pending.remove(c)
     for c in pending:
         (out / "cases" / c.id).mkdir(parents=True, exist_ok=True)
         (out / "cases" / c.id / "job.toml").write_text(c.job_text)
@@ -141,13 +156,13 @@ def run_study(
     t0 = time.perf_counter()
     ran: list[str] = []
     if not pending:
-        return StudyRun(results, ran, sorted(results), 0.0, 0, path)
+        return StudyRun(results, ran, sorted(results), 0.0, 0, path, reused)
     by_id = {c.id: c for c in cases}
     cluster = None
     if scheduler:
         client = Client(scheduler)
     else:
-        n = workers or default_study_workers()
+        n = min(workers or default_study_workers(), len(pending))  # no idle workers to start
         cluster = LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
         )
@@ -171,6 +186,8 @@ def run_study(
                     "measurement": {},
                 }
             record = write_case(out, by_id[case_id], result)
+            if cache is not None:
+                cache.put(by_id[case_id].job_text, result)
             results[case_id] = record
             ran.append(case_id)
             failed += record["status"] != "ok"
@@ -182,7 +199,7 @@ def run_study(
         if cluster is not None:
             cluster.close()
     skipped = sorted(set(results) - set(ran))
-    return StudyRun(results, ran, skipped, time.perf_counter() - t0, n_workers, path)
+    return StudyRun(results, ran, skipped, time.perf_counter() - t0, n_workers, path, reused)
 
 
 def default_study_workers() -> int:
@@ -206,8 +223,9 @@ def finished(out: Path, case: Case, retry_failed: bool = False) -> dict[str, Any
     return record
 
 
-def write_case(out: Path, case: Case, result: dict[str, Any]) -> dict[str, Any]:
-    """cases/<id>/measurement.json and result.json (written last, atomically: a resumed study trusts it)."""
+def write_case(out: Path, case: Case, result: dict[str, Any], reused: bool = False) -> dict[str, Any]:
+    """cases/<id>/measurement.json and result.json (written last, atomically: a resumed study trusts it);
+    ``reused``: the result came from the case store, not from a run of this study."""
     folder = out / "cases" / case.id
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "job.toml").write_text(case.job_text)
@@ -223,6 +241,8 @@ def write_case(out: Path, case: Case, result: dict[str, Any]) -> dict[str, Any]:
         "wall_s": result["wall_s"],
         "measured": measured_row(doc),
     }
+    if reused:
+        record["reused"] = True
     tmp = folder / "result.json.tmp"
     tmp.write_text(json.dumps(record, indent=2))
     tmp.replace(folder / "result.json")

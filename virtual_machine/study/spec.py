@@ -6,6 +6,7 @@ A study file names a base job and a list of ``[[vary]]`` entries::
     method = "one-at-a-time"                 # or "grid" (full factorial) or "monte-carlo"
     samples = 50                             # monte-carlo only
     seed = 1                                 # monte-carlo only: the same seed draws the same cases
+    cache = "../cases"                       # optional: a case store shared with other studies (study/cache.py)
     [[vary]]
     key = "machine.model.work_drive.backlash"  # any job key, dotted
     label = "work-drive backlash"            # the part's name in the report (default: the key)
@@ -36,7 +37,7 @@ from virtual_machine.job import (
 
 METHODS = ("one-at-a-time", "grid", "monte-carlo")
 DISTRIBUTIONS = ("normal", "uniform")
-STUDY_KEYS = ("base", "method", "samples", "seed", "vary")
+STUDY_KEYS = ("base", "method", "samples", "seed", "cache", "vary")
 VARY_KEYS = ("key", "label", "values", "range", "steps", "distribution", "mean", "std", "lo", "hi", "tolerance")
 MODEL_PREFIX = "machine.model."
 
@@ -81,6 +82,7 @@ class Study:
     varies: tuple[Vary, ...]
     samples: int = 0
     seed: int = 0
+    cache: Path | None = None  # the case store shared with other studies (absolute), or none
 
     @property
     def name(self) -> str:
@@ -182,6 +184,10 @@ def load_study(path: str | Path) -> Study:
         problems.append(Problem("samples", samples, "a Monte-Carlo study needs samples >= 2", "e.g. samples = 50"))
     if not isinstance(seed, int) or isinstance(seed, bool):
         problems.append(Problem("seed", seed, "must be an integer", "e.g. seed = 1"))
+    cache = data.get("cache")
+    if cache is not None and not (isinstance(cache, str) and cache):
+        problems.append(Problem("cache", cache, "must be a directory path", 'e.g. cache = "../cases"'))
+        cache = None
     if "base" not in data or not isinstance(data["base"], str):
         raise InputError(
             [*problems, Problem("base", data.get("base"), "missing", 'e.g. base = "../jobs/default.toml"')], source
@@ -215,7 +221,16 @@ def load_study(path: str | Path) -> Study:
             varies.append(vary)
     if problems:
         raise InputError(problems, source)
-    return Study(path, base_path, base_data, method, tuple(varies), samples if method == "monte-carlo" else 0, seed)
+    return Study(
+        path,
+        base_path,
+        base_data,
+        method,
+        tuple(varies),
+        samples if method == "monte-carlo" else 0,
+        seed,
+        (path.parent / cache).resolve() if cache else None,
+    )
 
 
 def _vary(entry: dict, where: str, method: str, base_data: dict, problems: list[Problem]) -> Vary | None:
