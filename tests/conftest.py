@@ -8,6 +8,11 @@ after them in their usual order: the two processes then finish within a short fi
 
 from __future__ import annotations
 
+import os
+
+import pytest
+from shared_runs import SharedRuns
+
 #: test files by wall time, longest first (the scenario fixture and the studies run whole machine jobs)
 LONG_FIRST = (
     "test_scenarios.py",
@@ -26,3 +31,11 @@ LONG_FIRST = (
 def pytest_collection_modifyitems(session, config, items) -> None:
     rank = {name: i for i, name in enumerate(LONG_FIRST)}
     items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: the rest keep their order
+
+
+@pytest.fixture(scope="session")
+def shared_runs(tmp_path_factory) -> SharedRuns:
+    """Whole-machine runs shared by the test files of this session (tests/shared_runs.py): under xdist in the
+    session's directory above each process's own, so every process of the session finds them."""
+    base = tmp_path_factory.getbasetemp()
+    return SharedRuns((base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "shared_runs")

@@ -32,14 +32,27 @@ SCENARIOS = Path(__file__).resolve().parents[1] / "assets" / "jobs" / "scenarios
 SIDES = ("left", "right")
 
 
-@functools.cache
-def scenario(name: str):
-    """Run one scenario job as skive run does: (job, co-simulation, measurement of the exact swept surface of the
-    motion the machine made). Cached: several tests share."""
-    job = load_job(SCENARIOS / f"{name}.toml")
-    sim = cosimulate(job, workers=2)
-    exact = SweptVolumes(job.gear, sim.edge, sampled_passes(job.skiving, sim.record.passes))
-    return job, sim, measure_gear(exact, job.gear)
+#: the scenarios whose runs test_study.py's studies take as their cases: run once in the session, as a study case
+#: (skive run: the same co-simulation, and the same measurement of the exact swept surface with the mesh beside it)
+STUDIED = ("helical_mechatronic", "lead_screw_error", "mechanical_change_gears")
+
+
+@pytest.fixture(scope="module")
+def scenario(shared_runs):
+    """name -> (job, the machine's motion record, measurement of the exact swept surface of the motion the machine
+    made): each scenario job run once as skive run does, the tests share it."""
+
+    @functools.cache
+    def run(name: str):
+        job = load_job(SCENARIOS / f"{name}.toml")
+        if name in STUDIED:
+            result, record = shared_runs.run(SCENARIOS / f"{name}.toml")
+            return job, record, result["measurement"]
+        sim = cosimulate(job, workers=2)
+        exact = SweptVolumes(job.gear, sim.edge, sampled_passes(job.skiving, sim.record.passes))
+        return job, sim.record, measure_gear(exact, job.gear)
+
+    return run
 
 
 @functools.cache
@@ -52,14 +65,13 @@ def ideal_cut_of_baseline():
 
 
 @pytest.fixture(scope="module")
-def helical():
-    """The helical baseline and the scenarios against it: name -> (job, co-simulation, measurement)."""
+def helical(scenario):
+    """The helical baseline and the scenarios against it: name -> (job, motion record, measurement)."""
     return {name: scenario(name) for name in ("helical_mechatronic", "lead_screw_error", "no_correction")}
 
 
-def drift_um_per_mm(sim, face_width: float) -> float:
+def drift_um_per_mm(rec, face_width: float) -> float:
     """Slope of the synchronisation error against the carriage while the mesh point crosses the face [um/mm]."""
-    rec = sim.record
     s, e = rec.q[rec.cutting, 2], rec.sync_um[rec.cutting]
     over = np.abs(s) < face_width / 2
     return float(np.polyfit(s[over], e[over], 1)[0])
@@ -76,9 +88,9 @@ def base_tangent_length(job, doc) -> float:
     return (z1 - z0) * math.cos(math.atan(math.tan(g.alpha_n) / math.cos(g.beta)))
 
 
-def predicted_helix_change(job, doc, sim, base_sim) -> float:
+def predicted_helix_change(job, doc, rec, base_rec) -> float:
     """The left-flank change of f_Hbeta [um] that the change of the sync error's drift predicts."""
-    slope = drift_um_per_mm(sim, job.gear.face_width) - drift_um_per_mm(base_sim, job.gear.face_width)
+    slope = drift_um_per_mm(rec, job.gear.face_width) - drift_um_per_mm(base_rec, job.gear.face_width)
     return -slope * base_tangent_length(job, doc)
 
 
@@ -96,7 +108,7 @@ def measured_change(doc, ref, name: str) -> float:
 def test_lead_screw_pitch_error_tilts_the_helix(helical) -> None:
     """The carriage travels (1 + eps) times what the CNC counts, the differential rotation follows the count: the
     lead grows by eps, so the helix slope deviation changes by eps L_beta tan(beta_b), opposite on the flanks."""
-    (job, base_sim, base), (bad_job, sim, bad) = helical["helical_mechatronic"], helical["lead_screw_error"]
+    (job, base_rec, base), (bad_job, rec, bad) = helical["helical_mechatronic"], helical["lead_screw_error"]
     eps = bad_job.machine["model"]["lead_screw_pitch_error"]
     g = job.gear
     alpha_t = math.atan(math.tan(g.alpha_n) / math.cos(g.beta))
@@ -109,7 +121,7 @@ def test_lead_screw_pitch_error_tilts_the_helix(helical) -> None:
     for s in SIDES:  # measured -8.77 / +8.82 um against 9.03 um
         assert abs(change[s]) == pytest.approx(expected, rel=0.05), change
     # the same from the recorded drift: r2 |dphi2/ds| eps = 2.7 um per mm of carriage (measured 8.81 um)
-    assert abs(predicted_helix_change(bad_job, bad, sim, base_sim)) == pytest.approx(expected, rel=0.05)
+    assert abs(predicted_helix_change(bad_job, bad, rec, base_rec)) == pytest.approx(expected, rel=0.05)
     # the pitch does not care (measured +0.08 um); the profile slope moves too, by the same amount on both
     # flanks (measured -4.7 / -4.8 um: in skiving root and tip of a flank are generated at different carriage
     # positions, mirrored between the flanks, and the phase drifts with the carriage), less than the helix
@@ -122,12 +134,12 @@ def test_adaptive_correction_holds_the_phase_under_the_cutting_load(helical) -> 
     """Without the correction (keys open) the axes are only speed-controlled: the cutting torque's changes leave
     phase errors that stay. The correction reduces the sync error while cutting at least 5x (seed 000's purpose);
     without it the phase drifts over the face and tilts the helix by that drift, opposite on the flanks."""
-    (job, base_sim, base), (_, sim, free) = helical["helical_mechatronic"], helical["no_correction"]
-    with_, without = base_sim.record.sync_stats("cut")["rms_um"], sim.record.sync_stats("cut")["rms_um"]
+    (job, base_rec, base), (_, rec, free) = helical["helical_mechatronic"], helical["no_correction"]
+    with_, without = base_rec.sync_stats("cut")["rms_um"], rec.sync_stats("cut")["rms_um"]
     assert without > 5 * with_, (with_, without)
     change = helix_change(free, base)
     assert change["left"] * change["right"] < 0, change
-    predicted = predicted_helix_change(job, free, sim, base_sim)
+    predicted = predicted_helix_change(job, free, rec, base_rec)
     assert abs(predicted) > 10.0  # a real effect, not scatter
     # the helix angle part (measured 47.4 um against 46.8 predicted); the part alike on the flanks (+2.5 um, a taper
     # of the tooth thickness) is the depth axis giving way to a radial force that the phase error changes
@@ -137,7 +149,7 @@ def test_adaptive_correction_holds_the_phase_under_the_cutting_load(helical) -> 
     assert free["iso1328"]["class"]["overall"] is None or free["iso1328"]["class"]["overall"] > 9
 
 
-def test_ideal_stiff_machine_cuts_the_ideal_kinematics_gear() -> None:
+def test_ideal_stiff_machine_cuts_the_ideal_kinematics_gear(scenario) -> None:
     """Every stage and the nut rigid, no backlash or friction, a 10x stiffer depth axis, fine pulses and encoders:
     the machine turns the exact setup ratios (mean sync error ~0), so it cuts the gear of the ideal kinematics.
     What remains is the servo loops' lag under the cutting load, which changes while the cutter crosses the face:
@@ -148,11 +160,11 @@ def test_ideal_stiff_machine_cuts_the_ideal_kinematics_gear() -> None:
     plane at a phase that turns once per revolution; they fall with the feed squared (test_cut_measurement.py).
     The drift also tilts both profiles alike (+2.8 / +1.9 um of f_Halpha here, as the lead screw's drift does):
     F_alpha is not compared."""
-    job, sim, doc = scenario("ideal_machine")
+    job, rec, doc = scenario("ideal_machine")
     ideal = ideal_cut_of_baseline()
-    stats = sim.record.sync_stats("cut")
+    stats = rec.sync_stats("cut")
     assert abs(stats["mean_um"]) < 0.5, stats
-    drift = drift_um_per_mm(sim, job.gear.face_width)
+    drift = drift_um_per_mm(rec, job.gear.face_width)
     assert abs(drift) < 1.5, drift  # the servos alone hold the load: a small lag, no ratio error
     opposite, alike = helix_parts(doc, ideal)
     assert opposite == pytest.approx(-drift * base_tangent_length(job, doc), abs=0.25), (opposite, drift)
@@ -163,18 +175,18 @@ def test_ideal_stiff_machine_cuts_the_ideal_kinematics_gear() -> None:
     assert doc["iso1328"]["class"]["overall"] <= ideal["iso1328"]["class"]["overall"]
 
 
-def test_mechanical_change_gear_error_tilts_the_helix_by_the_sheets_amount() -> None:
+def test_mechanical_change_gear_error_tilts_the_helix_by_the_sheets_amount(scenario) -> None:
     """S1 without a 17-tooth change gear realises ix = 1.7 as 65/41 * 89/83 (eps = -1.73e-5): the work lags
     eps pi d2 = 1.12 um of arc per work turn, -5.6 um per mm of carriage, and the helix tilts by that drift over
     L_beta, opposite on the flanks (18.9 um here; measured 19.2); the load barely adds to it. Tolerance 5 %."""
-    job, sim, doc = scenario("mechanical_change_gears")
+    job, rec, doc = scenario("mechanical_change_gears")
     ideal = ideal_cut_of_baseline()
     ix = setup_sheet(job, "mechanical").settings["ix"]
     assert ix.realisation["gears"]["a_b_c_d"] == [65, 41, 89, 83] and ix.relative_error == pytest.approx(
         -1.73e-5, rel=0.01
     )
     predicted = ix.effect["pitch_um_per_work_rev"] / job.process["axial_feed"]  # um of arc per mm of carriage
-    assert drift_um_per_mm(sim, job.gear.face_width) == pytest.approx(predicted, rel=0.05)
+    assert drift_um_per_mm(rec, job.gear.face_width) == pytest.approx(predicted, rel=0.05)
     opposite, alike = helix_parts(doc, ideal)
     assert opposite == pytest.approx(-predicted * base_tangent_length(job, doc), rel=0.05), (opposite, predicted)
     assert abs(alike) < 2.5  # the realistic depth axis under the radial force (1.8 um, as on the baseline)
@@ -182,36 +194,35 @@ def test_mechanical_change_gear_error_tilts_the_helix_by_the_sheets_amount() -> 
     assert doc["iso1328"]["class"]["overall"] is None or doc["iso1328"]["class"]["overall"] > 9
 
 
-def test_hydraulic_shaft_without_differential_tilts_the_helix_by_its_divider_error() -> None:
+def test_hydraulic_shaft_without_differential_tilts_the_helix_by_its_divider_error(scenario) -> None:
     """S3 makes the helix through kx = (z2/z0)(1 + dir2 s/T) = 1.177440, which the coding disc realises as 4239
     windows of 3600 steps = 1.1775 (eps = +5.1e-5: the work lags 3.3 um per turn, 16.6 um per mm). The simulated
     machine turns exactly the realised ratio; the oil columns, twisting more as the load builds over the face,
     add their own lag (measured 26 % more drift). The helix tilts by the recorded drift (70 um), opposite on the
     flanks. Tolerances: the ratio within 1e-5; the helix within 5 % of the recorded drift."""
-    job, sim, doc = scenario("hydraulic_shaft")
+    job, rec, doc = scenario("hydraulic_shaft")
     ideal = ideal_cut_of_baseline()
     kx = setup_sheet(job, "hydraulic-shaft").settings["kx"]
-    rec = sim.record
     b1, b2 = rec.q[rec.cutting, 0], rec.q[rec.cutting, 1]
     assert abs(np.polyfit(b2, b1, 1)[0]) == pytest.approx(kx.realised, rel=1e-5)
     sheet = -kx.effect["pitch_um_per_work_rev"] / job.process["axial_feed"]  # S3: kx is cutter turns per work turn
-    drift = drift_um_per_mm(sim, job.gear.face_width)
+    drift = drift_um_per_mm(rec, job.gear.face_width)
     assert sheet < -15.0 and 1.0 <= drift / sheet < 1.35, (drift, sheet)
     opposite, _ = helix_parts(doc, ideal)
     assert opposite == pytest.approx(-drift * base_tangent_length(job, doc), rel=0.05), (opposite, drift)
     assert doc["iso1328"]["class"]["overall"] is None  # 70 um of helix slope: beyond class 11
 
 
-def test_hydraulic_shaft_with_differential_keeps_the_helix() -> None:
+def test_hydraulic_shaft_with_differential_keeps_the_helix(scenario) -> None:
     """S2 adds the helix through the differential from the feed (ky, -4.9e-6 off) and leaves kx = z0/z2 exact:
     no ratio drift, so the helix stays within what the load's lag makes on any machine (1.8 um here, against
     70 um without the differential; the recorded drift predicts it within 0.1 um) and the gear grades like the
     ideal cut."""
-    job, sim, doc = scenario("hydraulic_differential")
+    job, rec, doc = scenario("hydraulic_differential")
     ideal = ideal_cut_of_baseline()
     sheet = setup_sheet(job, "hydraulic-differential").settings
     assert sheet["kx"].relative_error == 0.0 and abs(sheet["ky"].relative_error) < 1e-5
-    drift = drift_um_per_mm(sim, job.gear.face_width)
+    drift = drift_um_per_mm(rec, job.gear.face_width)
     assert abs(drift) < 1.5, drift
     opposite, _ = helix_parts(doc, ideal)
     assert abs(opposite) < 2.5 and opposite == pytest.approx(-drift * base_tangent_length(job, doc), abs=0.1)
@@ -220,37 +231,35 @@ def test_hydraulic_shaft_with_differential_keeps_the_helix() -> None:
     assert doc["iso1328"]["class"]["overall"] <= ideal["iso1328"]["class"]["overall"]
 
 
-def test_work_drive_backlash_stays_out_of_the_gear() -> None:
+def test_work_drive_backlash_stays_out_of_the_gear(scenario) -> None:
     """Ten times the work drive's backlash (200 arcsec): the work motor M2's torque does reverse while cutting
     (the servo answers each engagement's torque pulse), so the play can be crossed; but the encoder sits on the
     spindle B2 (the play is inside the position loop) and the spindle with table and blank (0.15 kg m^2, 9x the
     motor's inertia referred to it) moves by only T t^2 / 2J while the motor crosses. Theory: the gear is the
     baseline's, every ISO parameter within 0.3 um, and the sync error the same within 0.1 um RMS."""
-    _, sim, doc = scenario("work_backlash")
-    _, base_sim, base = scenario("helical_mechatronic")
-    rec = sim.record
+    _, rec, doc = scenario("work_backlash")
+    _, base_rec, base = scenario("helical_mechatronic")
     m2 = rec.torque[rec.cutting, rec.actuators.index("M2")]
     assert m2.min() < 0.0 < m2.max(), (m2.min(), m2.max())
-    assert abs(rec.sync_stats("cut")["rms_um"] - base_sim.record.sync_stats("cut")["rms_um"]) < 0.1
+    assert abs(rec.sync_stats("cut")["rms_um"] - base_rec.sync_stats("cut")["rms_um"]) < 0.1
     for name, value in doc["iso1328"]["measured"].items():
         assert abs(value - base["iso1328"]["measured"][name]) < 0.3, name
 
 
-def test_soft_tool_spindle_twists_inside_the_correction_loop() -> None:
+def test_soft_tool_spindle_twists_inside_the_correction_loop(scenario) -> None:
     """A belt 10x softer (2e3 N m/rad, 142 Hz with the spindle): the mean cutting torque twists it by T/k, many
     micrometres at the cutter, but the encoder sits on the spindle B1, so the correction holds the mean phase
     (the mean sync error stays within 0.3 um). What it cannot hold is the dynamics: the load's changes ring the
     softer stage, the sync error's peak-to-peak grows by more than a third, and the helix moves by the change of
     the recorded drift (0.89 um predicted, 0.93 measured; within 0.1 um)."""
-    job, sim, doc = scenario("soft_tool_spindle")
-    _, base_sim, base = scenario("helical_mechatronic")
-    rec = sim.record
+    job, rec, doc = scenario("soft_tool_spindle")
+    _, base_rec, base = scenario("helical_mechatronic")
     k = job.machine["model"]["tool_drive"]["stiffness"]
     torque = abs(float(np.mean(rec.torque[rec.cutting, rec.actuators.index("M1")])))
     twist_um = torque / k * job.skiving.cutter.reference_diameter / 2 * 1e3  # at the cutter's reference circle
-    stats, base_stats = rec.sync_stats("cut"), base_sim.record.sync_stats("cut")
+    stats, base_stats = rec.sync_stats("cut"), base_rec.sync_stats("cut")
     assert twist_um > 10 * abs(stats["mean_um"] - base_stats["mean_um"]) and twist_um > 3.0, twist_um
     assert abs(stats["mean_um"] - base_stats["mean_um"]) < 0.3
     assert stats["peak_to_peak_um"] > 1.33 * base_stats["peak_to_peak_um"], (stats, base_stats)
     opposite, _ = helix_parts(doc, base)
-    assert opposite == pytest.approx(predicted_helix_change(job, doc, sim, base_sim), abs=0.1)
+    assert opposite == pytest.approx(predicted_helix_change(job, doc, rec, base_rec), abs=0.1)

@@ -380,16 +380,21 @@ def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(small_study
     assert "0 run now" in res.output and "3 already done" in res.output and "no ISO 1328-1 classes" in res.output
 
 
-def test_a_studys_lead_screw_sensitivity_is_the_theory(tmp_path) -> None:
+def test_a_studys_lead_screw_sensitivity_is_the_theory(tmp_path, shared_runs) -> None:
     """The helical scenario baseline and a 1 % long lead screw: the study's sensitivity of f_Hbeta is
     L_beta tan(beta_b) per unit of eps, opposite on the flanks (the scenario test's theory), within 5 %; the
-    budget's contribution is that sensitivity times the stated tolerance."""
+    budget's contribution is that sensitivity times the stated tolerance. Its two cases are the scenario jobs
+    helical_mechatronic and lead_screw_error: the study takes their runs from the session's case store (run once,
+    shared with test_scenarios.py) instead of running them again."""
+    for name in ("helical_mechatronic", "lead_screw_error"):
+        shared_runs.run(SCENARIOS / f"{name}.toml")
     path = study_file(
         tmp_path,
         '[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\nvalues = [0.01]\ntolerance = 8e-5\n',
         base=SCENARIOS / "helical_mechatronic.toml",
     )
-    one = pipeline.run(path, tmp_path / "out", workers=2, target=5)
+    one = pipeline.run(path, tmp_path / "out", workers=2, target=5, cache=shared_runs.cache.directory)
+    assert one.run.reused == ["c000", "c001"] and one.run.ran == []
     job = load_job(SCENARIOS / "helical_mechatronic.toml")
     g = job.gear
     doc = (tmp_path / "out" / "cases" / "c001" / "measurement.json").read_text()
@@ -406,16 +411,23 @@ def test_a_studys_lead_screw_sensitivity_is_the_theory(tmp_path) -> None:
     assert "lead_screw_pitch_error" in page and "data:image/png;base64," in page
 
 
-def test_a_studys_change_gear_error_is_the_setting_sheets_drift(tmp_path) -> None:
+def test_a_studys_change_gear_error_is_the_setting_sheets_drift(tmp_path, shared_runs) -> None:
     """S1 without a 17-tooth change gear (the scenario) against the same machine with one: the helix tilt between
-    the two cases is the drift the setting sheet predicts for the realised ix, over L_beta, within 5 %."""
+    the two cases is the drift the setting sheet predicts for the realised ix, over L_beta, within 5 %. The base
+    case is the scenario's run from the session's case store; the case with 17 runs on Dask and is stored."""
     base = SCENARIOS / "mechanical_change_gears.toml"
+    shared_runs.run(base)
     job = load_job(base)
     with_17 = sorted([*job.machine["change_gears"], 17])
     path = study_file(tmp_path, f'[[vary]]\nkey = "machine.change_gears"\nvalues = [{with_17}]\n', base=base)
-    outcome = pipeline.run(path, tmp_path / "out", workers=2)
+    outcome = pipeline.run(path, tmp_path / "out", workers=2, cache=shared_runs.cache.directory)
     res = outcome.run.results
     assert [res[c]["status"] for c in ("c000", "c001")] == ["ok", "ok"]
+    assert outcome.run.reused == ["c000"] and outcome.run.ran == ["c001"]
+    (case,) = (c for c in cases(outcome.study) if c.id == "c001")
+    assert shared_runs.cache.get(case.job_text)["measurement"] == json.loads(
+        (tmp_path / "out" / "cases" / "c001" / "measurement.json").read_text()
+    )
     drift = []  # um of arc per mm of carriage, from each case's own setting sheet
     for case in ("c000", "c001"):
         ix = setup_sheet(load_job(tmp_path / "out" / "cases" / case / "job.toml"), "mechanical").settings["ix"]
