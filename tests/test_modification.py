@@ -257,14 +257,47 @@ def modified_job(modification: dict):
     return parse_job(data, str(SCENARIO))
 
 
-@pytest.fixture(scope="module")
-def crowned_path():
-    """The helical scenario job (z 20, mn 1, beta 15 deg, b 4) with 10 um lead crowning on both flanks and a
-    +6 um helix angle modification on the left one, planned and cut on the ideal machine."""
-    from virtual_machine.modification_path import plan_path
+CROWNED = {"lead_crowning": 0.010, "left": {"helix_angle_modification": 0.006}}
 
-    job = modified_job({"lead_crowning": 0.010, "left": {"helix_angle_modification": 0.006}})
-    return job, plan_path(job)
+
+@pytest.fixture(scope="module")
+def crowned_run(tmp_path_factory):
+    """`skive run` of the helical scenario job (z 20, mn 1, beta 15 deg, b 4) with 10 um lead crowning on both
+    flanks and a +6 um helix angle modification on the left one: the path planned and cut on the ideal machine,
+    then iterated on the simulated one. Returns the run's output and directory, and the job and path it planned on
+    the ideal machine (the tests of the path read that plan: it is planned once)."""
+    from unittest import mock
+
+    from click.testing import CliRunner
+
+    import virtual_machine.modification_path as modification_path
+    from virtual_machine.cli import main
+
+    tmp = tmp_path_factory.mktemp("crowned")
+    job = tmp / "crowned.toml"
+    job.write_text(
+        SCENARIO.read_text() + "\n[modification]\nlead_crowning = 0.010\n[modification.left]\n"
+        "helix_angle_modification = 0.006\n"
+    )
+    planned, plan_path = [], modification_path.plan_path
+
+    def keep(job, *args, **kwargs):
+        planned.append((job, plan_path(job, *args, **kwargs)))
+        return planned[-1][1]
+
+    with mock.patch.object(modification_path, "plan_path", keep):
+        res = CliRunner().invoke(main, ["run", str(job), "--out", str(tmp / "out"), "--mesh-tolerance", "40"])
+    assert res.exit_code == 0, res.output
+    (plan,) = planned
+    return res.output, tmp / "out", plan
+
+
+@pytest.fixture(scope="module")
+def crowned_path(crowned_run):
+    """The crowned job (the design CROWNED) and the path `skive run` planned for it on the ideal machine."""
+    job, plan = crowned_run[2]
+    assert job.modification == modified_job(CROWNED).modification and job.gear == modified_job(CROWNED).gear
+    return job, plan
 
 
 def test_the_corrections_effect_is_the_hand_worked_k_r_and_k_t(crowned_path) -> None:
@@ -332,26 +365,16 @@ def test_skive_cut_makes_the_modification_and_says_how(tmp_path) -> None:
     assert doc["cut"]["motion"].startswith("ideal, finishing pass along")
 
 
-def test_the_simulated_machine_makes_the_modification_by_its_path(tmp_path) -> None:
+def test_the_simulated_machine_makes_the_modification_by_its_path(crowned_run) -> None:
     """`skive run` of the helical scenario job with 10 um lead crowning and +6 um f_Hbeta on the left flank: the
     path planned on the ideal machine leaves the realistic machine's own helix tilt (its servo lag drifts over the
     face: residual ~2.9 um); the accuracy check on the machine brings C_beta and f_Hbeta within 0.5 um of the
     design, in at most 3 machine runs."""
     import json
 
-    from click.testing import CliRunner
-
-    from virtual_machine.cli import main
-
-    job = tmp_path / "crowned.toml"
-    job.write_text(
-        SCENARIO.read_text() + "\n[modification]\nlead_crowning = 0.010\n[modification.left]\n"
-        "helix_angle_modification = 0.006\n"
-    )
-    res = CliRunner().invoke(main, ["run", str(job), "--out", str(tmp_path / "out"), "--mesh-tolerance", "40"])
-    assert res.exit_code == 0, res.output
-    assert "simulated machine, iteration 2" in res.output and "simulated machine: converged" in res.output
-    doc = json.loads((tmp_path / "out" / "measurement.json").read_text())
+    output, out, _ = crowned_run
+    assert "simulated machine, iteration 2" in output and "simulated machine: converged" in output
+    doc = json.loads((out / "measurement.json").read_text())
     path = doc["modification_path"]
     machine = path["machine_iterations"]
     assert path["machine_converged"] and len(machine) <= 3
