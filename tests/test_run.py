@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -21,21 +22,30 @@ SMALL_JOB = small_job(sweep_error=0.02)
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    """The same job run twice (reproducibility), the first with a recording."""
+    """The same job run twice (reproducibility), the first with a recording; with the co-simulation each made."""
+    import virtual_machine.run as run_module
+
     tmp = tmp_path_factory.mktemp("run")
     job = tmp / "small.toml"
     job.write_text(SMALL_JOB)
-    out = []
+    out, sims, cosimulate = [], [], run_module.cosimulate
+
+    def keep(*args, **kwargs):
+        sims.append(cosimulate(*args, **kwargs))
+        return sims[-1]
+
     for k in range(2):
         args = ["run", str(job), "--out", str(tmp / f"out{k}")] + (["--rrd", str(tmp / "run.rrd")] if k == 0 else [])
-        res = CliRunner().invoke(main, args)
+        with mock.patch.object(run_module, "cosimulate", keep):
+            res = CliRunner().invoke(main, args)
         assert res.exit_code == 0, res.output
         out.append((tmp / f"out{k}", res.output))
-    return tmp, out
+    assert len(sims) == 2
+    return tmp, out, sims
 
 
 def test_run_writes_every_file(runs) -> None:
-    _, ((out, text), _) = runs
+    _, ((out, text), _), _ = runs
     for name in (
         "gear.stl",
         "measurement.json",
@@ -64,7 +74,7 @@ def test_run_writes_every_file(runs) -> None:
 
 
 def test_recording_has_the_cut_and_the_forces(runs) -> None:
-    tmp, _ = runs
+    tmp, _, _ = runs
     chunks = RrdReader(tmp / "run.rrd").stream().to_chunks()
     entities = {c.entity_path for c in chunks}
     assert {
@@ -81,7 +91,7 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
 
 
 def test_the_same_job_gives_the_same_gear(runs) -> None:
-    _, ((a, _), (b, _)) = runs
+    _, ((a, _), (b, _)), _ = runs
     da, db = (json.loads((x / "measurement.json").read_text()) for x in (a, b))
     for block in ("profile", "helix", "pitch"):
         assert da[block] == db[block]
@@ -178,16 +188,24 @@ def test_the_jobs_motor_torques_are_the_amplifiers_current_limits(tmp_path) -> N
         assert model.actuator(name).ctrlrange[1] == pytest.approx(peak)
 
 
-def test_a_gear_that_cannot_be_measured_keeps_the_run_and_says_why(tmp_path, monkeypatch) -> None:
+def test_a_gear_that_cannot_be_measured_keeps_the_run_and_says_why(tmp_path, monkeypatch, runs) -> None:
     # the measuring machine refuses a damaged gear (as a ball that cannot seat in a gouged space): the run keeps
-    # gear.stl and its facts, and the error says what the machine did while it cut
+    # gear.stl and its facts, and the error says what the machine did while it cut. The machine and the cut are
+    # the co-simulation of the same job that `runs` made without a recording (not made a third time)
     import virtual_machine.run as run_module
     from metrology.workpiece import UnmeasurableError
+
+    made = runs[2][1]
 
     def refuse(*args, **kwargs):
         raise UnmeasurableError("the ball of 1.750 mm does not seat in space 7 near r = 9.5 mm")
 
+    def made_before(job, **kwargs):  # the run of the same job, with the same removal
+        assert job.skiving == load_job(path).skiving and kwargs["removal"] == made.removal
+        return made
+
     monkeypatch.setattr(run_module, "measure_cut", refuse)
+    monkeypatch.setattr(run_module, "cosimulate", made_before)
     path = tmp_path / "small.toml"
     path.write_text(SMALL_JOB)
     out = tmp_path / "out"
