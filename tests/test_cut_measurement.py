@@ -1,5 +1,6 @@
 """The cut measured on its exact swept surface: against the ideal kinematics (physics only), against the mesh of
-the same cut (within the mesh's bound) and against the direct feed-mark probe of benchmarks/bench_feed_marks.py."""
+the same cut (within the mesh's bound; along flank normals, within its sweep error) and against the direct feed-mark
+probe of benchmarks/bench_feed_marks.py."""
 
 import functools
 import math
@@ -27,11 +28,27 @@ DEG = math.pi / 180
 UM = 1e3
 
 
+#: z 16, mn 1, b 2, cutter z0 11, one full-depth pass at 0.2 mm/rev
+SMALL = SkivingSetup(Gear(16, 1.0, 20 * DEG, 0.0, 2.0), Gear(11, 1.0, 20 * DEG, 20 * DEG, 5.0), 2000, 0.2, (2.25,))
+
+
+@functools.cache
+def manifold_cut(tol: float):
+    """SMALL's pass cut by the manifold booleans (tubes of sweep error ``tol``, one process), conjugate edge."""
+    return cut_ideal(SMALL, "conjugate", tol, tol, workers=1, removal="manifold")
+
+
+@functools.cache
+def exact_cut() -> SweptVolumes:
+    """SMALL's exact swept surface (the same edge and motion)."""
+    return SweptVolumes(SMALL.gear, make_edge(SMALL, "conjugate"), ideal_passes(SMALL))
+
+
 @functools.cache
 def small_cut():
-    """z 16, mn 1, b 2, cutter z0 11, one full-depth pass at 0.2 mm/rev, conjugate edge, cut at a 1.5 um mesh."""
-    st = SkivingSetup(Gear(16, 1.0, 20 * DEG, 0.0, 2.0), Gear(11, 1.0, 20 * DEG, 20 * DEG, 5.0), 2000, 0.2, (2.25,))
-    report = cut_ideal(st, "conjugate", 1.5e-3, 1.5e-3, workers=1, removal="manifold")
+    """SMALL cut at a 1.5 um mesh, measured on its exact swept surface with the mesh beside it."""
+    st = SMALL
+    report = manifold_cut(1.5e-3)
     mesh = check_mesh(to_trimesh(report.result.gear))
     doc, mesh_doc = measure_cut(
         st.gear, report.edge, ideal_passes(st), mesh, MeasureOptions(), report.result.sweep_error
@@ -57,9 +74,9 @@ def test_the_exact_measurement_is_the_direct_probe_of_the_feed_marks_benchmark()
     """bench_feed_marks.py probes one tooth's profile along the flank normals and evaluates it; the measurement's
     mid-section profile of the same tooth is that probe (same numbers to 0.01 um): datum, ranges and the normal
     to base-tangent conversion add nothing of their own."""
-    st, report, doc, _ = small_cut()
+    st, _, doc, _ = small_cut()
     g = st.gear
-    sv = SweptVolumes(g, report.edge, ideal_passes(st))
+    sv = exact_cut()
     L = np.asarray(doc["_traces"]["L_mm"])
     k = 2  # nominal tooth index; reported as the tooth at its place in the measurement's order
     number = int(np.nonzero(np.asarray(doc["_traces"]["order"]) == k)[0][0]) + 1
@@ -71,6 +88,47 @@ def test_the_exact_measurement_is_the_direct_probe_of_the_feed_marks_benchmark()
         assert np.nanmax(np.abs(trace - e)) < 0.01
         tooth = next(t for t in doc["profile"][side]["teeth"] if t["tooth"] == number)
         assert tooth["f_falpha"] == pytest.approx(evaluate(L, e)["f_f"], abs=0.01)
+
+
+@pytest.mark.parametrize("tol", [6e-3, 1.5e-3])
+def test_the_meshed_cut_matches_the_exact_sweep_within_its_sweep_error(tol):
+    """Along flank normals, the mesh that the booleans leave and the exact surface differ by no more than the
+    reported sweep error. Measured: 3.8 um at 6 um, 0.94 um at 1.5 um (the cut small_cut measures)."""
+    report = manifold_cut(tol)
+    assert report.result.sweep_error <= tol
+    mesh = to_trimesh(report.result.gear)
+    tri = mesh.vertices[mesh.faces]
+    centres = tri.mean(axis=1)
+    sv = exact_cut()
+    for side in SIDES:
+        p, n = flank_line(SMALL.gear, side)
+        exact = sv.probe(p, n, 0.02)
+        meshed = np.array([_crossing(tri, centres, p[i], n[i]) for i in range(len(p))])
+        assert np.isfinite(meshed).all() and np.isfinite(exact).all()
+        assert np.abs(meshed - exact).max() <= report.result.sweep_error + 1e-6, side
+
+
+def flank_line(g: Gear, side: str, n: int = 15) -> tuple[np.ndarray, np.ndarray]:
+    """Points and outward normals along the evaluated profile of tooth 2 at z = 0."""
+    l0, l1 = profile_range(g, MeasureOptions())  # the profile evaluation range of the measurement
+    xi = np.linspace(l0, l1, n) / g.base_radius
+    return flank_points(g, side, xi, 0.0, 2), flank_normals(g, side, xi, 0.0, 2)
+
+
+def _crossing(tri: np.ndarray, centres: np.ndarray, p: np.ndarray, n: np.ndarray, reach: float = 0.03) -> float:
+    """Signed distance d in [-reach, reach] at which the line p + d n crosses the triangles (nearest to p)."""
+    near = np.linalg.norm(centres - p, axis=1) < 0.5
+    a, b, c = tri[near, 0], tri[near, 1], tri[near, 2]
+    e1, e2, s = b - a, c - a, p - a  # Moller-Trumbore with the line's parameter d
+    h = np.cross(n, e2)
+    det = np.einsum("ij,ij->i", e1, h)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.einsum("ij,ij->i", s, h) / det
+        q = np.cross(s, e1)
+        v = (q @ n) / det
+        d = np.einsum("ij,ij->i", e2, q) / det
+    ok = (np.abs(det) > 1e-15) & (u >= 0) & (v >= 0) & (u + v <= 1) & (np.abs(d) <= reach)
+    return float(d[ok][np.argmin(np.abs(d[ok]))]) if ok.any() else float("nan")
 
 
 def _finishing_at(feed: float, edge: str):
