@@ -22,6 +22,7 @@ from functools import cached_property
 from typing import Protocol
 
 import numpy as np
+from numba import njit
 
 from cutting.flank import twist_rate
 from cutting.gear import Gear
@@ -338,25 +339,33 @@ class DexelLines:
     def cells(self, centres: np.ndarray, radii: np.ndarray) -> np.ndarray:
         """The fans (cell = space * slices + slice) that the balls (centres (m, 3), radii (m,)) [mm] can reach: per
         ball and slice its section's angular reach against each space's sector (a superset; the kernel tests
-        each line against the passage's balls and boxes)."""
-        c, r = np.asarray(centres, float).reshape(-1, 3), np.asarray(radii, float).ravel()
-        dz = c[:, 2][:, None] - self.z[None, :]
-        section = np.sqrt(np.maximum(r[:, None] ** 2 - dz**2, 0.0))  # the ball's radius in each slice's plane
-        ball, slice_ = np.nonzero(np.abs(dz) <= r[:, None])
-        if len(ball) == 0:
-            return np.zeros(0, np.int64)
-        rs = section[ball, slice_]
-        rho = np.hypot(c[ball, 0], c[ball, 1])
-        # the ball centre's angle in the slice's untwisted frame (space k centred at k pitch)
-        theta = np.arctan2(c[ball, 1], c[ball, 0]) - self.twist_rate * self.z[slice_] - self.pitch / 2 - self.phase
-        width = np.where(rs < rho, np.arcsin(np.clip(rs / np.maximum(rho, 1e-12), 0.0, 1.0)), math.pi)
-        # a fan spreads half a pitch either side of its space's centre (its rays end on the tooth centre planes)
-        k_lo = np.ceil((theta - width) / self.pitch - 0.5).astype(np.int64)
-        k_hi = np.floor((theta + width) / self.pitch + 0.5).astype(np.int64)
-        span = np.minimum(k_hi - k_lo + 1, self.spaces)
-        rep = np.repeat(np.arange(len(ball)), span)
-        k = (k_lo[rep] + np.arange(len(rep)) - np.repeat(np.cumsum(span) - span, span)) % self.spaces
-        return np.unique(k * self.slices + slice_[rep])
+        each line against the passage's balls and boxes). Compiled: a run asks once per passage."""
+        c = np.ascontiguousarray(np.asarray(centres, float).reshape(-1, 3))
+        r = np.ascontiguousarray(np.asarray(radii, float).ravel())
+        return _fan_cells(c, r, self.z, self.twist_rate, self.pitch, self.phase, self.spaces)
+
+
+@njit(cache=True, error_model="numpy")
+def _fan_cells(c, r, z, twist, pitch, phase, spaces):
+    """DexelLines.cells: the sorted cells whose sectors the balls' sections reach (widened by 1e-9 rad)."""
+    slices = z.shape[0]
+    hit = np.zeros(spaces * slices, np.bool_)
+    for b in range(c.shape[0]):
+        rho = math.hypot(c[b, 0], c[b, 1])
+        for j in range(slices):
+            dz = c[b, 2] - z[j]
+            if abs(dz) > r[b]:
+                continue
+            rs = math.sqrt(max(r[b] * r[b] - dz * dz, 0.0))  # the ball's radius in the slice's plane
+            # the ball centre's angle in the slice's untwisted frame (space k centred at k pitch)
+            theta = math.atan2(c[b, 1], c[b, 0]) - twist * z[j] - pitch / 2 - phase
+            width = math.asin(min(max(rs / max(rho, 1e-12), 0.0), 1.0)) + 1e-9 if rs < rho else math.pi
+            # a fan spreads half a pitch either side of its space's centre (its rays end on the tooth centre planes)
+            k_lo = math.ceil((theta - width) / pitch - 0.5)
+            k_hi = math.floor((theta + width) / pitch + 0.5)
+            for k in range(k_lo, k_lo + min(k_hi - k_lo + 1, spaces)):
+                hit[(k % spaces) * slices + j] = True
+    return np.nonzero(hit)[0].astype(np.int64)
 
 
 def gear_phase(motion) -> float:
