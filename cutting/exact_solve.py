@@ -155,11 +155,10 @@ class ItemSolver:
         owner = np.concatenate([np.full(len(tb.m), k, np.int64) for k, tb in enumerate(tables)])
         times = np.ascontiguousarray(np.concatenate([tb.t for tb in tables]), dtype=float)
         angle = np.concatenate([np.asarray(tb.angle, dtype=float) for tb in tables])
-        chains = [np.ascontiguousarray(c[:, k], dtype=float) for c in (outline.lower, outline.upper) for k in (0, 1)]
         return cls(
             (owner, kind, ptr, params),
             (np.ascontiguousarray(packed), times, np.cos(angle), np.sin(angle)),
-            (*chains, float(outline.x0), float(outline.x1)),
+            compiled_outline(outline),
         )
 
     def margins(self, p, u, ds, line, g, sample, lo_j, hi_j) -> np.ndarray:
@@ -344,12 +343,60 @@ def _interp(x, xp, fp):
     return out
 
 
+#: buckets per chain of the compiled outline: where a chain's search starts for an x (a chain has ~125 points)
+OUTLINE_BUCKETS = 512
+
+
+def compiled_outline(outline) -> tuple:
+    """What :func:`outline_margin` reads of a :class:`cutting.exact_sweep.Outline`: its lower and upper chains (x, y),
+    x0, x1, and per chain the index of its last point at or before each of OUTLINE_BUCKETS even steps over its x
+    range (so that a lookup starts next to its point instead of bisecting the chain)."""
+    out = []
+    starts = []
+    for chain in (outline.lower, outline.upper):
+        xs, ys = (np.ascontiguousarray(chain[:, k], dtype=float) for k in (0, 1))
+        lo, hi = float(xs[0]), float(xs[-1])
+        scale = OUTLINE_BUCKETS / (hi - lo) if hi > lo else 0.0
+        edges = lo + np.arange(OUTLINE_BUCKETS + 1) / scale if scale > 0 else np.full(OUTLINE_BUCKETS + 1, lo)
+        out += [xs, ys]
+        starts += [np.maximum(np.searchsorted(xs, edges, side="right") - 1, 0).astype(np.int64), lo, scale]
+    return (*out, float(outline.x0), float(outline.x1), *starts)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _interp_from(x, xp, fp, start, lo, scale):
+    """_interp(x, xp, fp) with the search started at the bucket of x (then walked to the last xp[j] <= x): the same
+    j, so the same value."""
+    n = len(xp)
+    if x != x:
+        return x
+    if x < xp[0]:
+        return fp[0]
+    if x > xp[n - 1]:
+        return fp[n - 1]
+    b = min(max(int((x - lo) * scale), 0), start.shape[0] - 1)
+    j = start[b]
+    while j > 0 and xp[j] > x:
+        j -= 1
+    while j + 1 < n and xp[j + 1] <= x:
+        j += 1
+    if j == n - 1 or xp[j] == x:
+        return fp[j]
+    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
+    out = slope * (x - xp[j]) + fp[j]
+    if out != out:
+        out = slope * (x - xp[j + 1]) + fp[j + 1]
+        if out != out and fp[j] == fp[j + 1]:
+            out = fp[j]
+    return out
+
+
 @njit(cache=True, error_model="numpy")
 def outline_margin(outline, x, y):
     """Outline.margin: min(above the lower chain, below the upper, x - x0, x1 - x)."""
-    lx, ly, ux, uy, x0, x1 = outline
-    below = y - _interp(x, lx, ly)
-    above = _interp(x, ux, uy) - y
+    lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us = outline
+    below = y - _interp_from(x, lx, ly, lb, l0, ls)
+    above = _interp_from(x, ux, uy, ub, u0, us) - y
     return min(min(below, above), min(x - x0, x1 - x))
 
 
