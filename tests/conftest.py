@@ -2,8 +2,13 @@
 
 The suite runs on two processes with whole files per process (pyproject: ``-n 2 --dist loadfile``); a file is
 handed to the next free process in collection order, so a long file collected last would run alone at the end.
-The files that take minutes are collected first (their order here, measured on the 2-core CI machine), the rest
-after them in their usual order: the two processes then finish within a short file of each other.
+The files that take minutes are collected first (their order here, measured on the 2-core machine), the rest
+after them in their usual order: the two processes then finish within a short file of each other. (pytest-xdist
+would otherwise hand out the files with the most tests first, whatever their time: that is switched off here.)
+
+The whole-machine runs several files need (tests/shared_runs.py) are made once per session and shared by the
+processes: test_scenarios.py makes those test_study.py's studies take as cases, first thing, while test_study.py
+starts with its own small studies on the other process.
 """
 
 from __future__ import annotations
@@ -13,19 +18,29 @@ import os
 import pytest
 from shared_runs import SharedRuns
 
-#: test files by wall time, longest first (the scenario fixture and the studies run whole machine jobs)
+#: test files by wall time, longest first (the scenario runs and the studies run whole machine jobs)
 LONG_FIRST = (
     "test_scenarios.py",
     "test_study.py",
     "test_modification.py",
+    "test_measure.py",
+    "test_dexel.py",
     "test_form_milling_cli.py",
-    "test_run.py",
-    "test_cosim.py",
     "test_cut_measurement.py",
+    "test_removal.py",
+    "test_cosim.py",
+    "test_run.py",
+    "test_measure_cli.py",
     "test_sampled_motion.py",
     "test_copying.py",
+    "test_machine_sizes.py",
     "test_vibration_lathe.py",
 )
+
+
+def pytest_configure(config) -> None:
+    if hasattr(config.option, "loadscopereorder"):  # pytest-xdist >= 3.6: keep the collection order below
+        config.option.loadscopereorder = False
 
 
 def pytest_collection_modifyitems(session, config, items) -> None:

@@ -40,7 +40,10 @@ STUDIED = ("helical_mechatronic", "lead_screw_error", "mechanical_change_gears")
 @pytest.fixture(scope="module")
 def scenario(shared_runs):
     """name -> (job, the machine's motion record, measurement of the exact swept surface of the motion the machine
-    made): each scenario job run once as skive run does, the tests share it."""
+    made): each scenario job run once as skive run does, the tests share it. The studied ones first: test_study.py,
+    in the other process, takes them from the store."""
+    for name in STUDIED:
+        shared_runs.run(SCENARIOS / f"{name}.toml")
 
     @functools.cache
     def run(name: str):
