@@ -18,7 +18,8 @@ import os
 import pytest
 from shared_runs import SharedRuns
 
-#: test files by wall time, longest first (the scenario runs and the studies run whole machine jobs)
+#: test files by wall time, longest first (measured: the scenario runs and the studies run whole machine jobs); the
+#: last few are short but would come last in collection order, alone at the end
 LONG_FIRST = (
     "test_scenarios.py",
     "test_study.py",
@@ -31,10 +32,13 @@ LONG_FIRST = (
     "test_cosim.py",
     "test_run.py",
     "test_measure_cli.py",
-    "test_sampled_motion.py",
     "test_copying.py",
+    "test_sampled_motion.py",
     "test_machine_sizes.py",
     "test_vibration_lathe.py",
+    "test_simulate.py",
+    "test_vibration_turning.py",
+    "test_cut_cli.py",
 )
 
 
