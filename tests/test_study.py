@@ -312,6 +312,10 @@ def test_a_study_takes_the_cases_its_case_store_holds(tmp_path) -> None:
     sensitivity = column_sensitivity(outcome.study, outcome.run.results, "f_Hbeta_right")
     assert sensitivity["machine.encoder_lines"] == pytest.approx((4.5 - 3.0) / (1000 - 5000))
     assert "2 reused from the case store" in outcome.report.read_text()
+    # the command line says so too, and its bar has nothing to run (a fresh output: every case from the store)
+    res = CliRunner().invoke(main, ["study", str(path), "--out", str(tmp_path / "cli")])
+    assert res.exit_code == 0, res.output
+    assert "0 run now, 0 already done, 2 reused from the case store" in res.output
     with pytest.raises(InputError) as err:
         load_study(study_file(tmp_path, 'cache = 3\n[[vary]]\nkey = "machine.encoder_lines"\nvalues = [1000]\n'))
     assert "cache" in err.value.keys

@@ -423,12 +423,19 @@ def study(
     study_file: Path, out: Path, workers: int | None, scheduler: str | None, target: int | None, retry_failed: bool
 ) -> None:
     from virtual_machine.study import pipeline
+    from virtual_machine.study.cache import CaseCache
     from virtual_machine.study.design import cases
     from virtual_machine.study.runner import finished
     from virtual_machine.study.spec import load_study
 
     try:  # every check before any case runs
-        todo = sum(finished(out, c, retry_failed) is None for c in cases(load_study(study_file)))
+        spec = load_study(study_file)
+        store = CaseCache(spec.cache) if spec.cache is not None else None
+        # the cases to run now: not finished before, and not in the study's case store (those are reused)
+        todo = sum(
+            finished(out, c, retry_failed) is None and (store is None or store.get(c.job_text) is None)
+            for c in cases(spec)
+        )
     except (InputError, ValueError) as exc:
         _fail(exc)
     bar = Progress("study", max(todo, 1), "cases", step=1 / todo if 0 < todo <= 100 else 0.01, value_format="{:.0f}")
@@ -456,7 +463,8 @@ def format_study(outcome, out: Path) -> str:
     lines = [
         "",
         f"STUDY  {outcome.study.path}  ({outcome.study.method}, {outcome.total_cases} cases: "
-        f"{len(run.results) - failed} ok, {failed} failed; {now}, {len(run.skipped)} already done)",
+        f"{len(run.results) - failed} ok, {failed} failed; {now}, {len(run.skipped) - len(run.reused)} already done"
+        + (f", {len(run.reused)} reused from the case store)" if run.reused else ")"),
     ]
     worst = budget.limiting()
     if budget.iso_error:
