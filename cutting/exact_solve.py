@@ -314,35 +314,6 @@ def _plane(table, g, j, q0, q1, q2):
     return table[g, j, 0] * q0 + table[g, j, 1] * q1 + table[g, j, 2] * q2 - table[g, j, 3]
 
 
-@njit(cache=True, error_model="numpy")
-def _interp(x, xp, fp):
-    """np.interp(x, xp, fp) for one x: clamped at the ends, the last xp[j] <= x, its value where x hits it."""
-    n = len(xp)
-    if x != x:
-        return x
-    if x < xp[0]:
-        return fp[0]
-    if x > xp[n - 1]:
-        return fp[n - 1]
-    lo, hi = 0, n
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if x >= xp[mid]:
-            lo = mid + 1
-        else:
-            hi = mid
-    j = lo - 1
-    if j == n - 1 or xp[j] == x:
-        return fp[j]
-    slope = (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j])
-    out = slope * (x - xp[j]) + fp[j]
-    if out != out:
-        out = slope * (x - xp[j + 1]) + fp[j + 1]
-        if out != out and fp[j] == fp[j + 1]:
-            out = fp[j]
-    return out
-
-
 #: buckets per chain of the compiled outline: where a chain's search starts for an x (a chain has ~125 points)
 OUTLINE_BUCKETS = 512
 
@@ -365,8 +336,8 @@ def compiled_outline(outline) -> tuple:
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _interp_from(x, xp, fp, start, lo, scale):
-    """_interp(x, xp, fp) with the search started at the bucket of x (then walked to the last xp[j] <= x): the same
-    j, so the same value."""
+    """np.interp(x, xp, fp) for one x: clamped at the ends, the last xp[j] <= x found from the bucket of x (a walk
+    of a step or two instead of bisecting the chain), its value where x hits it; NaN in, NaN out."""
     n = len(xp)
     if x != x:
         return x

@@ -370,3 +370,24 @@ def test_a_motion_without_a_compiled_pose_takes_the_numpy_item_solve():
     assert np.array_equal(np.isnan(got), np.isnan(want)) and np.isfinite(got).sum() > 60
     both = np.isfinite(got)
     assert np.abs(got[both] - want[both]).max() < 1e-9
+
+
+def test_the_bucketed_outline_lookup_is_numpys_interp():
+    """The compiled outline margin finds a chain's segment from a bucket of x instead of bisecting: on the default
+    job's edge, at 20k x across and beyond the chains (ends, vertices, repeated x), it gives np.interp's value bit
+    for bit, so the margin is Outline.margin's."""
+    from cutting.exact_solve import _interp_from, compiled_outline, outline_margin
+    from cutting.exact_sweep import Outline
+    from virtual_machine.job import default_job_path, load_job
+
+    job = load_job(default_job_path())
+    outline = Outline(make_edge(job.skiving, "conjugate").outline)
+    lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us = packed = compiled_outline(outline)
+    rng = np.random.default_rng(7)
+    x = np.concatenate([rng.uniform(x0 - 0.1, x1 + 0.1, 20000), lx, ux, [x0, x1, np.nextafter(x1, 0.0)]])
+    for xp, fp, start, lo, scale in ((lx, ly, lb, l0, ls), (ux, uy, ub, u0, us)):
+        got = np.array([_interp_from(v, xp, fp, start, lo, scale) for v in x])
+        assert np.array_equal(got, np.interp(x, xp, fp))
+    y = rng.uniform(-3.0, 3.0, len(x))
+    got = np.array([outline_margin(packed, a, b) for a, b in zip(x, y, strict=True)])
+    assert np.array_equal(got, outline.margin(x, y))
