@@ -139,12 +139,9 @@ class _Stroke:
         self.n += 1
 
     @property
-    def t(self) -> np.ndarray:
-        return self._rows[: self.n, 0]
-
-    @property
-    def q(self) -> np.ndarray:
-        return self._rows[: self.n, 1:6]
+    def rows(self) -> np.ndarray:
+        """The samples so far (a view): t [s] and the five axes (B1, B2 [rad], P3, X [m], TV [rad])."""
+        return self._rows[: self.n]
 
 
 def cosimulate(
@@ -347,9 +344,9 @@ def _ready_passages(stroke: _Stroke, setup, pitch: float):
     """The passages of ``stroke`` whose window the samples now cover (all that remain once it has ended), each
     with its samples (a slice around the window, time from the stroke's start) and the stroke's start time.
     Each call reads only the samples of the passages it yields (a stroke has ~10^4 of them)."""
-    rows = stroke._rows
-    n = stroke.n
-    phi = rows[:n, 1]  # P3 cutter angle (rad), growing along the stroke
+    rows = stroke.rows
+    n = len(rows)
+    phi = rows[:, 1]  # the cutter angle B1 [rad], growing along the stroke
     half = stroke.half
     if stroke.next_m is None:
         stroke.next_m = stroke.first_m = math.ceil((phi[0] - half) / pitch)
