@@ -1,6 +1,6 @@
 """The project's build backend: setuptools' own, and on an editable install the numba kernels compiled into the
-package's ``__pycache__`` (cutting/warmup.py), so that the first ``skive run`` after ``pip install -e .`` does not
-spend a minute compiling them.
+package's ``__pycache__`` (cutting/warmup.py, metrology/mesh_bvh.py), so that the first ``skive run`` after
+``pip install -e .`` does not spend a minute compiling them.
 
 pip builds in an isolated environment: the warm-up needs the kernels' own dependencies there (the same version
 ranges as the project's, so pip resolves the same numba the project then runs with; a numba of another version
@@ -31,7 +31,10 @@ def build_editable(wheel_directory, config_settings=None, metadata_directory=Non
     if not os.environ.get("SKIVE_NO_WARMUP"):
         print("skive: compiling the numba kernels into the package (about a minute, once)", file=sys.stderr)
         env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        # the cut's kernels, then the measuring machine's (metrology does not import cutting's warm-up)
         done = subprocess.run([sys.executable, "-m", "cutting.warmup"], cwd=ROOT, env=env, check=False)
+        if done.returncode == 0:
+            done = subprocess.run([sys.executable, "-m", "metrology.mesh_bvh"], cwd=ROOT, env=env, check=False)
         if done.returncode != 0:
             print("skive: the warm-up failed; the first run compiles the kernels instead", file=sys.stderr)
     return name

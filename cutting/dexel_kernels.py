@@ -459,10 +459,12 @@ def cut_cells(
         ray_lo = np.empty(nsub, np.int64)
         ray_hi = np.empty(nsub, np.int64)
         first_line = cells[k] * rays
+        acc = np.empty(STATS)  # a pair's sums, kept here: out's rows of neighbouring cells share cache lines
         for pr in range(cell_ptr[k], cell_ptr[k + 1]):
             g = cell_g[pr]
             for c in range(STATS):
                 out[pr, c] = 0.0
+                acc[c] = 0.0
             # the subwindows whose boxes reach the fan's plane (the cell's lines share it, normal u_slice)
             any_reach = False
             ray_first, ray_last = rays, -1
@@ -561,21 +563,23 @@ def cut_cells(
                     d1, d2, d3 = hi_r - lo_r, (hi_r * hi_r - lo_r * lo_r) / 2, (hi_r**3 - lo_r**3) / 3
                     v = weight[i, 0] * d1 + weight[i, 1] * d2
                     f = weight[i, 0] * d2 + weight[i, 1] * d3
-                    out[pr, 0] += v
-                    out[pr, 1] += p[i, 0] * v + u[i, 0] * f
-                    out[pr, 2] += p[i, 1] * v + u[i, 1] * f
-                    out[pr, 3] += p[i, 2] * v + u[i, 2] * f
+                    acc[0] += v
+                    acc[1] += p[i, 0] * v + u[i, 0] * f
+                    acc[2] += p[i, 1] * v + u[i, 1] * f
+                    acc[3] += p[i, 2] * v + u[i, 2] * f
                 if removed <= 0:
                     continue
                 thick = removed * ray_cos[ray]
                 area = ray_arc[ray] * dz
-                out[pr, 4] += removed
-                out[pr, 5] = max(out[pr, 5], thick)
-                out[pr, 6] += thick * area
-                out[pr, 7] += area
-                out[pr, 8] += ray_arc[ray]
-                out[pr, 9] += 1
+                acc[4] += removed
+                acc[5] = max(acc[5], thick)
+                acc[6] += thick * area
+                acc[7] += area
+                acc[8] += ray_arc[ray]
+                acc[9] += 1
                 flags[i] |= _subtract(mat_lo, mat_hi, mat_n, i, rem_lo, rem_hi, n_rem)
+            for c in range(STATS):
+                out[pr, c] = acc[c]
         for c in range(5):
             work[k, c] = wk[c]
 

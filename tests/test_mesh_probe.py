@@ -272,7 +272,6 @@ def test_annulus_first_surface_from_the_air_side():
 def test_random_batches_match_brute_force(small_gear):
     v, f = np.asarray(small_gear.vertices), np.asarray(small_gear.faces)
     wp = workpiece(small_gear)
-    assert any(len(np.unique(t.faces)) < len(t.faces) for t in wp.tiers)  # the end-face slivers are covered
     rng = np.random.default_rng(13)
     n = 300
     lo_box, hi_box = v.min(axis=0) - 1, v.max(axis=0) + 1
@@ -308,6 +307,72 @@ def test_structure_is_built_once(small_gear):
     wp = workpiece(small_gear)
     p = np.asarray(small_gear.vertices[:10])
     wp.probe(p, np.tile([1.0, 0, 0], (10, 1)), 0.1)
-    tiers = wp.tiers
+    tree = wp.tree
     wp.inside(p)
-    assert wp.tiers is tiers
+    assert wp.tree is tree
+
+
+# ---- the tree of triangle boxes -------------------------------------------------------------------------
+def test_tree_holds_every_triangle_once_inside_its_boxes(small_gear):
+    from metrology.mesh_bvh import LEAF
+
+    v, f = np.asarray(small_gear.vertices), np.asarray(small_gear.faces)
+    tree = workpiece(small_gear).tree
+    leaf = tree.child < 0
+    assert sorted(tree.order.tolist()) == list(range(len(f)))
+    held = np.concatenate([tree.order[s : s + c] for s, c in zip(tree.start[leaf], tree.count[leaf], strict=True)])
+    assert sorted(held.tolist()) == list(range(len(f)))  # each triangle in exactly one leaf
+    assert tree.count[leaf].max() <= LEAF  # distinct centres: every leaf split down to its size
+    tri = v[f]
+    for node in np.nonzero(leaf)[0]:
+        faces = tree.order[tree.start[node] : tree.start[node] + tree.count[node]]
+        assert (tri[faces].min(axis=(0, 1)) >= tree.node_lo[node]).all()
+        assert (tri[faces].max(axis=(0, 1)) <= tree.node_hi[node]).all()
+    inner = np.nonzero(~leaf)[0]
+    for side in (0, 1):  # a node's box holds its children's
+        assert (tree.node_lo[tree.child[inner] + side] >= tree.node_lo[inner]).all()
+        assert (tree.node_hi[tree.child[inner] + side] <= tree.node_hi[inner]).all()
+
+
+def test_many_crossings_on_a_line_and_triangles_sharing_a_centre():
+    """A stack of 30 plates (60 crossings on a line through all: more than a line keeps at first) and a fan of
+    triangles with one common centre (a leaf the tree cannot split)."""
+    plates = [trimesh.creation.box(extents=(4.0, 4.0, 0.5)) for _ in range(30)]
+    for k, m in enumerate(plates):
+        m.apply_translation((0.0, 0.0, 1.0 * k))
+    stack = trimesh.util.concatenate(plates)
+    wp = workpiece(stack)
+    o = np.array([[0.3, -0.2, -5.0], [1.1, 0.7, -5.0], [9.0, 0.0, -5.0]])
+    line, d, ent = wp.crossings(o, np.tile([0.0, 0.0, 1.0], (3, 1)), 0.0, 50.0)
+    expect = 5.0 + np.sort(np.concatenate([np.arange(30) - 0.25, np.arange(30) + 0.25]))
+    for i in (0, 1):
+        assert np.abs(d[line == i] - expect).max() < TOL
+        assert ent[line == i].tolist() == [True, False] * 30
+    assert not (line == 2).any()
+    # 64 triangles in a fan of directions, each moved so that its centroid is the origin: the centres coincide,
+    # the boxes do not
+    a = np.linspace(0, 2 * math.pi, 65)[:-1]
+    v, f = [], []
+    for k, ang in enumerate(a):
+        p = np.array(
+            [
+                [0.0, 0, 0],
+                [3 * math.cos(ang), 3 * math.sin(ang), 1.0],
+                [3 * math.cos(ang + 0.3), 3 * math.sin(ang + 0.3), -1.0],
+            ]
+        )
+        p -= p.mean(axis=0)
+        v.append(p)
+        f.append([3 * k, 3 * k + 1, 3 * k + 2])
+    v, f = np.concatenate(v), np.array(f)
+    wp = MeshWorkpiece(MeshData(v, f))
+    assert wp.tree.count.max() == len(f)  # one leaf holds them all
+    rng = np.random.default_rng(3)
+    o = rng.uniform(-3, 3, size=(200, 3))
+    u = rng.normal(size=(200, 3))
+    lo, hi = np.full(200, -10.0), np.full(200, 10.0)
+    got = wp._crossings(o, u, lo, hi, merge=False)
+    ref = brute_crossings(v, f, o, u, lo, hi)
+    assert len(ref[0]) > 50
+    assert np.array_equal(got[0], ref[0]) and np.array_equal(got[2], ref[2])
+    assert np.abs(got[1] - ref[1]).max() < TOL
