@@ -158,7 +158,7 @@ class ItemSolver:
         return cls(
             (owner, kind, ptr, params),
             (np.ascontiguousarray(packed), times, np.cos(angle), np.sin(angle)),
-            compiled_outline(outline),
+            outline.compiled,
         )
 
     def margins(self, p, u, ds, line, g, sample, lo_j, hi_j) -> np.ndarray:

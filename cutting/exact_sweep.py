@@ -28,7 +28,7 @@ from scipy.spatial import cKDTree
 
 from cutting.edge import CuttingEdge
 from cutting.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
-from cutting.exact_solve import ItemSolver, pose_table
+from cutting.exact_solve import ItemSolver, compiled_outline, pose_table
 from cutting.gear import Gear
 from cutting.removal import passage_range
 from cutting.sweep import outline_points, simplify_outline
@@ -84,6 +84,12 @@ class Outline:
         self.lower, self.upper = lower, upper
         self.x0, self.x1 = float(p[i0, 0]), float(p[i1, 0])
         self._points, self._cell, self._pad = p, cell, pad
+
+    @cached_property
+    def compiled(self) -> tuple:
+        """What the compiled margin reads (:func:`cutting.exact_solve.compiled_outline`), made once: the dexel
+        removal builds a solver per passage."""
+        return compiled_outline(self)
 
     @cached_property
     def _raster(self) -> tuple[np.ndarray, np.ndarray]:
