@@ -152,11 +152,13 @@ class DexelWorkpiece:
                 g += 1
         cell = np.concatenate(cell_of).astype(np.int64)
         gg = np.concatenate(g_of)
-        order = np.lexsort((gg, cell))
-        cell, gg = cell[order], gg[order]
-        first = np.r_[True, cell[1:] != cell[:-1]] if len(cell) else np.zeros(0, bool)
+        if g > 1:  # one passage (the co-simulation's usual call): cells() gives its cells sorted
+            order = np.lexsort((gg, cell))
+            cell, gg = cell[order], gg[order]
+        first = np.ones(len(cell), bool)
+        np.not_equal(cell[1:], cell[:-1], out=first[1:])
         cells = cell[first]
-        cell_ptr = np.r_[np.nonzero(first)[0], len(cell)].astype(np.int64)
+        cell_ptr = np.append(np.flatnonzero(first), len(cell)).astype(np.int64)
         out = np.zeros((len(cell), STATS))
         work = np.zeros((len(cells), 5), np.int64)
         tab = (packed, *self._rasters)
@@ -208,6 +210,8 @@ class DexelWorkpiece:
         """Per passage: the sums and extremes of its (cell, passage) shares."""
         ln = self.lines
         s = np.repeat(cell_slice, per_cell)
+        if count == 1:  # one passage (the co-simulation's usual call): its sums at once
+            return [self._chip(out, s, pass_of[0], passage[0])]
         vol = np.bincount(g, out[:, 0], minlength=count)
         mom = np.stack([np.bincount(g, out[:, 1 + c], minlength=count) for c in range(3)], axis=1)
         t_max = np.zeros(count)
@@ -234,6 +238,21 @@ class DexelWorkpiece:
                 )
             )
         return chips
+
+    def _chip(self, out: np.ndarray, s: np.ndarray, pass_index, passage) -> DexelChip:
+        """The chip of one passage from its (cell, passage) shares ``out`` (cells of slices ``s``), as _chips."""
+        total = out.sum(axis=0)
+        vol, area = float(total[0]), float(total[7])
+        return DexelChip(
+            int(pass_index),
+            int(passage),
+            vol,
+            total[1:4] / vol if vol > 0 else np.full(3, math.nan),
+            float(out[:, 5].max()) if len(out) else 0.0,
+            float(total[6] / area) if area > 0 else 0.0,
+            float(np.bincount(s, out[:, 8]).max()) if len(out) else 0.0,
+            int(total[9]),
+        )
 
     @property
     def overflowed(self) -> int:
