@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from checks import finite_max
 
 from cutting.copying_path import corrections, plan_copying
 from cutting.errors import InputError
@@ -157,6 +158,7 @@ def planned():
     return plan, cut, measure_gear(cut, GEAR, MeasureOptions(design=mod))
 
 
+@pytest.mark.slow
 def test_the_path_iterations_converge(planned):
     plan, _, _ = planned
     geo = [it["path_change_um"] for it in plan.iterations if it["step"] == "path"]
@@ -180,8 +182,7 @@ def test_ideal_machine_makes_the_design_within_1um_at_three_sections(planned):
         assert helix["C_beta"] == pytest.approx(helix["C_beta_design"], abs=0.5)
         assert abs(helix["F_beta"]) < 1.0
         topo = np.asarray(doc["topography"][side]["against_design_um"], dtype=float)
-        assert np.nanmax(np.abs(topo)) < 1.0
-        assert np.isfinite(topo).mean() > 0.95
+        assert finite_max(topo, 0.95) < 1.0
 
 
 def test_manifold_removal_matches_the_exact_surface_within_its_sweep_error(planned):
@@ -200,7 +201,7 @@ def test_manifold_removal_matches_the_exact_surface_within_its_sweep_error(plann
         p = flank_points(GEAR, side, xi, zz, tooth).reshape(-1, 3)
         n = flank_normals(GEAR, side, xi, zz, tooth).reshape(-1, 3)
         d_exact, d_mesh = exact.probe(p, n, 0.05), mesh.probe(p, n, 0.05)
-        assert np.nanmax(np.abs(d_exact - d_mesh)) < tol + 1e-3  # the sweep error and the circles' chords
+        assert finite_max(d_exact - d_mesh, 1.0) < tol + 1e-3  # the sweep error and the circles' chords
 
 
 # ---- bad input ------------------------------------------------------------------------------------------------

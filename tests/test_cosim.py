@@ -40,6 +40,7 @@ def runs(tmp_path_factory):
     return cosimulate(job, forces=True), cosimulate(job, forces=False)
 
 
+@pytest.mark.slow
 def test_the_motors_pay_for_the_chips(runs) -> None:
     loaded, free = runs
     chip_energy = sum(a.load.energy for a in loaded.loads)
@@ -97,6 +98,7 @@ def loaded_job():
     return parse_job(tomllib.loads(SMALL_JOB))
 
 
+@pytest.mark.slow
 def test_parallel_manifold_removal_cuts_the_same_gear(tmp_path) -> None:
     """The manifold reference: two worker processes, each owning half the tooth spaces, take the same chips as the
     inline removal (without forces the machine's motion does not depend on when the chips finish)."""

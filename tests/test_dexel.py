@@ -224,6 +224,7 @@ def both_cuts():
     }
 
 
+@pytest.mark.slow
 def test_both_removals_take_the_same_chips():
     """Every pass's chip volume within 2 %, 95 % of its chips (above 1 % of the largest) within 2 % each, chip by
     chip matched by (pass, cutter tooth, time). Measured: passes 0.1-0.7 %, p95 0.6-1.6 %."""
@@ -243,6 +244,7 @@ def test_both_removals_take_the_same_chips():
         assert np.percentile(rel, 95) <= 0.02, (p, np.percentile(rel, 95))
 
 
+@pytest.mark.slow
 def test_both_solids_measure_within_their_bounds_of_the_exact_surface():
     """Each solid, written as gear.stl, measured beside the exact swept surface: its traces within its stated bound
     (the dexel solid: 10 um, measured 7.9 um: the feed marks between its slices; the manifold: its 5 um sweep

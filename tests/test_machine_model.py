@@ -9,16 +9,17 @@ from dataclasses import replace
 import mujoco
 import numpy as np
 import pytest
+from checks import JOBS
 
 from machine_models.parameters import ARCSEC, DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import build_spec
 from virtual_machine.job import load_job
 
-JOBS = ["spur_external", "helical_internal", "default"]
+JOB_NAMES = ["spur_external", "helical_internal", "default"]
 
 
 def _model(job: str = "spur_external", params: SkivingMachineParams | None = None) -> mujoco.MjModel:
-    j = load_job(f"assets/jobs/{job}.toml")
+    j = load_job(str(JOBS / f"{job}.toml"))
     return build_spec(j.skiving, params or SkivingMachineParams(), j.machine["lead_screw_pitch"]).compile()
 
 
@@ -26,7 +27,7 @@ def _badqacc(d: mujoco.MjData) -> int:
     return int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
 
 
-@pytest.mark.parametrize("job", JOBS)
+@pytest.mark.parametrize("job", JOB_NAMES)
 def test_every_model_compiles_and_steps_without_warnings(job: str) -> None:
     m = _model(job)
     d = mujoco.MjData(m)
@@ -36,19 +37,18 @@ def test_every_model_compiles_and_steps_without_warnings(job: str) -> None:
     assert all(int(w.number) == 0 for w in d.warning), [w.number for w in d.warning]
     assert np.isfinite(d.qpos).all()
     # the home keyframe puts the cutter on the first pass's centre distance with every stage relaxed
-    j = load_job(f"assets/jobs/{job}.toml")
+    j = load_job(str(JOBS / f"{job}.toml"))
     a = j.skiving.pass_centre_distances[0] * 1e-3
     assert d.qpos[m.joint("X").qposadr[0]] == pytest.approx(a, abs=1e-6)
 
 
 def test_scene_xml_round_trip_has_cutter_and_blank() -> None:
-    j = load_job("assets/jobs/spur_external.toml")
+    j = load_job(str(JOBS / "spur_external.toml"))
     xml = build_spec(j.skiving, SkivingMachineParams(), j.machine["lead_screw_pitch"]).to_xml()
     m = mujoco.MjModel.from_xml_string(xml)
-    for name in ("work_spindle", "tool_spindle", "carriage", "radial_slide", "lead_screw"):
-        assert m.body(name).id >= 0
-    for name in ("blank_frame", "cutter_frame"):
-        assert m.site(name).id >= 0
+    bodies = {m.body(i).name for i in range(m.nbody)}
+    assert {"work_spindle", "tool_spindle", "carriage", "radial_slide", "lead_screw"} <= bodies
+    assert {"blank_frame", "cutter_frame"} <= {m.site(i).name for i in range(m.nsite)}
     # visible geoms on the spindles (cutter and blank)
     assert (m.geom_bodyid == m.body("tool_spindle").id).sum() >= 2
     assert (m.geom_bodyid == m.body("work_spindle").id).sum() >= 2
@@ -124,14 +124,14 @@ def test_nut_axial_compliance() -> None:
         w = d.qvel[m.joint("TV").dofadr[0]]
         d.ctrl[m.actuator("M3").id] = 200.0 * (tv0 - q) - 2.0 * w  # motor holding the screw
         mujoco.mj_step(m, d)
-    pitch = load_job("assets/jobs/spur_external.toml").machine["lead_screw_pitch"] * 1e-3
+    pitch = load_job(str(JOBS / "spur_external.toml")).machine["lead_screw_pitch"] * 1e-3
     stretch = d.qpos[m.joint("P3").qposadr[0]] - pitch / (2 * math.pi) * d.qpos[m.joint("TV").qposadr[0]]
     assert stretch == pytest.approx(force / params.nut_stiffness, rel=0.02)
 
 
 def test_invalid_parameters_are_named() -> None:
     bad = replace(SkivingMachineParams(), work_drive=DriveStage(0.5, None, 1e-4), carriage_mass=0.0)
-    j = load_job("assets/jobs/spur_external.toml")
+    j = load_job(str(JOBS / "spur_external.toml"))
     with pytest.raises(ValueError, match=r"work_drive.backlash.*contact stiffness") as info:
         build_spec(j.skiving, bad, 10.0)
     assert "carriage_mass" in str(info.value)
@@ -147,7 +147,7 @@ def test_every_structure_compiles_and_steps_without_warnings(job: str, structure
 
     from virtual_machine.chains import chain_ratios
 
-    j = load_job(f"assets/jobs/{job}.toml")
+    j = load_job(str(JOBS / f"{job}.toml"))
     j = dataclasses.replace(j, machine=dict(j.machine, structure=structure))
     chains = chain_ratios(j) if structure != "mechatronic" else None
     spec = build_spec(j.skiving, SkivingMachineParams(), j.machine["lead_screw_pitch"], structure, chains)
@@ -203,7 +203,7 @@ def test_lead_screw_pitch_error_is_the_screws_real_lead() -> None:
     """A screw 0.4 % long: the nut couples P3 to TV with the real lead, and the home pose puts no preload on it."""
     from machine_models.parts import tendon_coefs
 
-    job = load_job("assets/jobs/spur_external.toml")
+    job = load_job(str(JOBS / "spur_external.toml"))
     nominal = job.machine["lead_screw_pitch"] * 1e-3  # m
     params = replace(SkivingMachineParams(), lead_screw_pitch_error=4e-3)
     m = build_spec(job.skiving, params, job.machine["lead_screw_pitch"]).compile()

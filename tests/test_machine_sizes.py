@@ -182,6 +182,7 @@ def test_the_estimate_by_hand() -> None:
     assert first.tool_torque_peak == pytest.approx(7.3, rel=0.03)
 
 
+@pytest.mark.slow
 def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
     """The small job (z2 18, mn 1, b 4, one full-depth pass) co-simulated on the small machine, forces on, one
     process: its peak cutting force, tool motor torque and torque about the work axis lie within 0.75-1.33x of the

@@ -111,6 +111,7 @@ DESIGN = Modification(
     left=FlankDesign(lead_crowning=10 * UM, profile_crowning=4 * UM, helix_angle_modification=6 * UM),
     right=FlankDesign(lead_crowning=10 * UM, end_relief=5 * UM, end_relief_length=2.0, twist=4 * UM),
 )
+
 GEARS = {
     "spur": GEAR,
     "helical": Gear(25, 2.0, 20 * DEG, 18 * DEG, 12.0),
@@ -136,6 +137,7 @@ def modified(request):
     return gear, measure_gear(mesh, gear, MeasureOptions(design=DESIGN)), measure_gear(mesh, gear)
 
 
+@pytest.mark.slow
 def test_a_gear_cut_to_its_design_measures_as_perfect_against_it(modified) -> None:
     """Every profile and helix deviation against the design within 0.3 um (a perfect reference gear measures
     within 0.2 um); without the design the same teeth show the modifications as deviations."""
@@ -300,6 +302,7 @@ def crowned_path(crowned_run):
     return job, plan
 
 
+@pytest.mark.slow
 def test_the_corrections_effect_is_the_hand_worked_k_r_and_k_t(crowned_path) -> None:
     """J read from the probe cuts: a radial correction moves both flanks by sin(alpha_t) per mm (the common rack),
     a tangential one by -+ r_b per rad; within 1 %."""
@@ -330,6 +333,7 @@ def test_skiving_makes_lead_crowning_and_a_helix_modification_by_its_path(crowne
     assert len(segments) == 2 * 10 + 2 and all(len(s["da"]) == 4 and len(s["dphi"]) == 4 for s in segments)
 
 
+@pytest.mark.slow
 def test_end_relief_by_the_path_and_what_only_a_cutter_makes() -> None:
     """End relief (5 um over 1 mm) made by the path within 1 um along the helix traces; a profile crowning the path
     cannot make is reported as the residual it leaves (the design's own 4 um over the active profile)."""
@@ -341,6 +345,7 @@ def test_end_relief_by_the_path_and_what_only_a_cutter_makes() -> None:
     assert plan.beyond_path_um["left"] == pytest.approx(4.0, abs=0.3) and plan.beyond_path_um["right"] == 0.0
 
 
+@pytest.mark.slow
 def test_skive_cut_makes_the_modification_and_says_how(tmp_path) -> None:
     """`skive cut` of a job with a [modification]: plans the path, cuts along it, measures against the design,
     and writes the path (iterations, J, Bezier segments) into measurement.json."""

@@ -80,6 +80,7 @@ def test_never_touching_the_blank_is_an_error():
         cut(Stock(st.gear), involute_edge(st, 30), far, 5e-3, res)
 
 
+@pytest.mark.slow
 def test_ideal_cut_of_a_small_gear():
     """One full-depth pass at 4 um sweep error: a manifold gear with the right teeth and thickness."""
     st = small_setup()
@@ -105,6 +106,7 @@ def test_ideal_cut_of_a_small_gear():
     assert doc["pitch"]["left"]["F_p"] < 4.0 + 1.0 and doc["pitch"]["right"]["F_p"] < 4.0 + 1.0
 
 
+@pytest.mark.slow
 def test_parallel_workers_cut_the_same_gear():
     """Two worker processes (each owning half of the tooth spaces) give the same gear and chips as one."""
     from cutting.engine import cut_passes
@@ -131,6 +133,7 @@ def _section(solid, z: float) -> tuple[float, float]:
     return float(np.linalg.norm(b - a, axis=1).sum()), float(np.hypot(a[:, 0], a[:, 1]).min())
 
 
+@pytest.mark.slow
 def test_slab_planes_leave_no_trace_in_a_cut_face():
     """A face three slabs wide, cut by two workers: the section exactly on a slab plane is the section a
     hair beside it (same perimeter, nothing inside the root circle)."""

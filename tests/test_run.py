@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
+import tomllib
 from unittest import mock
 
 import numpy as np
 import pytest
+from checks import JOBS
 from click.testing import CliRunner
 from rerun.chunk import RrdReader
 from small_jobs import small_job
 
 from virtual_machine.cli import main
-from virtual_machine.job import load_job
+from virtual_machine.cutting_load import pass_loads
+from virtual_machine.job import load_job, parse_job
 from virtual_machine.program import ProgramSettings, program_duration
 from virtual_machine.simulate import LostSynchronismError, MachineRun, simulate
 
@@ -44,6 +46,7 @@ def runs(tmp_path_factory):
     return tmp, out, sims
 
 
+@pytest.mark.slow
 def test_run_writes_every_file(runs) -> None:
     _, ((out, text), _), _ = runs
     for name in (
@@ -64,7 +67,10 @@ def test_run_writes_every_file(runs) -> None:
     assert run["cut"]["passages"] > 300 and run["cut"]["chip_volume_mm3"] > 100.0
     f = run["forces"]
     assert f["material"] == "16MnCr5" and "Koenig" in f["source"]
-    assert 300.0 < f["peak_force_N"] < 5000.0  # m 1, full depth: chips of tens of um over a few mm of edge
+    # the peak against the estimate from the setting sheet before the run (virtual_machine/cutting_load.py; measured
+    # 0.79x: 1429 of 1809 N, the estimate takes the whole engagement at the mean chip's thickness)
+    est = max(ld.force_peak for ld in pass_loads(parse_job(tomllib.loads(SMALL_JOB)).skiving, "16MnCr5"))
+    assert 0.6 * est < f["peak_force_N"] < 1.4 * est, (f["peak_force_N"], est)
     assert -f["load_work_J"] == pytest.approx(f["chip_energy_J"], rel=0.08)
     assert run["synchronisation"]["sync_error_in_cut"]["rms_um"] < 20.0
     page = (out / "report.html").read_text()
@@ -73,6 +79,7 @@ def test_run_writes_every_file(runs) -> None:
         assert text_part in page
 
 
+@pytest.mark.slow
 def test_recording_has_the_cut_and_the_forces(runs) -> None:
     tmp, _, _ = runs
     chunks = RrdReader(tmp / "run.rrd").stream().to_chunks()
@@ -90,6 +97,7 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
     assert sum(c.num_rows for c in blank) == len(load_job(tmp / "small.toml").skiving.passes)
 
 
+@pytest.mark.slow
 def test_the_same_job_gives_the_same_gear(runs) -> None:
     _, ((a, _), (b, _)), _ = runs
     da, db = (json.loads((x / "measurement.json").read_text()) for x in (a, b))
@@ -100,13 +108,13 @@ def test_the_same_job_gives_the_same_gear(runs) -> None:
 
 
 def test_a_drive_that_cannot_follow_stops_the_job_with_its_reason() -> None:
-    job = load_job("assets/jobs/default.toml")
+    job = load_job(str(JOBS / "default.toml"))
     with pytest.raises(LostSynchronismError, match=r"M2 60\.0 N m.*process\.tool_speed"):
         simulate(job, settings=ProgramSettings(runup=0.2, runup_acceleration=1e5), duration=1.0)
 
 
 def test_the_program_duration_estimate_matches_the_run() -> None:
-    job = load_job("assets/jobs/default.toml")
+    job = load_job(str(JOBS / "default.toml"))
     rec = simulate(job, duration=np.inf)
     assert program_duration(job.skiving) == pytest.approx(rec.t[-1], rel=0.01)
 
@@ -114,6 +122,7 @@ def test_the_program_duration_estimate_matches_the_run() -> None:
 GRADABLE_JOB = small_job(sweep_error=0.02, face_width=4.0)  # ISO 1328-1 grades b >= 4 mm
 
 
+@pytest.mark.slow
 def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_path) -> None:
     """The project's own CI runs `skive check` on a small job: class 1 is out of reach for it (exit 1, every
     parameter over class 1 named); the verdict at the gear's own class passes."""
@@ -140,7 +149,7 @@ def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_pa
 def test_check_verdicts_on_known_documents() -> None:
     from virtual_machine.check import class_verdict, format_verdict
 
-    gear = load_job("assets/jobs/default.toml").gear
+    gear = load_job(str(JOBS / "default.toml")).gear
     measured = {
         "f_p": 1.0,
         "F_p": 3.0,
@@ -177,7 +186,7 @@ def test_check_verdicts_on_known_documents() -> None:
 def test_the_jobs_motor_torques_are_the_amplifiers_current_limits(tmp_path) -> None:
     # [machine.model] tool_motor_torque etc. set the motors' peak torques: the MuJoCo actuators' range and the
     # current limits of amplifiers 3, 11 and 18 alike (a limit left in the controller made the override idle)
-    text = Path("assets/jobs/default.toml").read_text()
+    text = (JOBS / "default.toml").read_text()
     path = tmp_path / "strong.toml"
     path.write_text(text + "\n[machine.model]\ntool_motor_torque = 55.0\nwork_motor_torque = 70.0\n")
     run = MachineRun(load_job(path))
@@ -188,6 +197,7 @@ def test_the_jobs_motor_torques_are_the_amplifiers_current_limits(tmp_path) -> N
         assert model.actuator(name).ctrlrange[1] == pytest.approx(peak)
 
 
+@pytest.mark.slow
 def test_a_gear_that_cannot_be_measured_keeps_the_run_and_says_why(tmp_path, monkeypatch, runs) -> None:
     # the measuring machine refuses a damaged gear (as a ball that cannot seat in a gouged space): the run keeps
     # gear.stl and its facts, and the error says what the machine did while it cut. The machine and the cut are

@@ -7,6 +7,7 @@ import json
 
 import numpy as np
 import pytest
+from checks import JOBS
 from click.testing import CliRunner
 from small_jobs import small_job
 
@@ -22,7 +23,7 @@ def test_interpolation_between_4khz_samples_is_within_0_1_um() -> None:
     """The finishing pass of spur_external sampled at 4 kHz (3.75 deg of cutter per sample): poses between the
     samples, applied to points 50 mm from the cutter axis, lie within 0.1 um of the exact motion (measured
     0.06 um; the sweep error allowed is 1 um)."""
-    motion = ideal_passes(load_job("assets/jobs/spur_external.toml").skiving)[3]
+    motion = ideal_passes(load_job(str(JOBS / "spur_external.toml")).skiving)[3]
     sampled = ideal_samples(motion, 4000.0)
     t = np.random.default_rng(1).uniform(0.0, motion.duration, 3000)
     r1, p1 = motion.pose(t)
@@ -36,7 +37,7 @@ def test_interpolation_between_4khz_samples_is_within_0_1_um() -> None:
 
 
 def test_tooth_passages_come_from_the_sampled_cutter_angle() -> None:
-    setup = load_job("assets/jobs/spur_external.toml").skiving
+    setup = load_job(str(JOBS / "spur_external.toml")).skiving
     motion = ideal_passes(setup)[3]
     sampled = ideal_samples(motion, 4000.0)
     edge = make_edge(setup, "conjugate")
@@ -47,7 +48,7 @@ def test_tooth_passages_come_from_the_sampled_cutter_angle() -> None:
 
 
 def test_bad_trajectories_are_refused() -> None:
-    setup = load_job("assets/jobs/spur_external.toml").skiving
+    setup = load_job(str(JOBS / "spur_external.toml")).skiving
     s = ideal_samples(ideal_passes(setup)[3], 1000.0)
     rot = s.rot.copy()
     rot[10] *= 1.01
@@ -62,6 +63,7 @@ def test_bad_trajectories_are_refused() -> None:
 SMALL_JOB = small_job(edge=None)
 
 
+@pytest.mark.slow
 def test_cut_along_the_simulated_trajectory(tmp_path) -> None:
     """skive simulate, then skive cut --trajectory: the gear the simulated machine cuts, measured; the default
     machine without load follows the ratio to a fraction of a micrometre (test_simulate), so its gear's span is

@@ -28,6 +28,8 @@ from virtual_machine.cosim import cosimulate
 from virtual_machine.job import load_job
 from virtual_machine.setup_sheet import setup_sheet
 
+pytestmark = pytest.mark.slow  # whole machine jobs (pytest -m 'not slow' skips them)
+
 SCENARIOS = Path(__file__).resolve().parents[1] / "assets" / "jobs" / "scenarios"
 SIDES = ("left", "right")
 

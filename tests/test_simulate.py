@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import mujoco
 import numpy as np
 import pytest
+from checks import JOBS
 
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import build_spec
@@ -19,7 +19,7 @@ from virtual_machine.simulate import relative_pose, simulate
 
 
 def _job(name: str, **machine) -> Job:
-    job = load_job(f"assets/jobs/{name}.toml")
+    job = load_job(str(JOBS / f"{name}.toml"))
     return dataclasses.replace(job, machine=dict(job.machine, **machine))
 
 
@@ -63,7 +63,7 @@ def test_adaptive_correction_rejects_a_load_step_at_least_5x() -> None:
 
 
 def test_pass_trajectories_cover_every_pass() -> None:
-    job = load_job("assets/jobs/spur_external.toml")
+    job = load_job(str(JOBS / "spur_external.toml"))
     rec = simulate(job)
     setup = job.skiving
     assert [p.index for p in rec.passes] == list(range(len(setup.passes)))
@@ -76,7 +76,7 @@ def test_pass_trajectories_cover_every_pass() -> None:
 
 
 def test_relative_pose_is_mujocos_kinematics() -> None:
-    job = load_job("assets/jobs/helical_internal.toml")
+    job = load_job(str(JOBS / "helical_internal.toml"))
     params = SkivingMachineParams()
     phys = MachinePhysics(build_spec(job.skiving, params, 10.0).compile(), params)
     rng = np.random.default_rng(3)
@@ -93,8 +93,8 @@ def test_relative_pose_is_mujocos_kinematics() -> None:
 def test_a_diverging_simulation_names_its_stage() -> None:
     params = dataclasses.replace(SkivingMachineParams(), work_drive=DriveStage(0.5, 1e10, 0.0, 0.0))
     with pytest.raises(SimulationDivergedError, match=r"work_drive.*stiffness"):
-        simulate(load_job("assets/jobs/spur_external.toml"), params, duration=0.5)
-    m = build_spec(load_job("assets/jobs/spur_external.toml").skiving, params, 10.0).compile()
+        simulate(load_job(str(JOBS / "spur_external.toml")), params, duration=0.5)
+    m = build_spec(load_job(str(JOBS / "spur_external.toml")).skiving, params, 10.0).compile()
     assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
 
 
@@ -107,7 +107,7 @@ def test_simulate_cli_writes_the_trajectory_and_the_record(tmp_path) -> None:
     from virtual_machine.cli import main
 
     out = tmp_path / "sim"
-    args = ["simulate", "assets/jobs/spur_external.toml", "--duration", "1.2", "--out", str(out), "--json"]
+    args = ["simulate", str(JOBS / "spur_external.toml"), "--duration", "1.2", "--out", str(out), "--json"]
     res = CliRunner().invoke(main, [*args, "--rrd", str(tmp_path / "run.rrd")])
     assert res.exit_code == 0, res.output
     doc = json.loads(res.output)
@@ -117,7 +117,8 @@ def test_simulate_cli_writes_the_trajectory_and_the_record(tmp_path) -> None:
     for name in ("trajectory.npz", "motion.npz", "simulation.json", "sync_error.png", "machine.xml", "scene.xml"):
         assert (out / name).stat().st_size > 0
     scene = mujoco.MjModel.from_xml_path(str(out / "scene.xml"))  # what the plain viewer opens
-    assert scene.body("tool_spindle").id > 0 and scene.site("cutter_frame").id >= 0
+    assert "tool_spindle" in {scene.body(i).name for i in range(scene.nbody)}
+    assert "cutter_frame" in {scene.site(i).name for i in range(scene.nsite)}
     (p,) = motion_io.load_trajectory(out / "trajectory.npz")
     assert p.index == 0 and p.rot.shape == (len(p.t), 3, 3)
     # the poses are rigid and follow the recorded axes
@@ -206,7 +207,7 @@ def test_simulate_cli_runs_a_thread_job(tmp_path) -> None:
 
     from virtual_machine.cli import main
 
-    res = CliRunner().invoke(main, ["simulate", "assets/jobs/thread_m12.toml", "--out", str(tmp_path), "--json"])
+    res = CliRunner().invoke(main, ["simulate", str(JOBS / "thread_m12.toml"), "--out", str(tmp_path), "--json"])
     assert res.exit_code == 0, res.output
     doc = json.loads(res.output)
     assert doc["form"] == "master-slave" and doc["lead_mm"] == 1.75
@@ -222,10 +223,10 @@ def test_job_overrides_machine_parameters(tmp_path) -> None:
     from virtual_machine.simulate import machine_params
 
     text = tmp_path / "j.toml"
-    base = Path("assets/jobs/spur_external.toml").read_text()
+    base = (JOBS / "spur_external.toml").read_text()
     text.write_text(base + "\n[machine.model.work_drive]\nbacklash = 1e-4\n")
     params = machine_params(load_job(text))
-    size = machine_params(load_job("assets/jobs/spur_external.toml"))  # the job's machine size, unchanged
+    size = machine_params(load_job(str(JOBS / "spur_external.toml")))  # the job's machine size, unchanged
     assert params.work_drive.backlash == 1e-4 and params.work_drive.stiffness == size.work_drive.stiffness
     m = build_spec(load_job(text).skiving, params, 10.0).compile()
     assert np.diff(m.tendon_lengthspring[m.tendon("work_drive").id])[0] == pytest.approx(1e-4)
@@ -281,10 +282,10 @@ def test_simulate_cli_overrides_the_structure(tmp_path) -> None:
     from virtual_machine.cli import main
 
     # 1.0 s: the run-up of spur_external's medium machine (0.64 s) and the first pass's start
-    args = ["simulate", "assets/jobs/spur_external.toml", "--duration", "1.0", "--out", str(tmp_path), "--json"]
+    args = ["simulate", str(JOBS / "spur_external.toml"), "--duration", "1.0", "--out", str(tmp_path), "--json"]
     res = CliRunner().invoke(main, [*args, "--structure", "mechanical"])
     assert res.exit_code == 0, res.output
     doc = json.loads(res.output)
     assert doc["structure"] == "mechanical" and list(doc["passes"][0]["peak_torque_Nm"]) == ["M1", "M2"]
-    res = CliRunner().invoke(main, ["simulate", "assets/jobs/thread_m12.toml", "--structure", "hydraulic-shaft"])
+    res = CliRunner().invoke(main, ["simulate", str(JOBS / "thread_m12.toml"), "--structure", "hydraulic-shaft"])
     assert res.exit_code == 2 and "hydraulic" in res.output

@@ -10,6 +10,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from checks import JOBS
 
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
 from virtual_machine.job import Job, load_job
@@ -26,7 +27,7 @@ FINE = {"command_pulses_per_rev": 1_000_000, "encoder_lines": 2_500_000}
 
 
 def _job(form: str, fine: bool = False, thread: dict | None = None, **machine) -> Job:
-    job = load_job("assets/jobs/thread_m12.toml")
+    job = load_job(str(JOBS / "thread_m12.toml"))
     structure, sync = FORMS[form]
     machine = {**job.machine, "structure": structure, "synchronization": sync, **(FINE if fine else {}), **machine}
     return dataclasses.replace(job, machine=machine, thread=dict(job.thread, **(thread or {})))
@@ -61,9 +62,8 @@ def test_every_form_compiles_steps_and_loads_from_xml(form: str, stiff: bool) ->
     assert d.qvel[m.joint("B1").dofadr[0]] > 1.0  # the spindle turned
     m2 = mujoco.MjModel.from_xml_string(spec.to_xml())
     assert (m2.nq, m2.nu, m2.ntendon, m2.neq) == (m.nq, m.nu, m.ntendon, m.neq)
-    for body in ("spindle", "carriage", "lead_screw"):
-        assert m2.body(body).id >= 0
-    assert m2.site("tool_tip").id >= 0
+    assert {"spindle", "carriage", "lead_screw"} <= {m2.body(i).name for i in range(m2.nbody)}
+    assert "tool_tip" in {m2.site(i).name for i in range(m2.nsite)}
     assert (m2.geom_bodyid == m2.body("spindle").id).sum() >= 2  # chuck and workpiece
     assert (m2.geom_bodyid == m2.body("carriage").id).sum() >= 2  # saddle and tool
 

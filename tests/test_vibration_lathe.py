@@ -96,6 +96,7 @@ def test_bad_turning_jobs_name_the_key(vibration, sync, key):
     assert key in str(info.value)
 
 
+@pytest.mark.slow
 def test_cli_setup_simulate_and_run(tmp_path):
     path = tmp_path / "job.toml"
     path.write_text(JOB.format(vibration=HARD, sync="master-slave"))
