@@ -92,21 +92,9 @@ def _sampled_parameters_of(t, rot, p):
         i0, i2, i3 = max(i - 1, 0), i + 1, min(i + 2, n - 1)
         ri = rot[i]
         logs = []
+        ri_t = (ri[0], ri[3], ri[6], ri[1], ri[4], ri[7], ri[2], ri[5], ri[8])  # R_i^T, row-major
         for k in (i0, i2, i3):
-            rk = rot[k]
-            # R_i^T R_k, row-major
-            m = (
-                ri[0] * rk[0] + ri[3] * rk[3] + ri[6] * rk[6],
-                ri[0] * rk[1] + ri[3] * rk[4] + ri[6] * rk[7],
-                ri[0] * rk[2] + ri[3] * rk[5] + ri[6] * rk[8],
-                ri[1] * rk[0] + ri[4] * rk[3] + ri[7] * rk[6],
-                ri[1] * rk[1] + ri[4] * rk[4] + ri[7] * rk[7],
-                ri[1] * rk[2] + ri[4] * rk[5] + ri[7] * rk[8],
-                ri[2] * rk[0] + ri[5] * rk[3] + ri[8] * rk[6],
-                ri[2] * rk[1] + ri[5] * rk[4] + ri[8] * rk[7],
-                ri[2] * rk[2] + ri[5] * rk[5] + ri[8] * rk[8],
-            )
-            logs.append(_log9(m))
+            logs.append(_log9(_mm(ri_t, rot[k])))  # R_i^T R_k
         v0, v2, v3 = logs[0], logs[1], logs[2]
         e = 1 + 13 * n + _PER_INTERVAL * i
         d02, d13 = t[i2] - t[i0], t[i3] - t[i]
