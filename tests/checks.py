@@ -3,7 +3,6 @@ cannot pass on missing values."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -14,13 +13,9 @@ JOBS = Path(__file__).resolve().parents[1] / "assets" / "jobs"
 
 def finite_max(values, share: float) -> float:
     """The largest |value| of ``values``, asserting that at least ``share`` of them are finite: np.nanmax alone
-    passes a measurement that came back NaN almost everywhere (and fails only when all of it is NaN).
-    SKIVE_TEST_SHARES=FILE appends each call's share to FILE (to state the shares a test expects)."""
+    passes a measurement that came back NaN almost everywhere (and fails only when all of it is NaN)."""
     v = np.abs(np.asarray(values, dtype=float))
     finite = np.isfinite(v)
     got = float(finite.mean()) if v.size else 0.0
-    if os.environ.get("SKIVE_TEST_SHARES"):
-        with open(os.environ["SKIVE_TEST_SHARES"], "a") as fh:
-            fh.write(f"{os.environ.get('PYTEST_CURRENT_TEST', '?')} {got:.4f} {v.size}\n")
     assert got >= share, f"only {got:.1%} of {v.size} values are finite (at least {share:.0%} expected)"
     return float(v[finite].max())
