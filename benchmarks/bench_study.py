@@ -17,9 +17,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from virtual_machine.study.design import cases
-from virtual_machine.study.runner import run_study
-from virtual_machine.study.spec import load_study
+from virtual_machine.studies.design import cases
+from virtual_machine.studies.runner import run_study
+from virtual_machine.studies.spec import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
 

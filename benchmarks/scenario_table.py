@@ -1,5 +1,6 @@
-"""The README's scenario table, re-measured (run on demand): every scenario of assets/jobs/scenarios/ on the simulated
-machine, as skive run does it (machine, forces, dexel cut, the exact swept surface of the motion it made).
+"""The scenario table of docs/skiving-run.md, re-measured (run on demand): every scenario of assets/jobs/scenarios/
+on the simulated machine, as skive run does it (machine, forces, dexel cut, the exact swept surface of the motion it
+made).
 
     python benchmarks/scenario_table.py                  # all scenarios (~10 min on 2 cores)
     python benchmarks/scenario_table.py lead_screw_error # some of them (the baseline and the ideal cut always run)

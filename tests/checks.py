@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 #: the shipped job files, wherever pytest is started from
-JOBS = Path(__file__).resolve().parents[1] / "assets" / "jobs"
+ROOT = Path(__file__).resolve().parents[1]
+JOBS = ROOT / "assets" / "jobs"
 
 
 def finite_max(values, share: float) -> float:

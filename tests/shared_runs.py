@@ -1,8 +1,8 @@
 """Whole-machine runs that several test files share in one pytest session (the ``shared_runs`` fixture).
 
-A job file is run once per session as a study case runs it (``virtual_machine.study.runner.run_case``: `skive run`
+A job file is run once per session as a study case runs it (``virtual_machine.studies.runner.run_case``: `skive run`
 with one removal process, measured on the exact swept surface of the motion the machine made), and kept in the
-session's case store (``virtual_machine.study.cache``): test_scenarios.py reads the result and the machine's motion
+session's case store (``virtual_machine.studies.cache``): test_scenarios.py reads the result and the machine's motion
 record, and the studies of test_study.py take the same run from the store as a case instead of running it again.
 The two files run in different processes (``--dist loadfile``), so a run is made under a file lock: whoever asks
 first runs it, the other waits for it and reads it.
@@ -17,10 +17,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from unittest import mock
 
-from virtual_machine.study.cache import CaseCache, content_key
+from virtual_machine.studies.cache import CaseCache, content_key
 
 if TYPE_CHECKING:
-    from virtual_machine.simulate import MotionRecord
+    from virtual_machine.machine_run import MotionRecord
 
 
 @contextlib.contextmanager
@@ -59,8 +59,8 @@ class SharedRuns:
 
 def _run_case(name: str, text: str) -> tuple[dict[str, Any], MotionRecord]:
     """``run_case`` of the job, keeping the motion record of the co-simulation `skive run` made."""
-    import virtual_machine.run as run_module
-    from virtual_machine.study.runner import run_case
+    import virtual_machine.skiving_run as run_module
+    from virtual_machine.studies.runner import run_case
 
     made = []
     cosimulate = run_module.cosimulate

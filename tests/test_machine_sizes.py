@@ -23,7 +23,7 @@ from machine_models.sizes import SIZE_NAMES, SIZES, size_for, workpiece_diameter
 from machine_models.skiving_machine import build_spec
 from virtual_machine.cutting_load import MARGIN, check_machine_holds, motor_loads, pass_loads, space_area
 from virtual_machine.job import flatten_model, load_job, parse_job
-from virtual_machine.simulate import MachineRun, machine_params, machine_size
+from virtual_machine.machine_run import MachineRun, machine_params, machine_size
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 
@@ -120,8 +120,8 @@ def test_overrides_act_on_top_of_the_size(tmp_path) -> None:
     assert p.tool_motor_torque == 900.0 and p.work_drive.backlash == 1e-4
     assert p.work_drive.stiffness == large.work_drive.stiffness and p.work_inertia == large.work_inertia
     assert dataclasses.replace(p, tool_motor_torque=large.tool_motor_torque, work_drive=large.work_drive) == large
-    # a study's base values are those of the base job's size (virtual_machine/study/spec.py)
-    from virtual_machine.study.spec import base_value
+    # a study's base values are those of the base job's size (virtual_machine/studies/spec.py)
+    from virtual_machine.studies.spec import base_value
 
     data = tomllib.loads((JOBS / "spur_external.toml").read_text())
     assert base_value(data, "machine.size") == "medium"
@@ -188,7 +188,7 @@ def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
     process: its peak cutting force, tool motor torque and torque about the work axis lie within 0.75-1.33x of the
     estimate's (measured 1.17x, 0.94x, 1.14x: 1773 vs 1510 N, 9.8 vs 10.5 N m at M1, 3.2 vs 2.9 N m)."""
     from virtual_machine.cosim import cosimulate
-    from virtual_machine.simulate import SEGMENTS
+    from virtual_machine.machine_run import SEGMENTS
 
     job = _text_job(tmp_path, small_job(face_width=4.0, sweep_error=0.02))
     (est,) = pass_loads(job.skiving, job.process["material"])
@@ -213,7 +213,7 @@ def test_a_job_too_heavy_for_its_machine_is_refused_before_the_run(tmp_path) -> 
     jobs pass on their default size (spur_external: M1 26.3 of 191 N m; helical_internal: M2 21.0 of 150 N m), and
     spur_external as shipped passes on the small machine too (M1 25.7 x 1.25 = 32.1 of 40 N m): co-simulated inline
     it runs through with M1 at most 26.4 N m; its stop at t = 15.3 s with two workers comes from the co-simulation's
-    lagging chips, not from the motor (README, "spur_external's machine")."""
+    lagging chips, not from the motor (docs/skiving-run.md, "spur_external's machine")."""
     from click.testing import CliRunner
 
     from virtual_machine.cli import main
@@ -260,8 +260,8 @@ def test_the_larger_sizes_servo_loops_reject_a_load_step(tmp_path, name, size, f
     and tuned to its inertias; the adaptive correction takes back what the speed loop alone loses (medium,
     spur_external: work 0.9 vs 18 um, tool 4.4 vs 89 um RMS; large, a mn 7 gear of 434 mm with 1e5 pulses/rev and
     5e4 encoder lines: work 2.0 vs 10 um, tool 2.9 vs 54 um)."""
+    from virtual_machine.machine_run import simulate
     from virtual_machine.program import ProgramSettings, runup_time
-    from virtual_machine.simulate import simulate
 
     text = (JOBS / f"{name}.toml").read_text() if name != "large" else LARGE_JOB
     if fine:  # one pulse of 10000 per turn is 132 um of arc on this gear: the discriminators' relay would cycle

@@ -14,8 +14,8 @@ from checks import JOBS
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import build_spec
 from virtual_machine.job import Job, load_job
+from virtual_machine.machine_run import relative_pose, simulate
 from virtual_machine.physics import MachinePhysics, SimulationDivergedError
-from virtual_machine.simulate import relative_pose, simulate
 
 
 def _job(name: str, **machine) -> Job:
@@ -220,7 +220,7 @@ def test_job_overrides_machine_parameters(tmp_path) -> None:
     """[machine.model] changes the MuJoCo machine (here the work drive's backlash, 1e-4 rad); unknown or invalid
     parameters are reported with their key and the valid names."""
     from cutting.errors import InputError
-    from virtual_machine.simulate import machine_params
+    from virtual_machine.machine_run import machine_params
 
     text = tmp_path / "j.toml"
     base = (JOBS / "spur_external.toml").read_text()

@@ -19,10 +19,10 @@ from metrology import tolerances as iso
 from virtual_machine.cli import main
 from virtual_machine.job import load_job
 from virtual_machine.setup_sheet import setup_sheet
-from virtual_machine.study import pipeline
-from virtual_machine.study.budget import column_sensitivity, error_budget
-from virtual_machine.study.design import cases, design
-from virtual_machine.study.spec import load_study
+from virtual_machine.studies import pipeline
+from virtual_machine.studies.budget import column_sensitivity, error_budget
+from virtual_machine.studies.design import cases, design
+from virtual_machine.studies.spec import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ROOT / "assets" / "jobs" / "scenarios"
@@ -211,7 +211,7 @@ def test_one_at_a_time_budget_and_the_tightening_that_reaches_a_class(tmp_path) 
 def test_a_part_that_cannot_reach_the_class_alone_is_said_so() -> None:
     """Base 3 um, part A 2 um and part B 4 um at their tolerances against a 6 um class tolerance: B limits, but A
     and the base leave it 1 um, so B needs 1/4 of its tolerance; against 4.5 um nothing is left for B."""
-    from virtual_machine.study.budget import ParameterBudget, PartEffect, _answer_stack, _stack
+    from virtual_machine.studies.budget import ParameterBudget, PartEffect, _answer_stack, _stack
 
     def budget():
         parts = [
@@ -292,7 +292,7 @@ def test_monte_carlo_variance_shares(tmp_path) -> None:
 
 def stored_result(helix: float) -> dict:
     """A finished case's result as a worker returns it, with a measurement that has every results.csv column."""
-    from virtual_machine.study.runner import FLANK_COLUMNS, SIDES
+    from virtual_machine.studies.runner import FLANK_COLUMNS, SIDES
 
     doc: dict = {block: {side: {} for side in SIDES} for block in ("profile", "helix", "pitch")}
     for block, name in FLANK_COLUMNS:
@@ -310,7 +310,7 @@ def test_a_study_takes_the_cases_its_case_store_holds(tmp_path) -> None:
     case's, and result.json, the report and the study run say it was reused. The store is keyed by the job's
     content: the default job file as written (comments, its own layout) is the study's base case. A failed case is
     not stored."""
-    from virtual_machine.study.cache import CaseCache, content_key
+    from virtual_machine.studies.cache import CaseCache, content_key
 
     path = study_file(tmp_path, 'cache = "store"\n[[vary]]\nkey = "machine.encoder_lines"\nvalues = [1000]\n')
     study = load_study(path)

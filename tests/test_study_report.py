@@ -8,9 +8,9 @@ from typing import Any
 
 import pytest
 
-from virtual_machine.study.budget import Budget, ParameterBudget, PartEffect, TargetAnswer
-from virtual_machine.study.report import write_study_report
-from virtual_machine.study.spec import Study, Vary
+from virtual_machine.studies.budget import Budget, ParameterBudget, PartEffect, TargetAnswer
+from virtual_machine.studies.report import write_study_report
+from virtual_machine.studies.spec import Study, Vary
 
 BACKLASH = "machine.model.work_drive.backlash"
 RUNOUT = "machine.model.spindle.runout"

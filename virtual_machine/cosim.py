@@ -44,7 +44,7 @@ from cutting.trajectory import ideal_passes
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
 from virtual_machine.job import Job, dexel_spacing
-from virtual_machine.simulate import SEGMENTS, MachineRun, MotionRecord, relative_pose
+from virtual_machine.machine_run import SEGMENTS, MachineRun, MotionRecord, relative_pose
 
 FEED = SEGMENTS.index("feed")
 
@@ -315,7 +315,7 @@ def cosimulate(
 #: passages the machine runs ahead of the dexel removal's newest chip: none. The chips and the cut would not depend
 #: on a batch, but the forces would act later, and a delay of a few passages (~4 ms on spur_external, a third of the
 #: tool spindle's 80 Hz speed loop) lets the cut's torque feed back into it until the motor saturates: the reason
-#: why spur_external stopped with the two-worker manifold removal (README)
+#: why spur_external stopped with the two-worker manifold removal (docs/skiving-run.md, "spur_external's machine")
 DEXEL_LAG = 0
 
 

@@ -11,7 +11,7 @@ import difflib
 import math
 import tomllib
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -130,7 +130,7 @@ PROCESS_KEYS: dict[str, Key] = {
     "feed_direction": Key(str, "down", "", "'down' (towards -z) or 'up'", _one_of("down", "up")),
     "material": Key(str, "16MnCr5", "", "workpiece material (cutting forces, later issues)"),
     "clearance": Key(float, 1.0, "mm", "axial approach and overrun added to the engagement zone", _at_least(0.0)),
-    # defaults from benchmarks/bench_mesh_tolerance.py (README "The manifold solid's tolerance")
+    # defaults from benchmarks/bench_mesh_tolerance.py (docs/cutting.md, "The manifold solid's tolerance")
     "sweep_error": Key(
         float,
         0.010,
@@ -139,7 +139,7 @@ PROCESS_KEYS: dict[str, Key] = {
         _positive,
     ),
     "roughing_sweep_error": Key(float, 0.020, "mm", "chord error allowed in the roughing passes (manifold)", _positive),
-    # defaults from benchmarks/bench_dexel.py (README "The dexel workpiece")
+    # defaults from benchmarks/bench_dexel.py (docs/cutting.md, "The dexel workpiece", "Spacing")
     "dexel_profile_spacing": Key(float, None, "mm", "dexel rays along the space's profile (default 0.1 mn)", _positive),
     "dexel_face_spacing": Key(float, None, "mm", "dexel slices along the face (default 0.2 mn)", _positive),
     "stl_tolerance": Key(
@@ -296,7 +296,7 @@ MACHINE_KEYS: dict[str, Key] = {
         None,
         "SI",
         "physical parameters of the MuJoCo machine overriding those of its size (machine_models/sizes.py, "
-        "parameters.py; README table), e.g. [machine.model.work_drive] backlash = 1e-4",
+        "parameters.py; table in docs/machines.md), e.g. [machine.model.work_drive] backlash = 1e-4",
     ),
 }
 
@@ -390,7 +390,7 @@ def model_problems(model: dict[str, Any] | None, kind: str) -> list[Problem]:
             out.append(Problem(f"machine.model.{key}", value, str(exc.args[0]), f"valid parameters: {names}"))
     params = override(base, good)
     return out + [
-        Problem("machine.model", good, p, "see the machine parameter table in the README") for p in params.problems()
+        Problem("machine.model", good, p, "see the parameter table in docs/machines.md") for p in params.problems()
     ]
 
 
@@ -668,7 +668,7 @@ def _parse_face_job(data: dict[str, Any], source: str) -> Job:
             names = {"m": "slots", "R": "tool_radius", "S": "feed"}
             field = str(exc).split(":")[0].split()[0]
             problems.append(
-                Problem(f"coupling.{names.get(field, field)}", "", str(exc), "see the README's coupling keys")
+                Problem(f"coupling.{names.get(field, field)}", "", str(exc), "see docs/face-contours-and-turning.md")
             )
         if coupling is not None and parsed["process"]["slots_cut"] > coupling.m:
             problems.append(
@@ -746,7 +746,7 @@ def _parse_turning_job(data: dict[str, Any], source: str) -> Job:
         except ValueError as exc:
             field = str(exc).split()[0]
             section = "vibration" if field in VIBRATION_KEYS else "turning"
-            problems.append(Problem(f"{section}.{field}", "", str(exc), "see the README's turning keys"))
+            problems.append(Problem(f"{section}.{field}", "", str(exc), "see docs/face-contours-and-turning.md"))
         if vibration is not None and (machine["structure"], machine["synchronization"]) != (
             "mechatronic",
             "master-slave",
@@ -902,6 +902,12 @@ def dexel_spacing(job: Job):
 
     p = job.process
     return DexelSpacing.for_gear(job.gear, p["axial_feed"], p.get("dexel_profile_spacing"), p.get("dexel_face_spacing"))
+
+
+def with_machine(job: Job, **overrides: Any) -> Job:
+    """The job with [machine] keys replaced (``None``: kept as the job says), e.g. another structure."""
+    given = {k: v for k, v in overrides.items() if v is not None}
+    return replace(job, machine={**job.machine, **given}) if given else job
 
 
 def default_job_path() -> Path:

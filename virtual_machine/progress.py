@@ -107,3 +107,39 @@ class Progress:
         extra = "".join(f", {v} {k.replace('_', ' ')}" for k, v in self.info.items())
         elapsed = self.clock() - self._start
         print(f"{self.desc}: {pct:.0f} % ({counts}{extra}, {elapsed:.0f} s)", file=self.stream, flush=True)
+
+
+class _Null:
+    """A stream that takes everything and shows nothing."""
+
+    def write(self, _text: str) -> int:
+        return 0
+
+    def flush(self) -> None:
+        pass
+
+
+class Reporter:
+    """Where a process says how it goes: stages (one line each) and tasks with a total (a :class:`Progress`).
+
+    A task lasts until the next stage or :meth:`close`. The CLI's reporter writes to stderr (bars on a terminal,
+    lines in a log); ``Reporter(quiet=True)`` says nothing (a notebook that wants only the result)."""
+
+    def __init__(self, stream: TextIO | None = None, *, quiet: bool = False) -> None:
+        self.stream = _Null() if quiet else stream
+        self._tasks: list[Progress] = []
+
+    def stage(self, name: str) -> None:
+        self.close()
+        stage(name, self.stream)
+
+    def task(self, desc: str, total: float, unit: str = "", **options) -> Progress:
+        """A task's progress; ``options`` as :class:`Progress` takes them (step, value_format)."""
+        bar = Progress(desc, total, unit, stream=self.stream, **options)
+        self._tasks.append(bar)
+        return bar
+
+    def close(self) -> None:
+        for bar in self._tasks:
+            bar.close()
+        self._tasks.clear()

@@ -23,7 +23,7 @@ import tomli_w
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import parse_job
-from virtual_machine.study.spec import Study, Vary, set_key, typed
+from virtual_machine.studies.spec import Study, Vary, set_key, typed
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from metrology import tolerances as iso
-from virtual_machine.study.spec import Study, Vary
+from virtual_machine.studies.spec import Study, Vary
 
 PARAMETERS = iso.PARAMETERS
 SLOPES = ("f_Halpha", "f_Hbeta")

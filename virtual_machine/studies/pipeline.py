@@ -11,11 +11,11 @@ from pathlib import Path
 
 from metrology import tolerances as iso
 from virtual_machine.job import parse_job
-from virtual_machine.study.budget import Budget, error_budget
-from virtual_machine.study.cache import CaseCache
-from virtual_machine.study.design import cases as study_cases
-from virtual_machine.study.runner import StudyRun, run_study
-from virtual_machine.study.spec import Study, load_study
+from virtual_machine.studies.budget import Budget, error_budget
+from virtual_machine.studies.cache import CaseCache
+from virtual_machine.studies.design import cases as study_cases
+from virtual_machine.studies.runner import StudyRun, run_study
+from virtual_machine.studies.spec import Study, load_study
 
 #: progress(done, failed, total, seconds_left or None)
 StudyProgress = Callable[[int, int, int, float | None], None]
@@ -51,7 +51,7 @@ def run(
 ) -> StudyOutcome:
     """Every check first (InputError before any case runs), then the cases, then the budget and the report.
     ``cache``: the case store the study shares with others (default: the study file's ``cache``, else none)."""
-    from virtual_machine.study.report import write_study_report
+    from virtual_machine.studies.report import write_study_report
 
     study = load_study(path)
     cases = study_cases(study)

@@ -12,7 +12,7 @@ gear cannot be measured, anything else) is recorded with its error; the others g
 Each case cuts with one removal process (the Dask worker is the unit of parallelism), so its result does not
 depend on how many workers the study has: the same study gives the same table with 1 or N workers.
 
-With a case store (:mod:`virtual_machine.study.cache`), a case whose job the store holds is not run: its stored
+With a case store (:mod:`virtual_machine.studies.cache`), a case whose job the store holds is not run: its stored
 result is written as the case's (result.json says ``"reused": true``), and every case that finishes is stored.
 """
 
@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from virtual_machine.study.cache import CaseCache
-from virtual_machine.study.design import Case
-from virtual_machine.study.spec import Study
+from virtual_machine.studies.cache import CaseCache
+from virtual_machine.studies.design import Case
+from virtual_machine.studies.spec import Study
 
 SIDES = ("left", "right")
 #: measured columns of results.csv per flank: (block of measurement.json, name), in um
@@ -59,7 +59,7 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
     """One case on a worker: the job run as `skive run` runs it (one removal process), in a scratch directory.
     Returns status, error, wall time and the measurement document (or, for a gear that could not be measured,
     the run's facts), never raises for a failing case."""
-    from virtual_machine.run import run_job
+    from virtual_machine.skiving_run import run_job
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix=f"skive-{case_id}-") as tmp:
@@ -88,9 +88,9 @@ def expected_failures() -> tuple[type[Exception], ...]:
     """What a machine or a job can do to a case: bad input, a diverged simulation, lost synchronism, a gear the
     measuring machine cannot measure."""
     from cutting.errors import InputError
+    from virtual_machine.machine_run import LostSynchronismError
     from virtual_machine.physics import SimulationDivergedError
-    from virtual_machine.run import UnmeasurableGearError
-    from virtual_machine.simulate import LostSynchronismError
+    from virtual_machine.skiving_run import UnmeasurableGearError
 
     return (InputError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError)
 

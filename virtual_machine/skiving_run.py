@@ -53,7 +53,7 @@ def versions() -> dict[str, str]:
 
 
 def run_job(
-    path: Path,
+    job: Job | Path,
     out: Path,
     rrd: Path | None = None,
     progress: Callable[[float, int], None] | None = None,
@@ -62,13 +62,15 @@ def run_job(
     mesh_tolerance: float | None = None,
     removal: str = "dexel",
 ) -> dict[str, Any]:
-    """Run the job at ``path``; write its files into ``out``; return the measurement document with ``run``.
+    """Run ``job`` (or the job file at that path); write its files into ``out``; return the measurement document
+    with ``run``.
     ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage;
     ``workers``: the manifold removal's processes (default one per core); ``mesh_tolerance`` [mm]: the solid's
     tolerance (default the job's process.sweep_error); ``removal``: "dexel" or "manifold" (the reference)."""
     announce = stage or (lambda name: None)
     durations: dict[str, float] = {}
-    job = with_mesh_tolerance(load_job(path), mesh_tolerance)
+    job = with_mesh_tolerance(job if isinstance(job, Job) else load_job(job), mesh_tolerance)
+    path = Path(job.source)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     workers = workers or default_workers()

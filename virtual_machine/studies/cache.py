@@ -3,7 +3,7 @@ filled the store) is taken from it instead of run again.
 
 The store is a directory (a study file's ``cache = "DIR"``, relative to the study file, or ``pipeline.run(...,
 cache=DIR)``) of ``<key>.json`` files, each the result a study worker returns for a case (status, error, wall time,
-measurement document: see :func:`virtual_machine.study.runner.run_case`) with the job it ran. The key is the
+measurement document: see :func:`virtual_machine.studies.runner.run_case`) with the job it ran. The key is the
 sha256 of the job's content (:func:`job_content`: the keys and values, whatever their order, comments or layout), so
 a one-at-a-time study's base case and the base job run by another study, or the job file itself, share an entry.
 Only cases that finished ("ok") are stored: a failure may be the worker's, not the job's. An entry is written

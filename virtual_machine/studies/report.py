@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from virtual_machine.report import STYLE, html_table
-from virtual_machine.study.budget import Budget, ParameterBudget
-from virtual_machine.study.spec import Study
+from virtual_machine.studies.budget import Budget, ParameterBudget
+from virtual_machine.studies.spec import Study
 
 PER_FIGURE = 10  # tornado subplots per PNG
 LOW_COLOUR, HIGH_COLOUR = "tab:blue", "tab:orange"

@@ -1,0 +1,141 @@
+"""The Python API: what the CLI does, as functions that return what they made.
+
+    from virtual_machine import load_job, run
+    result = run(load_job("assets/jobs/default.toml"), out="out")
+    result.measurement["iso1328"]["class"]["overall"]     # the gear's ISO 1328-1 class
+    result.report_path                                    # out/report.html
+
+Each stage takes a job (a :class:`virtual_machine.job.Job`, or the path of a job file) and goes through the job's
+process (:data:`virtual_machine.processes.PROCESSES`), exactly as `skive setup|simulate|cut|run` do; each returns a
+:class:`virtual_machine.processes.Product` (``data``, ``text``, ``files``, ``out``). Progress goes to stderr as on
+the command line (a line per stage, bars on a terminal); ``quiet=True`` silences it. Errors in the input raise
+:class:`cutting.errors.InputError` (its message says what is wrong and how to fix it), before anything runs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from virtual_machine.job import Job, default_job_path, load_job, with_machine
+from virtual_machine.processes import Product, process_for
+from virtual_machine.progress import Reporter
+
+JobLike = Job | str | Path
+
+
+def _job(job: JobLike | None) -> Job:
+    if isinstance(job, Job):
+        return job
+    return load_job(default_job_path() if job is None else job)
+
+
+def _tolerance(job: Job, mesh_tolerance: float | None) -> Job:
+    from virtual_machine.skiving_run import with_mesh_tolerance
+
+    return with_mesh_tolerance(job, None if mesh_tolerance is None else mesh_tolerance * 1e-3)
+
+
+def setup(job: JobLike | None = None, *, structure: str | None = None) -> Product:
+    """The setting sheet of ``job`` (default: the default job); ``structure``: another machine structure."""
+    j = _job(job)
+    return process_for(j).setup(j, structure=structure)
+
+
+def simulate(
+    job: JobLike | None = None,
+    out: str | Path = "out",
+    *,
+    duration: float | None = None,
+    rrd: str | Path | None = None,
+    structure: str | None = None,
+    synchronization: str | None = None,
+    adaptive_correction: bool | None = None,
+    quiet: bool = False,
+) -> Product:
+    """The machine runs through the job without cutting (``duration`` [s] of machine time at most), the [machine]
+    keys given here replacing the job's; writes the motion into ``out``."""
+    j = with_machine(
+        _job(job), structure=structure, synchronization=synchronization, adaptive_correction=adaptive_correction
+    )
+    rec = Path(rrd) if rrd is not None else None
+    return process_for(j).simulate(j, Path(out), duration=duration, rrd=rec, reporter=Reporter(quiet=quiet))
+
+
+def cut(
+    job: JobLike | None = None,
+    out: str | Path = "out",
+    *,
+    edge: str | None = None,
+    workers: int | None = None,
+    trajectory: str | Path | None = None,
+    mesh_tolerance: float | None = None,
+    removal: str = "dexel",
+    quiet: bool = False,
+) -> Product:
+    """The ideal machine (or the simulated motion in ``trajectory``, a `simulate` trajectory.npz) cuts the
+    workpiece; it is measured and written into ``out``. ``mesh_tolerance`` [um]: gear.stl's sweep error."""
+    j = _tolerance(_job(job), mesh_tolerance)
+    path = Path(trajectory) if trajectory is not None else None
+    return process_for(j).cut(
+        j, Path(out), edge=edge, workers=workers, trajectory=path, removal=removal, reporter=Reporter(quiet=quiet)
+    )
+
+
+def run(
+    job: JobLike | None = None,
+    out: str | Path = "out",
+    *,
+    rrd: str | Path | None = None,
+    workers: int | None = None,
+    mesh_tolerance: float | None = None,
+    removal: str = "dexel",
+    quiet: bool = False,
+) -> Product:
+    """The simulated machine cuts the workpiece under its cutting forces; measured, the report (and with ``rrd``
+    the Rerun recording) written into ``out``. ``result.measurement`` is measurement.json's document."""
+    j = _tolerance(_job(job), mesh_tolerance)
+    rec = Path(rrd) if rrd is not None else None
+    return process_for(j).run(j, Path(out), rrd=rec, workers=workers, removal=removal, reporter=Reporter(quiet=quiet))
+
+
+def measure(mesh: str | Path, job: str | Path | None = None, out: str | Path | None = None) -> dict[str, Any]:
+    """Measure a gear mesh (STL, PLY, OBJ, 3MF, GLB) as the gear of ``job``'s [gear] section (default: the default
+    job's), as a gear measuring machine does; with ``out``, write measurement.json and the charts there."""
+    import json
+
+    from metrology.charts import finite, write_charts
+    from metrology.datum import load_mesh
+    from metrology.measure import MeasureOptions, measure_gear
+    from virtual_machine.job import load_gear_section
+
+    gear, options = load_gear_section(default_job_path() if job is None else job)
+    design = options.pop("design")
+    result = measure_gear(load_mesh(Path(mesh)), gear, MeasureOptions.from_job(options, design), str(mesh))
+    doc = finite(result)
+    if out is not None:
+        folder = Path(out)
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "measurement.json").write_text(json.dumps(doc, indent=2, allow_nan=False))
+        write_charts(folder, result)
+    return doc
+
+
+def study(
+    study_file: str | Path,
+    out: str | Path,
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    target_class: int | None = None,
+    retry_failed: bool = False,
+    progress=None,
+):
+    """Run the cases of a study file on Dask (a local cluster of ``workers``, or the ``scheduler`` at that address)
+    and write results.csv, the error budget and report.html into ``out``; returns the study's outcome (its
+    ``budget``, ``run`` and ``report``). ``progress(done, failed, total, seconds_left)`` follows the cases."""
+    from virtual_machine.studies import pipeline
+
+    return pipeline.run(
+        Path(study_file), Path(out), workers, scheduler, target_class, progress, retry_failed=retry_failed
+    )

@@ -1,0 +1,85 @@
+"""Face tooth contours by continuous indexing (seed 004): the process of a "face_contour" job.
+
+- setup: the setting sheet (setting angle lambda, |V| along the slot, the flat-bottom e, the straight-slot ratio);
+- simulate: the face-contour machine (MuJoCo, its electronic gearbox) cuts the slots: its synchronisation;
+- cut: the ideal kinematics cut the first ``process.slots_cut`` slots, measured exactly and on the solid;
+- run: the machine cuts them; the slots are cut and measured from the motion it recorded
+(:mod:`virtual_machine.face_contour_job`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from virtual_machine.job import Job
+from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.progress import Reporter
+
+FILES = ("coupling.stl", "measurement.json", "report.html")
+
+
+class FaceContour(Process):
+    kind = "face_contour"
+    title = "face contour (continuous indexing)"
+
+    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+        from cutting.face_contour import setting_sheet
+        from virtual_machine.face_contour_job import format_setting_sheet, tool_speed
+
+        return Product("setup", finite_json(setting_sheet(job.coupling, tool_speed(job))), format_setting_sheet(job))
+
+    def simulate(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        duration: float | None = None,
+        rrd: Path | None = None,
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.face_contour_job import format_simulation, simulate_face_job
+
+        _, summary = simulate_face_job(job)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "simulation.json").write_text(json.dumps(finite_json(summary), indent=2, allow_nan=False))
+        return Product("simulate", summary, format_simulation(summary), written(out, "simulation.json"), out)
+
+    def cut(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        edge: str | None = None,
+        workers: int | None = None,
+        trajectory: Path | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.face_contour_job import cut_face_job, format_result
+
+        rep = reporter_or_default(reporter)
+        doc = cut_face_job(job, out, rep.stage)
+        rep.close()
+        text = format_result(doc) + f"\n\nwrote {out / 'coupling.stl'}, measurement.json"
+        return Product("cut", doc, text, written(out, *FILES), out)
+
+    def run(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        rrd: Path | None = None,
+        workers: int | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.face_contour_job import format_result, run_face_job
+
+        rep = reporter_or_default(reporter)
+        doc = run_face_job(job, Path(job.source), out, None, rep.stage, rrd)
+        rep.close()
+        text = format_result(doc) + (
+            f"\n\nwrote {out / 'coupling.stl'}, measurement.json, report.html" + (f", {rrd}" if rrd else "")
+        )
+        return Product("run", doc, text, written(out, *FILES) + ([rrd] if rrd else []), out)

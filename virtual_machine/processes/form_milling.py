@@ -1,0 +1,104 @@
+"""Form milling of spatially modified teeth by the copying method (seed 003): the process of a "form_milling" job.
+
+- setup: the profiled mill and the path table with its corrections (:func:`virtual_machine.form_milling.plan_job`);
+- cut: the ideal machine follows the planned path exactly (:func:`virtual_machine.form_milling.cut_form_job`);
+- run: the simulated form-milling machine (MuJoCo, its CNC) follows it, iterated on what it cut
+  (:func:`virtual_machine.form_milling.run_form_job`).
+A form-milling job has no separate `simulate`: its machine is simulated with its cut.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from cutting.errors import InputError, Problem
+from virtual_machine.job import Job
+from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.progress import Reporter
+
+FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png", "*.png")
+
+
+class FormMilling(Process):
+    kind = "form_milling"
+    title = "form milling (copying method)"
+
+    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+        from virtual_machine.form_milling import format_plan, plan_job
+
+        plan = plan_job(job, checks=0)
+        return Product("setup", finite_json(plan.summary()), format_plan(plan))
+
+    def simulate(self, job: Job, out: Path, **_options) -> Product:
+        raise InputError(
+            Problem("job", "[mill]", "a form-milling job is simulated with its cut", "use `skive run` for it"),
+            job.source,
+        )
+
+    def cut(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        edge: str | None = None,
+        workers: int | None = None,
+        trajectory: Path | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.form_milling import cut_form_job, format_copying
+        from virtual_machine.formatting import format_gear_stl, format_measurement
+
+        if trajectory is not None:
+            raise InputError(Problem("--trajectory", str(trajectory), "is for skiving jobs", "use `skive run` instead"))
+        rep = reporter_or_default(reporter)
+        doc = cut_form_job(job, out, rep.stage)
+        rep.close()
+        text = "\n".join(
+            [
+                format_measurement(doc, str(out / "gear.stl")),
+                format_copying(doc),
+                format_gear_stl(doc["cut"]["gear_stl"]),
+            ]
+        )
+        return Product("cut", doc, text, written(out, *FILES), out)
+
+    def run(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        rrd: Path | None = None,
+        workers: int | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.form_milling import format_copying, run_form_job
+        from virtual_machine.formatting import format_measurement
+
+        rep = reporter_or_default(reporter)
+        bars: list = []
+
+        def announce(name: str) -> None:
+            rep.stage(name)
+            if name.startswith("machine"):
+                bars.append(rep.task("form-milling machine", 1.0, "of the program", value_format="{:.3f}"))
+
+        def progress(fraction: float) -> None:
+            if bars:
+                bars[-1].update_to(fraction)
+
+        try:
+            doc = run_form_job(job, Path(job.source), out, rrd, progress, announce)
+        finally:
+            rep.close()
+        wall = sum(v for k, v in doc["run"]["durations_s"].items() if k != "machine")
+        text = "\n".join(
+            [
+                format_measurement(doc, str(out / "gear.stl")),
+                format_copying(doc),
+                f"\nrun: {doc['run']['durations_s']['machine']:.1f} s of machine time in {wall:.1f} s; wrote "
+                f"{out / 'gear.stl'}, measurement.json, report.html, charts/" + (f", {rrd}" if rrd else ""),
+            ]
+        )
+        return Product("run", doc, text, written(out, *FILES) + ([rrd] if rrd else []), out)

@@ -1,0 +1,281 @@
+"""Gear skiving (seed 000, the setting sheets S1-S4): the process of a "gear" job.
+
+- setup: the machine setting sheet of the job's structure (:mod:`virtual_machine.setup_sheet`);
+- simulate: the machine runs through the passes without cutting (:mod:`virtual_machine.machine_run`): trajectory.npz,
+  motion.npz, simulation.json, sync_error.png;
+- cut: the ideal kinematics (or a simulated trajectory) cut the gear (:mod:`cutting.ideal_cut`), measured on its
+  exact swept surface and on gear.stl;
+- run: the simulated machine cuts it under its cutting forces (:mod:`virtual_machine.skiving_run`), measured, reported.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from virtual_machine.job import Job
+from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.progress import Reporter
+
+RUN_FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png")
+
+
+class Skiving(Process):
+    kind = "gear"
+    title = "gear skiving"
+
+    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+        from virtual_machine.formatting import format_sheet
+        from virtual_machine.setup_sheet import setup_sheet
+
+        sheet = setup_sheet(job, structure)
+        return Product("setup", finite_json(sheet.to_json()), format_sheet(sheet, job.source))
+
+    def simulate(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        duration: float | None = None,
+        rrd: Path | None = None,
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine import motion_io
+        from virtual_machine.machine_run import simulate
+
+        rep = reporter_or_default(reporter)
+        st = job.skiving
+        total = duration or (sum(st.pass_times) + 0.5 + 1.2 * (len(st.passes) - 1))  # strokes, run-up, returns
+        bar = rep.task("machine time", total, "s", value_format="{:.2f}")
+
+        def progress(t: float) -> None:
+            bar.set_total(t)
+            bar.update_to(t)
+
+        t0 = time.perf_counter()
+        try:
+            rec = simulate(job, duration=duration, progress=progress)
+        finally:
+            rep.close()
+        wall = time.perf_counter() - t0
+        meta = {
+            "job": job.source,
+            "structure": job.machine["structure"],
+            "synchronization": job.machine["synchronization"],
+            "adaptive_correction": job.machine["adaptive_correction"],
+            "wall_seconds": wall,
+        }
+        doc = motion_io.save(rec, out, meta, st.gear.teeth)
+        if rrd is not None:
+            from virtual_machine.recording import write_recording
+
+            write_recording(rrd, model_xml=rec.model_xml, motion=rec, setup=st, charts=[out / "sync_error.png"])
+            doc["recording"] = str(rrd)
+        files = written(out, "trajectory.npz", "motion.npz", "simulation.json", "sync_error.png", "*.xml")
+        return Product("simulate", doc, format_simulation(doc, job, wall, out), files + ([rrd] if rrd else []), out)
+
+    def cut(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        edge: str | None = None,
+        workers: int | None = None,
+        trajectory: Path | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        import json
+
+        from cutting.gear_file import write_gear_stl
+        from cutting.ideal_cut import cut_ideal, default_workers
+        from cutting.trajectory import ideal_passes
+        from metrology.charts import finite, write_charts
+        from virtual_machine.formatting import chip_record, format_gear_stl, format_measurement, format_removal
+        from virtual_machine.job import dexel_spacing
+        from virtual_machine.skiving_run import measure_written_cut
+
+        rep = reporter_or_default(reporter)
+        st = job.skiving
+        bars: dict = {}
+
+        def progress(i: int, done: int, total: int) -> None:
+            if i not in bars:
+                bars[i] = rep.task(f"pass {i + 1}/{len(st.passes)}", total, "passages")
+            bars[i].update_to(done)
+
+        kind = edge or job.cutter_options["edge"]
+        motions = None
+        plan = None
+        if job.modification is not None and trajectory is None:
+            from virtual_machine.modification_path import plan_path
+
+            rep.stage("path for the flank modification (seed 003: radial and tangential corrections, accuracy check)")
+            plan = plan_path(job)
+            motions = plan.motions
+        if trajectory is not None:
+            from cutting.sampled_motion import sampled_passes
+            from virtual_machine.motion_io import load_trajectory
+
+            motions = sampled_passes(st, load_trajectory(trajectory))
+        report = cut_ideal(
+            st,
+            kind,
+            job.process["sweep_error"],
+            job.process["roughing_sweep_error"],
+            progress,
+            workers,
+            motions=motions,
+            removal=removal,
+            spacing=dexel_spacing(job),
+        )
+        rep.stage("measurement: the exact swept surface and the mesh")
+        out.mkdir(parents=True, exist_ok=True)
+        stl = write_gear_stl(report.result.gear, out / "gear.stl", job.process["stl_tolerance"])
+        result = measure_written_cut(
+            job, report.edge, motions or ideal_passes(st), report.result, stl, out / "gear.stl"
+        )
+        r = report.result
+        result["cut"] = {
+            "edge": kind,
+            "motion": ("ideal" if plan is None else "ideal, finishing pass along the modification's path")
+            if trajectory is None
+            else str(trajectory),
+            "sweep_error_um": r.sweep_error * 1e3,
+            "pass_sweep_error_um": [r.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(st.passes))],
+            "sweeps": r.sweeps,
+            "subtractions": r.subtractions,
+            "passages": len(r.chips),
+            "triangles": stl.solid_triangles,
+            "gear_stl": stl.summary(),
+            "workers": workers or default_workers(),
+            "seconds": report.seconds,
+            "pass_seconds": report.pass_seconds,
+            "pass_stock_triangles": report.pass_triangles,
+            "machine_seconds": list(st.pass_times),
+            "removal": report.removal,
+            "chips": [chip_record(c) for c in r.chips],
+        }
+        if plan is not None:
+            from virtual_machine.modification_path import path_summary
+
+            result["modification_path"] = path_summary(plan)
+        doc = finite(result)
+        (out / "measurement.json").write_text(json.dumps(doc, indent=2, allow_nan=False))
+        write_charts(out, result)
+        lines = [format_measurement(doc, str(out / "gear.stl"))]
+        if plan is not None:
+            lines.append(format_path(doc["modification_path"]))
+        lines.append(format_removal(result["cut"], len(st.passes), sum(st.pass_times)))
+        lines.append(format_gear_stl(result["cut"]["gear_stl"]))
+        files = written(out, "gear.stl", "measurement.json", "*.png")
+        return Product("cut", doc, "\n".join(lines), files, out)
+
+    def run(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        rrd: Path | None = None,
+        workers: int | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.formatting import format_measurement
+        from virtual_machine.program import program_duration
+        from virtual_machine.skiving_run import run_job
+
+        rep = reporter_or_default(reporter)
+        bar = rep.task("machine and cut", program_duration(job.skiving), "s of machine time", value_format="{:.2f}")
+
+        def progress(t: float, passages: int) -> None:
+            bar.set_total(t)
+            bar.update_to(t, engagements=passages)
+
+        def announce(name: str) -> None:
+            if name != "machine and cut":
+                rep.stage(name)
+
+        try:
+            doc = run_job(job, out, rrd, progress, announce, workers, None, removal)
+        finally:
+            rep.close()
+        lines = [format_measurement(doc, str(out / "gear.stl"))]
+        if doc.get("modification_path"):
+            lines.append(format_path(doc["modification_path"]))
+        lines.append(format_run(doc["run"], out, rrd))
+        return Product("run", doc, "\n".join(lines), written(out, *RUN_FILES) + ([rrd] if rrd else []), out)
+
+
+def format_simulation(doc: dict, job: Job, wall: float, out: Path) -> str:
+    """The simulation's synchronisation error per pass and its periodic parts."""
+    lines = [
+        f"\nSIMULATION  {job.source}  ({job.machine['structure']}, {job.machine['synchronization']}, "
+        f"adaptive correction {'on' if job.machine['adaptive_correction'] else 'off'})",
+        f"{doc['machine_seconds']:.2f} s of machine time in {wall:.1f} s wall "
+        f"({doc['machine_seconds'] / wall:.1f}x real time)",
+        "synchronisation error while cutting (arc on the reference circle, um):",
+    ]
+    motors = "/".join(doc["passes"][0]["peak_torque_Nm"]) if doc["passes"] else ""
+    lines.append(f"{'pass':>5} {'mean':>8} {'rms':>8} {'rms-mean':>9} {'p-p':>8}   peak torque {motors} [N m]")
+    for p in doc["passes"]:
+        s, tq = p["sync_error_in_cut"], p["peak_torque_Nm"]
+        if s:
+            lines.append(
+                f"{p['pass'] + 1:>5} {s['mean_um']:8.3f} {s['rms_um']:8.3f} {s['rms_about_mean_um']:9.3f} "
+                f"{s['peak_to_peak_um']:8.3f}   " + " / ".join(f"{v:.1f}" for v in tq.values())
+            )
+    for name, v in doc.get("periodic_part", {}).items():
+        lines.append(f"periodic part per {name.replace('_', ' ')}: {v['peak_to_peak_um']:.3f} um p-p")
+    lines.append(
+        f"written: {out / 'trajectory.npz'}, {out / 'motion.npz'}, {out / 'simulation.json'}, {out / 'sync_error.png'}"
+    )
+    return "\n".join(lines)
+
+
+def format_path(path: dict) -> str:
+    """The accuracy check's iterations and what the path cannot make."""
+    lines = ["", "PATH  the finishing pass's radial and tangential corrections (seed 003's accuracy check)"]
+    for where, rows, converged in (
+        ("ideal machine", path["iterations"], path["converged"]),
+        ("simulated machine", path.get("machine_iterations"), path.get("machine_converged")),
+    ):
+        if rows is None:
+            continue
+        for it in rows:
+            r, c = it["residual_um"], it["C_beta_um"]
+            lines.append(
+                f"  {where}, iteration {it['iteration']}: largest residual left {r['left']:.2f} um, right "
+                f"{r['right']:.2f} um; C_beta {c['left']:.2f} / {c['right']:.2f} um"
+            )
+        lines.append(f"  {where}: " + ("converged" if converged else "NOT converged: the residual stopped falling"))
+    for side, um in path["beyond_path_um"].items():
+        if um > 0.05:
+            lines.append(
+                f"  {side} flank: {um:.2f} um of the design vary over the profile: a modified cutter makes them"
+            )
+    return "\n".join(lines)
+
+
+def format_run(run: dict, out: Path, rrd: Path | None) -> str:
+    """The end-of-run table: stages and their wall time, what the machine and the chips did, the files."""
+    from virtual_machine.formatting import format_gear_stl
+
+    d = run["durations_s"]
+    wall = sum(v for k, v in d.items() if k != "machine")
+    lines = ["", f"RUN  {run['job']['path']}  ({run['machine']['structure']} / {run['machine']['synchronization']})"]
+    lines += [f"  {k:18s} {v:8.1f} s" for k, v in d.items() if k != "machine"]
+    lines.append(f"  {'total':18s} {wall:8.1f} s for {d['machine']:.2f} s of machine time")
+    sync, f = run["synchronisation"]["sync_error_in_cut"], run["forces"]
+    if sync:
+        lines.append(f"  sync error while cutting: RMS {sync['rms_um']:.3f} um, p-p {sync['peak_to_peak_um']:.3f} um")
+    lines.append(
+        f"  {run['cut']['passages']} engagements, {run['cut']['chip_volume_mm3']:.1f} mm^3 of chips, peak force "
+        f"{f['peak_force_N']:.0f} N, cutting energy {f['chip_energy_J']:.0f} J ({f['material']})"
+    )
+    lines.append("  " + format_gear_stl(run["cut"]["gear_stl"]))
+    if run.get("modification"):
+        lines.append(f"  modification: {run['modification']}")
+    files = ["gear.stl", "measurement.json", "report.html", "charts/"]
+    lines.append(f"  files: {', '.join(str(out / x) for x in files)}" + (f", {rrd}" if rrd else ""))
+    return "\n".join(lines)

@@ -1,0 +1,116 @@
+"""Thread cutting on the lathe (seed 001's thread group): the process of a "thread" job.
+
+- setup: the setting sheet of the thread group (:mod:`virtual_machine.setup_sheet`);
+- simulate: one threading stroke on the lathe (:mod:`virtual_machine.simulate_thread`): its lead error;
+- run: the same stroke, and the lead of the thread the carriage's path cuts measured as a thread measuring machine
+  reports it (its deviation along the thread: mean, peak to peak, drift) in measurement.json.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from cutting.errors import InputError, Problem
+from virtual_machine.job import Job
+from virtual_machine.processes.base import Process, Product, finite_json, written
+from virtual_machine.progress import Reporter
+
+
+class ThreadCutting(Process):
+    kind = "thread"
+    title = "thread cutting"
+
+    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+        from virtual_machine.formatting import format_sheet
+        from virtual_machine.setup_sheet import setup_sheet
+
+        sheet = setup_sheet(job, structure)
+        return Product("setup", finite_json(sheet.to_json()), format_sheet(sheet, job.source))
+
+    def simulate(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        duration: float | None = None,
+        rrd: Path | None = None,
+        reporter: Reporter | None = None,
+    ) -> Product:
+        return _stroke(job, out, duration, measurement=False)
+
+    def cut(self, job: Job, out: Path, **_options) -> Product:
+        raise InputError(Problem("job", job.kind, "skive cut makes gears and couplings", "use `skive run`"))
+
+    def run(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        rrd: Path | None = None,
+        workers: int | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        return _stroke(job, out, None, measurement=True)
+
+
+def _stroke(job: Job, out: Path, duration: float | None, measurement: bool) -> Product:
+    """One threading stroke on the lathe, its lead error (simulation.json, thread_motion.npz, scene.xml); with
+    ``measurement`` also measurement.json: the lead of the thread the carriage's path cuts."""
+    import numpy as np
+
+    from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
+    from virtual_machine import motion_io
+    from virtual_machine.simulate_thread import simulate_thread
+    from virtual_machine.thread_layout import thread_layout
+
+    t0 = time.perf_counter()
+    rec = simulate_thread(job, duration=duration)
+    wall = time.perf_counter() - t0
+    out.mkdir(parents=True, exist_ok=True)
+    params = ThreadLatheParams()
+    motion_io.write_model(build_thread_lathe_spec(thread_layout(job, params), params).to_xml(), out)
+    np.savez_compressed(
+        out / "thread_motion.npz",
+        t=rec.t,
+        b1=rec.b1,
+        p2=rec.p2,
+        tv=rec.tv,
+        torque=rec.torque,
+        lead_error_um=rec.lead_error_um,
+        on_thread=rec.on_thread,
+    )
+    drift, travel = rec.drift() if rec.on_thread.sum() > 2 else (0.0, 0.0)
+    doc = {
+        "job": job.source,
+        "form": rec.form,
+        "lead_mm": rec.lead,
+        "machine_seconds": float(rec.t[-1]),
+        "wall_seconds": wall,
+        "lead_error_on_thread": rec.stats(),
+        "lead_drift_um": drift,
+        "travel_mm": travel,
+    }
+    (out / "simulation.json").write_text(json.dumps(doc, indent=2))
+    data = doc
+    if measurement:
+        lead = {"lead_mm": rec.lead, "form": rec.form, **(doc["lead_error_on_thread"] or {}), "drift_um": drift}
+        data = {"thread": lead, "run": doc}
+        (out / "measurement.json").write_text(json.dumps(data, indent=2))
+    s = doc["lead_error_on_thread"]
+    lines = [
+        f"THREAD SIMULATION  {job.source}  ({rec.form}), lead {rec.lead} mm",
+        f"{doc['machine_seconds']:.2f} s of machine time in {wall:.1f} s wall",
+    ]
+    if s:
+        lines.append(
+            f"lead error on the thread: mean {s['mean_um']:.3f} um, p-p {s['peak_to_peak_um']:.3f} um, "
+            f"drift {drift:+.3f} um over {abs(travel):.1f} mm"
+        )
+    names = ["thread_motion.npz", "simulation.json", *(["measurement.json"] if measurement else []), "scene.xml"]
+    lines.append("written: " + ", ".join(str(out / f) for f in names))
+    files = written(out, "thread_motion.npz", "simulation.json", "measurement.json", "*.xml")
+    # the CLI's --json of `skive simulate` prints the stroke's summary, as before
+    return Product("run" if measurement else "simulate", data if measurement else doc, "\n".join(lines), files, out)

@@ -1,0 +1,70 @@
+"""Vibration turning (seed 004): the process of a "turning" job.
+
+- setup: the turned surface the commanded path predicts (crests, chip breaking);
+- simulate: the lathe turns with the feed vibration: its path against the command, the surface it leaves;
+- run: the same, the turned surface also made by manifold3d and its crests held against the exact envelope
+(:mod:`virtual_machine.turning`). A turning job has no `cut`: its surface comes from the lathe's path.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from cutting.errors import InputError, Problem
+from virtual_machine.job import Job
+from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.progress import Reporter
+
+FILES = ("workpiece.stl", "measurement.json", "report.html")
+
+
+class VibrationTurning(Process):
+    kind = "turning"
+    title = "vibration turning"
+
+    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+        from cutting.vibration_turning import turned_surface_summary
+        from virtual_machine.turning import format_prediction, ideal_setup
+
+        doc = turned_surface_summary(ideal_setup(job), job.process["revolutions"])
+        return Product("setup", finite_json(doc), format_prediction(job))
+
+    def simulate(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        duration: float | None = None,
+        rrd: Path | None = None,
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.turning import format_run, simulate_summary
+
+        doc, _, _ = simulate_summary(job)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "simulation.json").write_text(json.dumps(finite_json(doc), indent=2, allow_nan=False))
+        return Product("simulate", doc, format_run(doc), written(out, "simulation.json"), out)
+
+    def cut(self, job: Job, out: Path, **_options) -> Product:
+        raise InputError(Problem("job", job.kind, "skive cut makes gears and couplings", "use `skive run`"))
+
+    def run(
+        self,
+        job: Job,
+        out: Path,
+        *,
+        rrd: Path | None = None,
+        workers: int | None = None,
+        removal: str = "dexel",
+        reporter: Reporter | None = None,
+    ) -> Product:
+        from virtual_machine.turning import format_run, run_turning
+
+        rep = reporter_or_default(reporter)
+        doc = run_turning(job, Path(job.source), out, rrd, rep.stage)
+        rep.close()
+        text = format_run(doc) + (
+            f"\n\nwrote {out / 'workpiece.stl'}, measurement.json, report.html" + (f", {rrd}" if rrd else "")
+        )
+        return Product("run", doc, text, written(out, *FILES) + ([rrd] if rrd else []), out)
