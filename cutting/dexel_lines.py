@@ -48,7 +48,7 @@ class DexelSpacing:
     def for_gear(cls, gear: Gear, feed: float, profile: float | None = None, face: float | None = None) -> DexelSpacing:
         """The default spacing of a gear cut at ``feed`` [mm per work revolution]: 0.1 mn along the profile,
         0.2 mn along the face, refined to an eighth of the feed (and of the profile spacing) at the faces and the
-        tip corners; or the given values (README: chips against the manifold reference)."""
+        tip corners; or the given values (docs/cutting.md, "Spacing": chips against the manifold reference)."""
         profile = 0.1 * gear.mn if profile is None else profile
         face = 0.2 * gear.mn if face is None else face
         return cls(profile, face, min(feed / 8, profile / 8, face / 8))

@@ -3,7 +3,7 @@
 The defaults describe a mid-size vertical skiving machine for gears of 50-250 mm (a 1980s electronic-gearbox
 machine of seed 000 fig. 4 refitted with modern servo drives): a work table on a gear stage, a directly
 belt-driven tool spindle on a swivel head, a vertical carriage on a ball screw. They are plausible orders of
-magnitude, not one maker's data; the README's parameter table repeats them with the reasoning.
+magnitude, not one maker's data; the parameter table of docs/machines.md repeats them with the reasoning.
 
 Units are SI (m, kg, s, rad, N, N m) as MuJoCo uses them; the job files and the cutting engine use mm.
 """

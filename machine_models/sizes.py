@@ -17,8 +17,8 @@ large      <= 500          <= 8      630, 2.1    the 400-500 mm class (e.g. LK 5
 
 Where the figures come from. Only the class (the largest workpiece diameter, as the model numbers name it) is taken
 from the market. The makers' data sheets (drive powers, speeds, torques, module ranges) could not be read in this
-project's environment: its searchable copies of the web held none (README, "Machine sizes"), so no maker's figure is
-claimed. Everything else is derived, and says so:
+project's environment: its searchable copies of the web held none (docs/machines.md, "Machine sizes"), so no
+maker's figure is claimed. Everything else is derived, and says so:
 
 - geometry: each size is the small machine scaled by k = table diameter / 300 mm;
 - inertias of bodies ~ k^5 (rho D^4 h), masses ~ k^3, friction torques and forces ~ k^3 (they follow the weight
