@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from virtual_machine.form_milling import cut_form_job, run_form_job
 from virtual_machine.job import load_job
+from virtual_machine.processes.form_milling.stages import cut_form_job, run_form_job
 
 ASSET = Path(__file__).resolve().parent.parent / "assets" / "jobs" / "form_milled_crowned.toml"
 

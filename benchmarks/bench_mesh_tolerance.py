@@ -42,7 +42,7 @@ from cutting.ideal_cut import default_workers
 from cutting.removal import Chip, expected_genus
 from cutting.trajectory import ideal_passes
 from virtual_machine.job import PROCESS_KEYS, load_job
-from virtual_machine.progress import Progress
+from virtual_machine.output.progress import Progress
 
 #: the requirement (issue): chip volumes within 2 % of a 1 um reference, a gear.stl a user can open
 VOLUME_LIMIT = 2.0  # [%] every pass's total chip volume, and the 95th percentile of its chips

@@ -24,7 +24,7 @@ from cutting.gear_file import write_gear_stl
 from cutting.ideal_cut import cut_ideal, default_workers
 from cutting.trajectory import ideal_passes
 from virtual_machine.job import default_job_path, dexel_spacing, load_job
-from virtual_machine.skiving_run import measure_written_cut, run_job
+from virtual_machine.processes.skiving.run import measure_written_cut, run_job
 
 #: issue 26's bars per job file name: wall seconds (after the first run), peak memory [GiB]
 BARS = {"default.toml": (10.0, None), "spur_external.toml": (120.0, 4.0), "helical_internal.toml": (240.0, None)}

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from virtual_machine.change_gears import choose_change_gears
 from virtual_machine.job import load_job
-from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.setting.change_gears import choose_change_gears
+from virtual_machine.setting.sheet import setup_sheet
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 

@@ -17,7 +17,7 @@ import time
 import mujoco
 
 from virtual_machine.job import load_job
-from virtual_machine.machine_run import simulate
+from virtual_machine.runtime.machine_run import simulate
 
 STRUCTURES = (
     ("mechatronic", "equal-coordinates"),

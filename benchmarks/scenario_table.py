@@ -25,8 +25,8 @@ from cutting.exact_sweep import SweptVolumes
 from cutting.sampled_motion import sampled_passes
 from cutting.trajectory import ideal_passes
 from metrology.measure import measure_gear
-from virtual_machine.cosim import cosimulate
 from virtual_machine.job import load_job
+from virtual_machine.processes.skiving.cosim import cosimulate
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "assets" / "jobs" / "scenarios"
 BASELINE = "helical_mechatronic"

@@ -129,7 +129,7 @@ class SampledMotion:
 
 
 def sampled_passes(setup: SkivingSetup, passes) -> list[SampledMotion]:
-    """SampledMotions of the pass trajectories of a simulated run (virtual_machine.motion_io.load_trajectory)."""
+    """SampledMotions of the pass trajectories of a simulated run (virtual_machine.output.motion_io.load_trajectory)."""
     if not passes:
         raise ValueError("the trajectory holds no pass; simulate the job through at least one feed stroke")
     out = []

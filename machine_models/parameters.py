@@ -60,7 +60,7 @@ class SkivingMachineParams:
     #: M2 -> table: 1:2 precision spur stage, 1e6 N m/rad (table bearing + stage, referred to the table),
     #: 20 arcsec backlash (a precision stage, DIN 3967 "reduced" class)
     work_drive: DriveStage = field(default_factory=lambda: DriveStage(0.5, 1.0e6, 20 * ARCSEC, 60.0))
-    #: rad/s^2: the CNC's limit on the table's acceleration in the run-up (virtual_machine/program.py): M2 holds
+    #: rad/s^2: the CNC's limit on the table's acceleration in the run-up (virtual_machine/runtime/program.py): M2 holds
     #: 740 and saturates at 1000 on the default job, so the ramp lengthens for fast jobs instead of losing
     #: synchronism; a larger table accelerates slower (machine_models/sizes.py)
     work_acceleration: float = 600.0

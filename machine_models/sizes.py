@@ -38,7 +38,8 @@ maker's figure is claimed. Everything else is derived, and says so:
 The stages' frequencies fall with size (tool belt 459 / 231 / 168 Hz, work stage 1324 / 954 / 627 Hz, screw
 318 / 234 / 153 Hz without cutter and blank), staying above the 80 Hz (tool, work) and 40 Hz (feed) speed loops
 whose gains follow the inertias (virtual_machine/structures/axis.py). The motors were sized against the jobs each
-size must hold (virtual_machine/cutting_load.py, tests/test_machine_sizes.py): spur_external (z 40, mn 2) and
+size must hold (virtual_machine/processes/skiving/cutting_load.py, tests/test_machine_sizes.py): spur_external (z
+40, mn 2) and
 helical_internal (z 60, mn 2, ring) on medium need M1 26 of 191 N m and M2 21 of 150 N m; a mn 4 gear of 208 mm
 at 120 m/min needs M1 92 N m on medium, a mn 7 gear of 434 mm 267 N m of the large machine's 573.
 """

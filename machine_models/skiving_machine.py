@@ -156,7 +156,8 @@ def build_spec(
         raise ValueError(f"unknown structure {structure!r}: use one of {', '.join(DRIVES)}")
     if chains is None and structure != "mechatronic":
         raise ValueError(
-            f"structure {structure!r} needs the realised ratios of its chains (virtual_machine.chains.chain_ratios)"
+            f"structure {structure!r} needs the realised ratios of its chains "
+            f"(virtual_machine.setting.chains.chain_ratios)"
         )
     drives = DRIVES[structure](spec, {"world": world, "head": head}, setup, params, chains or ChainRatios())
     spec.add_key(name="home", qpos=_home_qpos(spec, lay, drives))

@@ -10,7 +10,7 @@ and joints (seed 001 notation):
 - ``spindle_motor`` hinge ``M1``, torque actuator ``M1`` (every form);
 - ``screw_motor`` hinge ``M2``, torque actuator ``M2`` (electronic forms only).
 
-Three forms (``virtual_machine.thread_layout.thread_form``):
+Three forms (``virtual_machine.setting.thread_layout.thread_form``):
 
 - ``mechanical`` (fig. 1): M1 -> 8 -> R2 -> iv -> 5 -> spindle (stage ``spindle_drive``, ratio c3 iv), and the
   internal link 5 -> ix -> R1 -> 6 -> TV (stage ``gear_chain``, ratio hand * ix * i01 screw rad per spindle
@@ -144,7 +144,8 @@ class ThreadLayout:
 
 
 def build_thread_lathe_spec(lay: ThreadLayout, params: ThreadLatheParams | None = None) -> mujoco.MjSpec:
-    """The MJCF model of the thread lathe laid out by ``lay`` (``virtual_machine.thread_layout.thread_layout``: the
+    """The MJCF model of the thread lathe laid out by ``lay``
+    (``virtual_machine.setting.thread_layout.thread_layout``: the
     job's form and its setting sheet's ratios)."""
     params = params or ThreadLatheParams()
     problems = params.problems()

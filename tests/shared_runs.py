@@ -20,7 +20,7 @@ from unittest import mock
 from virtual_machine.studies.cache import CaseCache, content_key
 
 if TYPE_CHECKING:
-    from virtual_machine.machine_run import MotionRecord
+    from virtual_machine.runtime.machine_run import MotionRecord
 
 
 @contextlib.contextmanager
@@ -59,7 +59,7 @@ class SharedRuns:
 
 def _run_case(name: str, text: str) -> tuple[dict[str, Any], MotionRecord]:
     """``run_case`` of the job, keeping the motion record of the co-simulation `skive run` made."""
-    import virtual_machine.skiving_run as run_module
+    import virtual_machine.processes.skiving.run as run_module
     from virtual_machine.studies.runner import run_case
 
     made = []

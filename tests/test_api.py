@@ -62,7 +62,7 @@ def test_check_grades_only_gears(tmp_path) -> None:
 def test_the_package_says_what_is_public() -> None:
     for name in ("load_job", "setup", "simulate", "cut", "run", "measure", "study", "PROCESSES"):
         assert name in virtual_machine.__all__ and getattr(virtual_machine, name) is not None
-    for module in ("machine_run", "skiving_run", "studies.pipeline"):  # the modules beside the API keep its names
+    for module in ("runtime.machine_run", "processes.skiving.run", "studies.pipeline"):  # the API keeps its names
         importlib.import_module(f"virtual_machine.{module}")
     assert callable(virtual_machine.run) and callable(virtual_machine.simulate) and callable(virtual_machine.study)
 

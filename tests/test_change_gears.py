@@ -1,4 +1,4 @@
-"""Tests of virtual_machine.change_gears: exact ratios, optimality against brute force, rules, errors."""
+"""Tests of virtual_machine.setting.change_gears: exact ratios, optimality against brute force, rules, errors."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from virtual_machine.change_gears import (
+from virtual_machine.setting.change_gears import (
     STANDARD_SET,
     ChangeGearSet,
     GearTrain,

@@ -20,8 +20,8 @@ from metrology.charts import (
     write_charts,
     write_png,
 )
-from virtual_machine.machine_run import SEGMENTS
-from virtual_machine.report import run_chart
+from virtual_machine.output.report import run_chart
+from virtual_machine.runtime.machine_run import SEGMENTS
 
 
 def measurement(z: int = 20, classed: bool = True, designed: bool = False) -> dict:

@@ -9,8 +9,8 @@ import pytest
 from small_jobs import small_job
 
 from cutting.forces import EngagementLoad
-from virtual_machine.cosim import ForcePredictor, cosimulate
 from virtual_machine.job import load_job
+from virtual_machine.processes.skiving.cosim import ForcePredictor, cosimulate
 
 SMALL_JOB = small_job(sweep_error=0.02)
 

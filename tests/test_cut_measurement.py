@@ -182,7 +182,7 @@ def test_a_gear_file_that_does_not_close_leaves_the_exact_measurement_standing(t
     """gear.stl with a hole cannot be measured; the exact swept surface does not need it: the measurement stands,
     and its mesh block says why the file was not measured."""
     from cutting.gear_file import GearFile
-    from virtual_machine.skiving_run import measure_written_cut
+    from virtual_machine.processes.skiving.run import measure_written_cut
 
     st, report, doc, _ = small_cut()
     job = SimpleNamespace(gear=st.gear, skiving=st, measurement=None, modification=None)  # what it reads of a job

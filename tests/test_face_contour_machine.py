@@ -34,14 +34,14 @@ from machine_models.face_contour_machine import (
     relaxed_qpos,
 )
 from machine_models.parameters import ARCSEC
-from virtual_machine.face_contour_cnc import (
+from virtual_machine.processes.face_contour.cnc import (
     FaceContourRecord,
     FaceTuning,
     cut_recorded,
     measure_recorded,
     simulate_face_contour,
 )
-from virtual_machine.physics import SimulationDivergedError
+from virtual_machine.runtime.physics import SimulationDivergedError
 
 COUPLING = FaceCoupling()  # m = 24, L = 52.5, R = 125, S = 0.05, depth 3: the plunge ends at turn 60
 ECCENTRIC = replace(COUPLING, control="eccentric", e=COUPLING.flat_bottom_eccentricity())

@@ -145,7 +145,7 @@ def test_every_structure_compiles_and_steps_without_warnings(job: str, structure
     steps 0.1 s with its motors idle without a MuJoCo warning (a diverged run only warns)."""
     import dataclasses
 
-    from virtual_machine.chains import chain_ratios
+    from virtual_machine.setting.chains import chain_ratios
 
     j = load_job(str(JOBS / f"{job}.toml"))
     j = dataclasses.replace(j, machine=dict(j.machine, structure=structure))
@@ -169,7 +169,7 @@ def test_every_structure_compiles_and_steps_without_warnings(job: str, structure
 def test_cutting_load_does_the_work_of_the_force_on_the_relative_motion() -> None:
     """The generalized forces of a cutting force F at a point (on the blank, -F on the cutter) do, for any joint
     velocity, the work F . (v_blank - v_cutter) of that point: checked against finite-difference point velocities."""
-    from virtual_machine.physics import MachinePhysics
+    from virtual_machine.runtime.physics import MachinePhysics
 
     m = _model()
     phys = MachinePhysics(m, SkivingMachineParams())

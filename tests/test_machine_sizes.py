@@ -1,4 +1,5 @@
-"""Machine sizes (machine_models/sizes.py) and the cutting-load check before a run (virtual_machine/cutting_load.py):
+"""Machine sizes (machine_models/sizes.py) and the cutting-load check before a run
+(virtual_machine/processes/skiving/cutting_load.py):
 every size is a valid machine that MuJoCo steps cleanly, the default size follows the gear, [machine.model]
 overrides act on top of the size, a bad size is refused naming the valid ones, the torque estimate agrees with a
 case worked by hand and with what the co-simulation measures, and a job too heavy for its machine is refused
@@ -21,9 +22,15 @@ from cutting.gear import Gear
 from machine_models.parameters import SkivingMachineParams
 from machine_models.sizes import SIZE_NAMES, SIZES, size_for, workpiece_diameter
 from machine_models.skiving_machine import build_spec
-from virtual_machine.cutting_load import MARGIN, check_machine_holds, motor_loads, pass_loads, space_area
 from virtual_machine.job import flatten_model, load_job, parse_job
-from virtual_machine.machine_run import MachineRun, machine_params, machine_size
+from virtual_machine.processes.skiving.cutting_load import (
+    MARGIN,
+    check_machine_holds,
+    motor_loads,
+    pass_loads,
+    space_area,
+)
+from virtual_machine.runtime.machine_run import MachineRun, machine_params, machine_size
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 
@@ -187,8 +194,8 @@ def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
     """The small job (z2 18, mn 1, b 4, one full-depth pass) co-simulated on the small machine, forces on, one
     process: its peak cutting force, tool motor torque and torque about the work axis lie within 0.75-1.33x of the
     estimate's (measured 1.17x, 0.94x, 1.14x: 1773 vs 1510 N, 9.8 vs 10.5 N m at M1, 3.2 vs 2.9 N m)."""
-    from virtual_machine.cosim import cosimulate
-    from virtual_machine.machine_run import SEGMENTS
+    from virtual_machine.processes.skiving.cosim import cosimulate
+    from virtual_machine.runtime.machine_run import SEGMENTS
 
     job = _text_job(tmp_path, small_job(face_width=4.0, sweep_error=0.02))
     (est,) = pass_loads(job.skiving, job.process["material"])
@@ -260,8 +267,8 @@ def test_the_larger_sizes_servo_loops_reject_a_load_step(tmp_path, name, size, f
     and tuned to its inertias; the adaptive correction takes back what the speed loop alone loses (medium,
     spur_external: work 0.9 vs 18 um, tool 4.4 vs 89 um RMS; large, a mn 7 gear of 434 mm with 1e5 pulses/rev and
     5e4 encoder lines: work 2.0 vs 10 um, tool 2.9 vs 54 um)."""
-    from virtual_machine.machine_run import simulate
-    from virtual_machine.program import ProgramSettings, runup_time
+    from virtual_machine.runtime.machine_run import simulate
+    from virtual_machine.runtime.program import ProgramSettings, runup_time
 
     text = (JOBS / f"{name}.toml").read_text() if name != "large" else LARGE_JOB
     if fine:  # one pulse of 10000 per turn is 132 um of arc on this gear: the discriminators' relay would cycle

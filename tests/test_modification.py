@@ -272,7 +272,7 @@ def crowned_run(tmp_path_factory):
 
     from click.testing import CliRunner
 
-    import virtual_machine.modification_path as modification_path
+    import virtual_machine.processes.skiving.modification_path as modification_path
     from virtual_machine.cli import main
 
     tmp = tmp_path_factory.mktemp("crowned")
@@ -337,7 +337,7 @@ def test_skiving_makes_lead_crowning_and_a_helix_modification_by_its_path(crowne
 def test_end_relief_by_the_path_and_what_only_a_cutter_makes() -> None:
     """End relief (5 um over 1 mm) made by the path within 1 um along the helix traces; a profile crowning the path
     cannot make is reported as the residual it leaves (the design's own 4 um over the active profile)."""
-    from virtual_machine.modification_path import plan_path
+    from virtual_machine.processes.skiving.modification_path import plan_path
 
     job = modified_job({"right": {"end_relief": 0.005, "end_relief_length": 1.0}, "left": {"profile_crowning": 0.004}})
     plan = plan_path(job)

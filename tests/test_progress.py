@@ -2,7 +2,7 @@
 
 import io
 
-from virtual_machine.progress import Progress, is_interactive, stage
+from virtual_machine.output.progress import Progress, is_interactive, stage
 
 
 class Clock:

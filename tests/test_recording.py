@@ -18,8 +18,8 @@ from metrology.measure import measure_gear
 from metrology.reference_gear import reference_gear_mesh
 from metrology.sections import MeshData
 from virtual_machine.job import load_job
-from virtual_machine.machine_run import simulate
-from virtual_machine.recording import decimation, deviation_colors, write_recording
+from virtual_machine.output.recording import decimation, deviation_colors, write_recording
+from virtual_machine.runtime.machine_run import simulate
 
 JOB = Path(__file__).resolve().parents[1] / "assets/jobs/spur_external.toml"
 DURATION, RATE = 0.8, 200.0

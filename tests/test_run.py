@@ -17,10 +17,10 @@ from rerun.chunk import RrdReader
 from small_jobs import small_job
 
 from virtual_machine.cli import main
-from virtual_machine.cutting_load import pass_loads
 from virtual_machine.job import load_job, parse_job
-from virtual_machine.machine_run import LostSynchronismError, MachineRun, simulate
-from virtual_machine.program import ProgramSettings, program_duration
+from virtual_machine.processes.skiving.cutting_load import pass_loads
+from virtual_machine.runtime.machine_run import LostSynchronismError, MachineRun, simulate
+from virtual_machine.runtime.program import ProgramSettings, program_duration
 
 SMALL_JOB = small_job(sweep_error=0.02)
 
@@ -29,7 +29,7 @@ SMALL_JOB = small_job(sweep_error=0.02)
 def runs(tmp_path_factory):
     """The same job run twice (reproducibility): by `skive run` with a recording, then by the Python API's example
     (examples/run_default_job.py); with the co-simulation each made."""
-    import virtual_machine.skiving_run as run_module
+    import virtual_machine.processes.skiving.run as run_module
 
     tmp = tmp_path_factory.mktemp("run")
     job = tmp / "small.toml"
@@ -75,7 +75,8 @@ def test_run_writes_every_file(runs) -> None:
     assert run["cut"]["passages"] > 300 and run["cut"]["chip_volume_mm3"] > 100.0
     f = run["forces"]
     assert f["material"] == "16MnCr5" and "Koenig" in f["source"]
-    # the peak against the estimate from the setting sheet before the run (virtual_machine/cutting_load.py; measured
+    # the peak against the estimate from the setting sheet before the run
+    # (virtual_machine/processes/skiving/cutting_load.py; measured
     # 0.79x: 1429 of 1809 N, the estimate takes the whole engagement at the mean chip's thickness)
     est = max(ld.force_peak for ld in pass_loads(parse_job(tomllib.loads(SMALL_JOB)).skiving, "16MnCr5"))
     assert 0.6 * est < f["peak_force_N"] < 1.4 * est, (f["peak_force_N"], est)
@@ -141,7 +142,7 @@ GRADABLE_JOB = small_job(sweep_error=0.02, face_width=4.0)  # ISO 1328-1 grades 
 def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_path) -> None:
     """The project's own CI runs `skive check` on a small job: class 1 is out of reach for it (exit 1, every
     parameter over class 1 named); the verdict at the gear's own class passes."""
-    from virtual_machine.check import class_verdict
+    from virtual_machine.output.check import class_verdict
 
     job = tmp_path / "small_b4.toml"
     job.write_text(GRADABLE_JOB)
@@ -162,7 +163,7 @@ def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_pa
 
 
 def test_check_verdicts_on_known_documents() -> None:
-    from virtual_machine.check import class_verdict, format_verdict
+    from virtual_machine.output.check import class_verdict, format_verdict
 
     gear = load_job(str(JOBS / "default.toml")).gear
     measured = {
@@ -217,7 +218,7 @@ def test_a_gear_that_cannot_be_measured_keeps_the_run_and_says_why(tmp_path, mon
     # the measuring machine refuses a damaged gear (as a ball that cannot seat in a gouged space): the run keeps
     # gear.stl and its facts, and the error says what the machine did while it cut. The machine and the cut are
     # the co-simulation of the same job that `runs` made without a recording (not made a third time)
-    import virtual_machine.skiving_run as run_module
+    import virtual_machine.processes.skiving.run as run_module
     from metrology.workpiece import UnmeasurableError
 
     made = runs[2][1]

@@ -24,9 +24,9 @@ from cutting.exact_sweep import SweptVolumes
 from cutting.sampled_motion import sampled_passes
 from cutting.trajectory import ideal_passes
 from metrology.measure import measure_gear
-from virtual_machine.cosim import cosimulate
 from virtual_machine.job import load_job
-from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.processes.skiving.cosim import cosimulate
+from virtual_machine.setting.sheet import setup_sheet
 
 pytestmark = pytest.mark.slow  # whole machine jobs (pytest -m 'not slow' skips them)
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from virtual_machine.job import load_job
-from virtual_machine.setup_sheet import ratio_error_effect, setup_sheet
+from virtual_machine.setting.sheet import ratio_error_effect, setup_sheet
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 T_HELICAL = math.pi * 2 * 60 / math.sin(math.radians(20))  # lead of the z = 60 internal gear, 1102.2483 mm

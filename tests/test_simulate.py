@@ -14,8 +14,8 @@ from checks import JOBS
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import build_spec
 from virtual_machine.job import Job, load_job
-from virtual_machine.machine_run import relative_pose, simulate
-from virtual_machine.physics import MachinePhysics, SimulationDivergedError
+from virtual_machine.runtime.machine_run import relative_pose, simulate
+from virtual_machine.runtime.physics import MachinePhysics, SimulationDivergedError
 
 
 def _job(name: str, **machine) -> Job:
@@ -103,8 +103,8 @@ def test_simulate_cli_writes_the_trajectory_and_the_record(tmp_path) -> None:
 
     from click.testing import CliRunner
 
-    from virtual_machine import motion_io
     from virtual_machine.cli import main
+    from virtual_machine.output import motion_io
 
     out = tmp_path / "sim"
     args = ["simulate", str(JOBS / "spur_external.toml"), "--duration", "1.2", "--out", str(out), "--json"]
@@ -166,7 +166,7 @@ def test_chain_structures_hold_the_ratio_their_sheet_realises(structure: str, ma
     (kx = 1147/997 for 1.15), S3 with its 3600-step motor (kx = 6261/3600 for 40/23): the simulated work spindle
     drifts against the tool by the sheet's own figure, pitch_um_per_work_rev = eps pi d (stiff chains: the rest
     of the machine adds no drift). S3's kx is cutter turns per work turn, so its error acts with the other sign."""
-    from virtual_machine.setup_sheet import setup_sheet
+    from virtual_machine.setting.sheet import setup_sheet
 
     job = _job("spur_external", structure=structure, **machine)
     sheet = setup_sheet(job, structure)
@@ -187,7 +187,7 @@ def test_chain_structures_run_a_helical_job(structure: str, setting: str) -> Non
     """The helix chains (iy with the differential; GGI2 -> GShD2; S3's kx with (1 + s/T)) add B4 with the right
     sign and size: on the default compliant machine, once the drift the sheet predicts from its realised ratio is
     taken out, the sync error varies by a few micrometres while cutting (a wrong B4 would drift by mm)."""
-    from virtual_machine.setup_sheet import setup_sheet
+    from virtual_machine.setting.sheet import setup_sheet
 
     job = _job("helical_internal", structure=structure)
     rec = simulate(job, duration=2.5)
@@ -220,7 +220,7 @@ def test_job_overrides_machine_parameters(tmp_path) -> None:
     """[machine.model] changes the MuJoCo machine (here the work drive's backlash, 1e-4 rad); unknown or invalid
     parameters are reported with their key and the valid names."""
     from cutting.errors import InputError
-    from virtual_machine.machine_run import machine_params
+    from virtual_machine.runtime.machine_run import machine_params
 
     text = tmp_path / "j.toml"
     base = (JOBS / "spur_external.toml").read_text()

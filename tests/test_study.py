@@ -18,7 +18,7 @@ from cutting.errors import InputError
 from metrology import tolerances as iso
 from virtual_machine.cli import main
 from virtual_machine.job import load_job
-from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.setting.sheet import setup_sheet
 from virtual_machine.studies import pipeline
 from virtual_machine.studies.budget import column_sensitivity, error_budget
 from virtual_machine.studies.design import cases, design
@@ -394,7 +394,8 @@ def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(small_study
     table = rows(one.run.csv)
     assert [r["case"] for r in table] == ["c000", "c001", "c002"]
     assert [r["status"] for r in table] == ["ok", "ok", "failed"]
-    # refused before its run: the estimated cutting torque exceeds the motor's (virtual_machine/cutting_load.py)
+    # refused before its run: the estimated cutting torque exceeds the motor's
+    # (virtual_machine/processes/skiving/cutting_load.py)
     assert "InputError" in table[2]["error"] and "M1" in table[2]["error"]
     # the table holds each case's own measurement (the figures of cases/c000/measurement.json)
     doc = json.loads((one.run.csv.parent / "cases" / "c000" / "measurement.json").read_text())

@@ -14,9 +14,9 @@ from checks import JOBS
 
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
 from virtual_machine.job import Job, load_job
-from virtual_machine.setup_sheet import thread_sheet
-from virtual_machine.simulate_thread import simulate_thread
-from virtual_machine.thread_layout import thread_layout
+from virtual_machine.runtime.thread_run import simulate_thread
+from virtual_machine.setting.sheet import thread_sheet
+from virtual_machine.setting.thread_layout import thread_layout
 
 FORMS = {
     "mechanical": ("mechanical", "master-slave"),

@@ -14,7 +14,7 @@ from cutting.errors import InputError
 from cutting.vibration_turning import crest_height, turned_surface_summary
 from virtual_machine.cli import main
 from virtual_machine.job import parse_job
-from virtual_machine.turning import ideal_setup, simulate_summary
+from virtual_machine.processes.turning.stages import ideal_setup, simulate_summary
 
 JOB = """
 [turning]

@@ -18,8 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from virtual_machine.job import Job, default_job_path, load_job, with_machine
+from virtual_machine.output.progress import Reporter
 from virtual_machine.processes import Product, process_for
-from virtual_machine.progress import Reporter
 
 JobLike = Job | str | Path
 
@@ -31,7 +31,7 @@ def _job(job: JobLike | None) -> Job:
 
 
 def _tolerance(job: Job, mesh_tolerance: float | None) -> Job:
-    from virtual_machine.skiving_run import with_mesh_tolerance
+    from virtual_machine.processes.skiving.run import with_mesh_tolerance
 
     return with_mesh_tolerance(job, None if mesh_tolerance is None else mesh_tolerance * 1e-3)
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import click
 
 from cutting.errors import InputError, Problem
-from virtual_machine.formatting import format_measurement
 from virtual_machine.job import STRUCTURES, default_job_path, load_job, with_machine
+from virtual_machine.output.formatting import format_measurement
+from virtual_machine.output.progress import Progress, Reporter
 from virtual_machine.processes import process_for
-from virtual_machine.progress import Progress, Reporter
 
 MESH_TOLERANCE_HELP = (
     "Sweep error of the finishing pass's manifold solid [um] (default: the job's process.sweep_error), and the most "
@@ -95,7 +95,7 @@ def cut(
     mesh_tolerance: float | None,
     removal: str,
 ) -> None:
-    from virtual_machine.skiving_run import with_mesh_tolerance
+    from virtual_machine.processes.skiving.run import with_mesh_tolerance
 
     path = job or default_job_path()
     try:
@@ -118,9 +118,9 @@ def cut(
 def run(
     job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh_tolerance: float | None, removal: str
 ) -> None:
-    from virtual_machine.machine_run import LostSynchronismError
-    from virtual_machine.physics import SimulationDivergedError
-    from virtual_machine.skiving_run import UnmeasurableGearError, with_mesh_tolerance
+    from virtual_machine.processes.skiving.run import UnmeasurableGearError, with_mesh_tolerance
+    from virtual_machine.runtime.machine_run import LostSynchronismError
+    from virtual_machine.runtime.physics import SimulationDivergedError
 
     path = job or default_job_path()
     try:
@@ -223,10 +223,10 @@ def format_study(outcome, out: Path) -> str:
 @click.option("--json", "as_json", is_flag=True, help="Print the verdict as JSON.")
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
-    from virtual_machine.check import class_verdict, format_verdict
-    from virtual_machine.machine_run import LostSynchronismError
-    from virtual_machine.physics import SimulationDivergedError
-    from virtual_machine.skiving_run import UnmeasurableGearError
+    from virtual_machine.output.check import class_verdict, format_verdict
+    from virtual_machine.processes.skiving.run import UnmeasurableGearError
+    from virtual_machine.runtime.machine_run import LostSynchronismError
+    from virtual_machine.runtime.physics import SimulationDivergedError
 
     try:
         j = load_job(job)
@@ -272,8 +272,8 @@ def simulate(
     correction: bool | None,
     rrd: Path | None,
 ) -> None:
-    from virtual_machine.machine_run import LostSynchronismError
-    from virtual_machine.physics import SimulationDivergedError
+    from virtual_machine.runtime.machine_run import LostSynchronismError
+    from virtual_machine.runtime.physics import SimulationDivergedError
 
     path = job or default_job_path()
     overrides = {"structure": structure, "synchronization": synchronization, "adaptive_correction": correction}

@@ -25,7 +25,7 @@ from typing import Any
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
-from virtual_machine.progress import Reporter
+from virtual_machine.output.progress import Reporter
 
 
 @dataclass

@@ -15,7 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from virtual_machine.report import STYLE, html_table
+from virtual_machine.output.report import STYLE, html_table
 from virtual_machine.studies.budget import Budget, ParameterBudget
 from virtual_machine.studies.spec import Study
 

@@ -59,7 +59,7 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
     """One case on a worker: the job run as `skive run` runs it (one removal process), in a scratch directory.
     Returns status, error, wall time and the measurement document (or, for a gear that could not be measured,
     the run's facts), never raises for a failing case."""
-    from virtual_machine.skiving_run import run_job
+    from virtual_machine.processes.skiving.run import run_job
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix=f"skive-{case_id}-") as tmp:
@@ -88,9 +88,9 @@ def expected_failures() -> tuple[type[Exception], ...]:
     """What a machine or a job can do to a case: bad input, a diverged simulation, lost synchronism, a gear the
     measuring machine cannot measure."""
     from cutting.errors import InputError
-    from virtual_machine.machine_run import LostSynchronismError
-    from virtual_machine.physics import SimulationDivergedError
-    from virtual_machine.skiving_run import UnmeasurableGearError
+    from virtual_machine.processes.skiving.run import UnmeasurableGearError
+    from virtual_machine.runtime.machine_run import LostSynchronismError
+    from virtual_machine.runtime.physics import SimulationDivergedError
 
     return (InputError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError)
 

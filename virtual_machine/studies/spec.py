@@ -125,12 +125,12 @@ def base_value(data: dict[str, Any], key: str) -> Any:
         pass
     section, _, rest = key.partition(".")
     if key == "machine.size":  # the base job's own size, or the one its gear gets by default
-        from virtual_machine.machine_run import machine_size
+        from virtual_machine.runtime.machine_run import machine_size
 
         return machine_size(parse_job(data))
     if key.startswith(MODEL_PREFIX):
         from machine_models.parameters import SkivingMachineParams, override
-        from virtual_machine.machine_run import machine_params
+        from virtual_machine.runtime.machine_run import machine_params
 
         name = key[len(MODEL_PREFIX) :]
         params = machine_params(parse_job(data))  # the base job's size and model (the job was parsed before)

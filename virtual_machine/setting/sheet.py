@@ -33,8 +33,8 @@ from fractions import Fraction
 from typing import Any
 
 from cutting.errors import InputError, Problem
-from virtual_machine.change_gears import STANDARD_SET, ChangeGearSet, choose_change_gears
 from virtual_machine.job import Job, machine_constants
+from virtual_machine.setting.change_gears import STANDARD_SET, ChangeGearSet, choose_change_gears
 
 STRUCTURE_SETTINGS = {
     "mechanical": ("ix", "iy", "iv", "is"),

@@ -1,4 +1,5 @@
-"""One threading stroke on the lathe of seed 001 (group Fv(B1 P2)): the fixed loop of :mod:`virtual_machine.machine_run`
+"""One threading stroke on the lathe of seed 001 (group Fv(B1 P2)): the fixed loop of
+:mod:`virtual_machine.runtime.machine_run`
 (controllers tick at the servo rate, physics sub-steps, record per tick) on the thread lathe model.
 
 The stroke: the spindle runs up along a smooth 0.3 s ramp of the speed command (mechanical, master-slave) or
@@ -25,9 +26,10 @@ from machine_models.parameters import override
 from machine_models.skiving_machine import MM
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
 from virtual_machine.job import Job, flatten_model
-from virtual_machine.machine_run import error_stats
-from virtual_machine.physics import SimulationDivergedError
-from virtual_machine.setup_sheet import thread_sheet
+from virtual_machine.runtime.machine_run import error_stats
+from virtual_machine.runtime.physics import SimulationDivergedError
+from virtual_machine.setting.sheet import thread_sheet
+from virtual_machine.setting.thread_layout import thread_layout
 from virtual_machine.structures.thread_group import (
     ThreadCnc,
     ThreadEqualCoordinates,
@@ -35,7 +37,6 @@ from virtual_machine.structures.thread_group import (
     ThreadMechanical,
     ThreadTuning,
 )
-from virtual_machine.thread_layout import thread_layout
 
 
 @dataclass

@@ -31,12 +31,12 @@ from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions
 from metrology.workpiece import UnmeasurableError
-from virtual_machine.cosim import CoSimulation, cosimulate
-from virtual_machine.formatting import format_sheet
 from virtual_machine.job import Job, load_job
-from virtual_machine.motion_io import summary
-from virtual_machine.report import run_chart, write_report
-from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.output.formatting import format_sheet
+from virtual_machine.output.motion_io import summary
+from virtual_machine.output.report import run_chart, write_report
+from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
+from virtual_machine.setting.sheet import setup_sheet
 
 #: blank snapshots per pass in the recording (manifold removal; the dexel removal makes its solid once per pass)
 SNAPSHOTS_PER_PASS = 3
@@ -119,7 +119,7 @@ def run_job(
 def _modification_runs(job: Job, announce, snapshots: int, workers: int, removal: str) -> tuple[CoSimulation, dict]:
     """The path of the job's flank modification: planned on the ideal machine (J, feed-forward, accuracy check),
     then iterated on the simulated machine, one co-simulation per iteration; the best one is the run."""
-    from virtual_machine.modification_path import iterate_on_machine, path_summary, plan_path
+    from virtual_machine.processes.skiving.modification_path import iterate_on_machine, path_summary, plan_path
 
     announce("path for the flank modification on the ideal machine (seed 003)")
     plan = plan_path(job)
@@ -237,7 +237,7 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
 
 
 def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, charts: list[Path]) -> None:
-    from virtual_machine.recording import write_recording
+    from virtual_machine.output.recording import write_recording
 
     rows = sim.load_rows
     series = {}

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from machine_models.structure_drives import ChainRatios
 from virtual_machine.job import Job, machine_constants
-from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.setting.sheet import setup_sheet
 
 
 def _realised(sheet, name: str) -> float:

@@ -32,8 +32,8 @@ import rerun.blueprint as rrb
 
 from cutting.flank import SIDES, base_tangent_deviation
 from cutting.gear import Gear
-from virtual_machine.machine_run import SEGMENTS, MotionRecord, PassTrajectory
-from virtual_machine.physics import AXES
+from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory
+from virtual_machine.runtime.physics import AXES
 
 if TYPE_CHECKING:
     from cutting.skiving import SkivingSetup

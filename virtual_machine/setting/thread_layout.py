@@ -10,7 +10,7 @@ import math
 
 from machine_models.parts import MM
 from machine_models.thread_lathe import ThreadLatheParams, ThreadLayout
-from virtual_machine.setup_sheet import thread_sheet
+from virtual_machine.setting.sheet import thread_sheet
 
 
 def thread_form(job) -> str:

@@ -214,7 +214,7 @@ def machine_params(job: Job):
 def cnc_passes(plan: CopyingPlan) -> list:
     """The passes for the CNC: per space the left pass fed down, the right pass fed up; the path as the mill
     centre (radial, tangential) in the frame where space k faces +x (the machine indexes it there)."""
-    from virtual_machine.form_mill_cnc import MillPass
+    from virtual_machine.processes.form_milling.cnc import MillPass
 
     half = plan.gear.face_width / 2 + plan.approach
     out = []
@@ -276,7 +276,7 @@ def run_form_job(
     stage: Stage | None = None,
 ) -> dict[str, Any]:
     """`skive run` of a form-milling job on the simulated machine (see the module docstring)."""
-    from virtual_machine.form_mill_cnc import simulate_form_milling
+    from virtual_machine.processes.form_milling.cnc import simulate_form_milling
 
     stage = stage or (lambda name: None)
     durations: dict[str, float] = {}
@@ -356,8 +356,8 @@ def _write(doc: dict[str, Any], out: Path) -> list[Path]:
 
 
 def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], plan: CopyingPlan) -> None:
-    from virtual_machine.formatting import class_table
-    from virtual_machine.report import STYLE, _image, html_table
+    from virtual_machine.output.formatting import class_table
+    from virtual_machine.output.report import STYLE, _image, html_table
 
     iso = doc["iso1328"]
     cls = (iso.get("class") or {}).get("overall")
@@ -403,7 +403,7 @@ def _record(rrd: Path, job: Job, record, stl_path: Path, doc: dict[str, Any], ch
     import rerun as rr
     import trimesh
 
-    from virtual_machine.recording import _send_series
+    from virtual_machine.output.recording import _send_series
 
     rrd.parent.mkdir(parents=True, exist_ok=True)
     rec = rr.RecordingStream("skive_form_milling", send_properties=False)

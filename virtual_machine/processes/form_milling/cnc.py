@@ -15,7 +15,7 @@ plus inertia (acceleration) feed-forward, limited to the motor's peak torque wit
 (g: axis motion per motor radian, J: inertia at the motor). Screw and nut compliance, backlash, friction and
 the Z weight therefore show in the relative motion of mill and gear but not at the encoders. Moves are
 minimum-jerk (quintic) point-to-point profiles; the feed ramps up and down with a cycloidal (jerk-limited)
-velocity ramp. The loop is the fixed one of :mod:`virtual_machine.machine_run`: servo tick, physics sub-steps,
+velocity ramp. The loop is the fixed one of :mod:`virtual_machine.runtime.machine_run`: servo tick, physics sub-steps,
 divergence check, record.
 """
 
@@ -31,7 +31,7 @@ import numpy as np
 
 from machine_models.form_mill import FormMillLayout, FormMillParams, build_form_mill_spec, stage_omega_h
 from machine_models.parameters import ARCSEC
-from virtual_machine.physics import SimulationDivergedError, divergence_message, servo_substeps
+from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
 
 AXES = ("A", "X", "Y", "Z", "S")  # the CNC's axes; A rad, X Y Z m, S rad
 MOTORS = ("MA", "MX", "MY", "MZ", "MS")

@@ -1,11 +1,13 @@
 """Gear skiving (seed 000, the setting sheets S1-S4): the process of a "gear" job.
 
-- setup: the machine setting sheet of the job's structure (:mod:`virtual_machine.setup_sheet`);
-- simulate: the machine runs through the passes without cutting (:mod:`virtual_machine.machine_run`): trajectory.npz,
+- setup: the machine setting sheet of the job's structure (:mod:`virtual_machine.setting.sheet`);
+- simulate: the machine runs through the passes without cutting (:mod:`virtual_machine.runtime.machine_run`):
+trajectory.npz,
   motion.npz, simulation.json, sync_error.png;
 - cut: the ideal kinematics (or a simulated trajectory) cut the gear (:mod:`cutting.ideal_cut`), measured on its
   exact swept surface and on gear.stl;
-- run: the simulated machine cuts it under its cutting forces (:mod:`virtual_machine.skiving_run`), measured, reported.
+- run: the simulated machine cuts it under its cutting forces (:mod:`virtual_machine.processes.skiving.run`),
+measured, reported.
 """
 
 from __future__ import annotations
@@ -14,8 +16,8 @@ import time
 from pathlib import Path
 
 from virtual_machine.job import Job
+from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
-from virtual_machine.progress import Reporter
 
 RUN_FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png")
 
@@ -25,8 +27,8 @@ class Skiving(Process):
     title = "gear skiving"
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from virtual_machine.formatting import format_sheet
-        from virtual_machine.setup_sheet import setup_sheet
+        from virtual_machine.output.formatting import format_sheet
+        from virtual_machine.setting.sheet import setup_sheet
 
         sheet = setup_sheet(job, structure)
         return Product("setup", finite_json(sheet.to_json()), format_sheet(sheet, job.source))
@@ -40,8 +42,8 @@ class Skiving(Process):
         rrd: Path | None = None,
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine import motion_io
-        from virtual_machine.machine_run import simulate
+        from virtual_machine.output import motion_io
+        from virtual_machine.runtime.machine_run import simulate
 
         rep = reporter_or_default(reporter)
         st = job.skiving
@@ -67,7 +69,7 @@ class Skiving(Process):
         }
         doc = motion_io.save(rec, out, meta, st.gear.teeth)
         if rrd is not None:
-            from virtual_machine.recording import write_recording
+            from virtual_machine.output.recording import write_recording
 
             write_recording(rrd, model_xml=rec.model_xml, motion=rec, setup=st, charts=[out / "sync_error.png"])
             doc["recording"] = str(rrd)
@@ -91,9 +93,9 @@ class Skiving(Process):
         from cutting.ideal_cut import cut_ideal, default_workers
         from cutting.trajectory import ideal_passes
         from metrology.charts import finite, write_charts
-        from virtual_machine.formatting import chip_record, format_gear_stl, format_measurement, format_removal
         from virtual_machine.job import dexel_spacing
-        from virtual_machine.skiving_run import measure_written_cut
+        from virtual_machine.output.formatting import chip_record, format_gear_stl, format_measurement, format_removal
+        from virtual_machine.processes.skiving.run import measure_written_cut
 
         rep = reporter_or_default(reporter)
         st = job.skiving
@@ -108,14 +110,14 @@ class Skiving(Process):
         motions = None
         plan = None
         if job.modification is not None and trajectory is None:
-            from virtual_machine.modification_path import plan_path
+            from virtual_machine.processes.skiving.modification_path import plan_path
 
             rep.stage("path for the flank modification (seed 003: radial and tangential corrections, accuracy check)")
             plan = plan_path(job)
             motions = plan.motions
         if trajectory is not None:
             from cutting.sampled_motion import sampled_passes
-            from virtual_machine.motion_io import load_trajectory
+            from virtual_machine.output.motion_io import load_trajectory
 
             motions = sampled_passes(st, load_trajectory(trajectory))
         report = cut_ideal(
@@ -157,7 +159,7 @@ class Skiving(Process):
             "chips": [chip_record(c) for c in r.chips],
         }
         if plan is not None:
-            from virtual_machine.modification_path import path_summary
+            from virtual_machine.processes.skiving.modification_path import path_summary
 
             result["modification_path"] = path_summary(plan)
         doc = finite(result)
@@ -181,9 +183,9 @@ class Skiving(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.formatting import format_measurement
-        from virtual_machine.program import program_duration
-        from virtual_machine.skiving_run import run_job
+        from virtual_machine.output.formatting import format_measurement
+        from virtual_machine.processes.skiving.run import run_job
+        from virtual_machine.runtime.program import program_duration
 
         rep = reporter_or_default(reporter)
         bar = rep.task("machine and cut", program_duration(job.skiving), "s of machine time", value_format="{:.2f}")
@@ -259,7 +261,7 @@ def format_path(path: dict) -> str:
 
 def format_run(run: dict, out: Path, rrd: Path | None) -> str:
     """The end-of-run table: stages and their wall time, what the machine and the chips did, the files."""
-    from virtual_machine.formatting import format_gear_stl
+    from virtual_machine.output.formatting import format_gear_stl
 
     d = run["durations_s"]
     wall = sum(v for k, v in d.items() if k != "machine")

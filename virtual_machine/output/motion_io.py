@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from virtual_machine.machine_run import SEGMENTS, MotionRecord, PassTrajectory, error_stats
-from virtual_machine.physics import AXES
+from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory, error_stats
+from virtual_machine.runtime.physics import AXES
 
 TRAJECTORY_FORMAT = "skive pose trajectory 1"
 

@@ -248,7 +248,7 @@ def motor_loads(job: Job, params: SkivingMachineParams, loads: list[PassLoad] | 
             p.feed_motor_torque,
         )
     else:
-        from virtual_machine.chains import chain_ratios
+        from virtual_machine.setting.chains import chain_ratios
 
         chains = chain_ratios(job)
         main = BREAKDOWN * p.main_motor_torque
@@ -276,7 +276,7 @@ def check_machine_holds(job: Job, params: SkivingMachineParams, margin: float = 
     """Refuse (InputError) a job whose estimated peak torque at a motor, x ``margin``, exceeds that motor's peak
     torque, naming the motor, both torques, and what would hold it: a larger machine size and the motor torque
     that would do. Returns the motors' loads when they all hold."""
-    from virtual_machine.machine_run import machine_size
+    from virtual_machine.runtime.machine_run import machine_size
 
     loads = pass_loads(job.skiving, job.process["material"])
     motors = motor_loads(job, params, loads)

@@ -77,7 +77,7 @@ def simulate_turning(job: Job, progress: Callable[[float], None] | None = None):
     """The lathe turns ``process.revolutions`` revolutions after its run-up; returns the record and the path it
     made as a :class:`SampledTurning` (theta from the first measured revolution, which the vibration met at the
     spindle angle ``path.theta0`` after the feed engaged: :func:`commanded_path`)."""
-    from virtual_machine.simulate_thread import simulate_thread
+    from virtual_machine.runtime.thread_run import simulate_thread
 
     n = job.process["revolutions"]
     params = override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
@@ -202,7 +202,7 @@ def _stl(solid) -> bytes:
 
 
 def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
-    from virtual_machine.report import STYLE, html_table
+    from virtual_machine.output.report import STYLE, html_table
 
     m, c = doc["machine"], doc["commanded"]
     rows = [
@@ -236,7 +236,7 @@ def _record(rrd: Path, rec, sampled: SampledTurning, job: Job) -> None:
     """The carriage's path against the command and the uncut chip thickness over machine time."""
     import rerun as rr
 
-    from virtual_machine.recording import _send_series
+    from virtual_machine.output.recording import _send_series
 
     rrd.parent.mkdir(parents=True, exist_ok=True)
     stream = rr.RecordingStream("skive_turning", send_properties=False)

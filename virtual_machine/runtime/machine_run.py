@@ -22,12 +22,12 @@ from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import size_for, size_params
 from machine_models.skiving_machine import MM, build_spec
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
-from virtual_machine.chains import chain_ratios
 from virtual_machine.controllers import InductionMotor
 from virtual_machine.job import Job, flatten_model
-from virtual_machine.physics import AXES, MachinePhysics
-from virtual_machine.program import ProgramSettings, program
-from virtual_machine.setup_sheet import setup_sheet
+from virtual_machine.runtime.physics import AXES, MachinePhysics
+from virtual_machine.runtime.program import ProgramSettings, program
+from virtual_machine.setting.chains import chain_ratios
+from virtual_machine.setting.sheet import setup_sheet
 from virtual_machine.structures.hydraulic import HydraulicS2, HydraulicS3
 from virtual_machine.structures.mechanical import MechanicalS1
 from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4MasterSlave, S4Tuning
@@ -234,7 +234,8 @@ class MachineRun:
 
     Without ``params`` the machine is the job's own (:func:`machine_params`: its size with the [machine.model]
     overrides), and a job whose estimated cutting torque its motors cannot hold is refused before anything runs
-    (virtual_machine/cutting_load.py: InputError naming the motor); given ``params`` are taken as they are (tests,
+    (virtual_machine/processes/skiving/cutting_load.py: InputError naming the motor); given ``params`` are taken as
+    they are (tests,
     benchmarks). Without ``settings`` the run-up follows the machine's ``work_acceleration``.
 
     ``load``, if set, gives the cutting loads of a servo tick, ``load(t, dt)``: (force [N] on the workpiece,
@@ -254,7 +255,7 @@ class MachineRun:
     ):
         self.job = job
         if params is None:  # the job's own machine: refused before the run if its motors cannot hold the cut
-            from virtual_machine.cutting_load import check_machine_holds
+            from virtual_machine.processes.skiving.cutting_load import check_machine_holds
 
             params = machine_params(job)
             check_machine_holds(job, params)

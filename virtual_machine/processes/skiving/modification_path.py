@@ -187,7 +187,7 @@ class MachinePath:
     iterations: list[Iteration]
     converged: bool
     measurement: dict[str, Any]
-    sim: Any  # virtual_machine.cosim.CoSimulation of the path kept
+    sim: Any  # virtual_machine.processes.skiving.cosim.CoSimulation of the path kept
 
     def table(self) -> list[dict[str, Any]]:
         return iteration_table(self.iterations)

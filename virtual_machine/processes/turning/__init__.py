@@ -3,7 +3,7 @@
 - setup: the turned surface the commanded path predicts (crests, chip breaking);
 - simulate: the lathe turns with the feed vibration: its path against the command, the surface it leaves;
 - run: the same, the turned surface also made by manifold3d and its crests held against the exact envelope
-(:mod:`virtual_machine.turning`). A turning job has no `cut`: its surface comes from the lathe's path.
+(:mod:`virtual_machine.processes.turning.stages`). A turning job has no `cut`: its surface comes from the lathe's path.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ from pathlib import Path
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
+from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
-from virtual_machine.progress import Reporter
 
 FILES = ("workpiece.stl", "measurement.json", "report.html")
 
@@ -25,7 +25,7 @@ class VibrationTurning(Process):
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
         from cutting.vibration_turning import turned_surface_summary
-        from virtual_machine.turning import format_prediction, ideal_setup
+        from virtual_machine.processes.turning.stages import format_prediction, ideal_setup
 
         doc = turned_surface_summary(ideal_setup(job), job.process["revolutions"])
         return Product("setup", finite_json(doc), format_prediction(job))
@@ -39,7 +39,7 @@ class VibrationTurning(Process):
         rrd: Path | None = None,
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.turning import format_run, simulate_summary
+        from virtual_machine.processes.turning.stages import format_run, simulate_summary
 
         doc, _, _ = simulate_summary(job)
         out.mkdir(parents=True, exist_ok=True)
@@ -59,7 +59,7 @@ class VibrationTurning(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.turning import format_run, run_turning
+        from virtual_machine.processes.turning.stages import format_run, run_turning
 
         rep = reporter_or_default(reporter)
         doc = run_turning(job, Path(job.source), out, rrd, rep.stage)

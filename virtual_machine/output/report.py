@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from virtual_machine.formatting import class_table
-from virtual_machine.machine_run import SEGMENTS
+from virtual_machine.output.formatting import class_table
+from virtual_machine.runtime.machine_run import SEGMENTS
 
 STYLE = """
 body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; color: #222; }

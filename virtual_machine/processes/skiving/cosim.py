@@ -42,9 +42,9 @@ from cutting.sampled_motion import SampledMotion
 from cutting.sweep import outline_points, simplify_outline, split_sides
 from cutting.trajectory import ideal_passes
 from machine_models.parameters import SkivingMachineParams
-from virtual_machine.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
 from virtual_machine.job import Job, dexel_spacing
-from virtual_machine.machine_run import SEGMENTS, MachineRun, MotionRecord, relative_pose
+from virtual_machine.processes.skiving.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
+from virtual_machine.runtime.machine_run import SEGMENTS, MachineRun, MotionRecord, relative_pose
 
 FEED = SEGMENTS.index("feed")
 
@@ -161,7 +161,8 @@ def cosimulate(
     passages)`` is called as passages finish. ``snapshots_per_pass``: meshes of the stock taken evenly through
     each pass (the last at its end), for the recording. ``workers`` > 1 cuts in that many processes; the machine
     then runs at most :func:`max_lag` passages ahead of the finished chips. ``correction``: the finishing pass's
-    path corrections of a flank modification (virtual_machine/modification_path.py), made by the CNC. ``removal``:
+    path corrections of a flank modification (virtual_machine/processes/skiving/modification_path.py), made by the
+    CNC. ``removal``:
     "dexel" (the default: the dexel workpiece, cut a few passages at a time in this process; ``workers`` is moot)
     or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes)."""
     setup = job.skiving

@@ -4,7 +4,7 @@
 - simulate: the face-contour machine (MuJoCo, its electronic gearbox) cuts the slots: its synchronisation;
 - cut: the ideal kinematics cut the first ``process.slots_cut`` slots, measured exactly and on the solid;
 - run: the machine cuts them; the slots are cut and measured from the motion it recorded
-(:mod:`virtual_machine.face_contour_job`).
+(:mod:`virtual_machine.processes.face_contour.stages`).
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import json
 from pathlib import Path
 
 from virtual_machine.job import Job
+from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
-from virtual_machine.progress import Reporter
 
 FILES = ("coupling.stl", "measurement.json", "report.html")
 
@@ -25,7 +25,7 @@ class FaceContour(Process):
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
         from cutting.face_contour import setting_sheet
-        from virtual_machine.face_contour_job import format_setting_sheet, tool_speed
+        from virtual_machine.processes.face_contour.stages import format_setting_sheet, tool_speed
 
         return Product("setup", finite_json(setting_sheet(job.coupling, tool_speed(job))), format_setting_sheet(job))
 
@@ -38,7 +38,7 @@ class FaceContour(Process):
         rrd: Path | None = None,
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.face_contour_job import format_simulation, simulate_face_job
+        from virtual_machine.processes.face_contour.stages import format_simulation, simulate_face_job
 
         _, summary = simulate_face_job(job)
         out.mkdir(parents=True, exist_ok=True)
@@ -56,7 +56,7 @@ class FaceContour(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.face_contour_job import cut_face_job, format_result
+        from virtual_machine.processes.face_contour.stages import cut_face_job, format_result
 
         rep = reporter_or_default(reporter)
         doc = cut_face_job(job, out, rep.stage)
@@ -74,7 +74,7 @@ class FaceContour(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.face_contour_job import format_result, run_face_job
+        from virtual_machine.processes.face_contour.stages import format_result, run_face_job
 
         rep = reporter_or_default(reporter)
         doc = run_face_job(job, Path(job.source), out, None, rep.stage, rrd)

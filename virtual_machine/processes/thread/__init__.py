@@ -1,7 +1,7 @@
 """Thread cutting on the lathe (seed 001's thread group): the process of a "thread" job.
 
-- setup: the setting sheet of the thread group (:mod:`virtual_machine.setup_sheet`);
-- simulate: one threading stroke on the lathe (:mod:`virtual_machine.simulate_thread`): its lead error;
+- setup: the setting sheet of the thread group (:mod:`virtual_machine.setting.sheet`);
+- simulate: one threading stroke on the lathe (:mod:`virtual_machine.runtime.thread_run`): its lead error;
 - run: the same stroke, and the lead of the thread the carriage's path cuts measured as a thread measuring machine
   reports it (its deviation along the thread: mean, peak to peak, drift) in measurement.json.
 """
@@ -14,8 +14,8 @@ from pathlib import Path
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
+from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, finite_json, written
-from virtual_machine.progress import Reporter
 
 
 class ThreadCutting(Process):
@@ -23,8 +23,8 @@ class ThreadCutting(Process):
     title = "thread cutting"
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from virtual_machine.formatting import format_sheet
-        from virtual_machine.setup_sheet import setup_sheet
+        from virtual_machine.output.formatting import format_sheet
+        from virtual_machine.setting.sheet import setup_sheet
 
         sheet = setup_sheet(job, structure)
         return Product("setup", finite_json(sheet.to_json()), format_sheet(sheet, job.source))
@@ -62,9 +62,9 @@ def _stroke(job: Job, out: Path, duration: float | None, measurement: bool) -> P
     import numpy as np
 
     from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
-    from virtual_machine import motion_io
-    from virtual_machine.simulate_thread import simulate_thread
-    from virtual_machine.thread_layout import thread_layout
+    from virtual_machine.output import motion_io
+    from virtual_machine.runtime.thread_run import simulate_thread
+    from virtual_machine.setting.thread_layout import thread_layout
 
     t0 = time.perf_counter()
     rec = simulate_thread(job, duration=duration)

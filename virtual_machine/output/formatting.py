@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from virtual_machine.setup_sheet import SetupSheet
+from virtual_machine.setting.sheet import SetupSheet
 
 
 def format_sheet(sheet: SetupSheet, source: str) -> str:

@@ -1,9 +1,11 @@
 """Form milling of spatially modified teeth by the copying method (seed 003): the process of a "form_milling" job.
 
-- setup: the profiled mill and the path table with its corrections (:func:`virtual_machine.form_milling.plan_job`);
-- cut: the ideal machine follows the planned path exactly (:func:`virtual_machine.form_milling.cut_form_job`);
+- setup: the profiled mill and the path table with its corrections
+(:func:`virtual_machine.processes.form_milling.stages.plan_job`);
+- cut: the ideal machine follows the planned path exactly
+(:func:`virtual_machine.processes.form_milling.stages.cut_form_job`);
 - run: the simulated form-milling machine (MuJoCo, its CNC) follows it, iterated on what it cut
-  (:func:`virtual_machine.form_milling.run_form_job`).
+  (:func:`virtual_machine.processes.form_milling.stages.run_form_job`).
 A form-milling job has no separate `simulate`: its machine is simulated with its cut.
 """
 
@@ -13,8 +15,8 @@ from pathlib import Path
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
+from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
-from virtual_machine.progress import Reporter
 
 FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png", "*.png")
 
@@ -24,7 +26,7 @@ class FormMilling(Process):
     title = "form milling (copying method)"
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from virtual_machine.form_milling import format_plan, plan_job
+        from virtual_machine.processes.form_milling.stages import format_plan, plan_job
 
         plan = plan_job(job, checks=0)
         return Product("setup", finite_json(plan.summary()), format_plan(plan))
@@ -46,8 +48,8 @@ class FormMilling(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.form_milling import cut_form_job, format_copying
-        from virtual_machine.formatting import format_gear_stl, format_measurement
+        from virtual_machine.output.formatting import format_gear_stl, format_measurement
+        from virtual_machine.processes.form_milling.stages import cut_form_job, format_copying
 
         if trajectory is not None:
             raise InputError(Problem("--trajectory", str(trajectory), "is for skiving jobs", "use `skive run` instead"))
@@ -73,8 +75,8 @@ class FormMilling(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        from virtual_machine.form_milling import format_copying, run_form_job
-        from virtual_machine.formatting import format_measurement
+        from virtual_machine.output.formatting import format_measurement
+        from virtual_machine.processes.form_milling.stages import format_copying, run_form_job
 
         rep = reporter_or_default(reporter)
         bars: list = []

@@ -4,7 +4,7 @@
   ratio amplitude) of :func:`cutting.face_contour.setting_sheet`.
 - `skive cut`: the ideal kinematics cut the first ``process.slots_cut`` slots (:func:`cutting.face_contour.cut_slots`).
 - `skive run`: the face-contour machine (MuJoCo, its electronic gearbox) cuts them; the slots are cut from the
-  motion it recorded (:mod:`virtual_machine.face_contour_cnc`).
+  motion it recorded (:mod:`virtual_machine.processes.face_contour.cnc`).
 
 Either way the coupling is measured exactly (from the motion) and on the manifold solid: slot bottom form
 (+ concave), side deviations and bows, slot spacing; written to measurement.json with coupling.stl.
@@ -116,7 +116,7 @@ def machine_params(job: Job):
 
 def simulate_face_job(job: Job, progress=None):
     """`skive simulate`: the face-contour machine cuts the slots; the record and its synchronisation figures."""
-    from virtual_machine.face_contour_cnc import simulate_face_contour
+    from virtual_machine.processes.face_contour.cnc import simulate_face_contour
 
     slots = tuple(range(job.process["slots_cut"]))
     record = simulate_face_contour(
@@ -151,7 +151,7 @@ def format_simulation(summary: dict[str, Any]) -> str:
 
 def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None, rrd: Path | None = None) -> dict[str, Any]:
     """`skive run`: the face-contour machine cuts the slots; they are cut and measured from its recorded motion."""
-    from virtual_machine.face_contour_cnc import cut_recorded, measure_recorded
+    from virtual_machine.processes.face_contour.cnc import cut_recorded, measure_recorded
 
     stage = stage or (lambda name: None)
     c: FaceCoupling = job.coupling
@@ -190,7 +190,7 @@ def _record(rrd: Path, record, stl: Path) -> None:
     import rerun as rr
     import trimesh
 
-    from virtual_machine.recording import _send_series
+    from virtual_machine.output.recording import _send_series
 
     rrd.parent.mkdir(parents=True, exist_ok=True)
     rec = rr.RecordingStream("skive_face_contour", send_properties=False)
@@ -244,7 +244,7 @@ def _write(out: Path, doc: dict[str, Any], cut) -> None:
 
 
 def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
-    from virtual_machine.report import STYLE, html_table
+    from virtual_machine.output.report import STYLE, html_table
 
     rows = [[s["slot"], s["bottom_shape"], s["bottom_form_um"], *s["side_bow_um"]] for s in doc["slots"]]
     body = [

@@ -17,7 +17,8 @@ axis counts the pulses of **reference generator 14** (p pulses per head revoluti
 
 The pulse-to-analog converters turn each axis's fine count (its divider's content included, no +-1 pulse jitter)
 into the position command and the generator's frequency into the speed feed-forward. Per axis the servo is the
-cascade of :mod:`virtual_machine.form_mill_cnc` on the **motor encoder** (semi-closed loop): position loop (Kv) with
+cascade of :mod:`virtual_machine.processes.form_milling.cnc` on the **motor encoder** (semi-closed loop): position
+loop (Kv) with
 speed feed-forward -> PI speed loop -> torque, plus inertia feed-forward, limited to the motor's peak torque with
 anti-windup. The stages' compliance, backlash and friction therefore show between tip and workpiece, not at the
 encoders.
@@ -71,7 +72,7 @@ from machine_models.face_contour_machine import (
 )
 from machine_models.parameters import ARCSEC
 from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
-from virtual_machine.physics import SimulationDivergedError, divergence_message, servo_substeps
+from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
 
 __all__ = [
     "AXES",
