@@ -20,13 +20,13 @@ import math
 import resource
 import time
 
-from cutting.edge import make_edge
-from cutting.engine import cut_passes
-from cutting.exact_sweep import SweptVolumes
 from cutting.gear import Gear
-from cutting.ideal_cut import default_workers, to_trimesh
-from cutting.skiving import SkivingSetup
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.engine import cut_passes
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.ideal_cut import default_workers, to_trimesh
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 from metrology.datum import check_mesh
 from metrology.measure import measure_gear
 from virtual_machine.job import PROCESS_KEYS

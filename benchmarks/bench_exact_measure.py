@@ -15,9 +15,9 @@ import time
 from collections import defaultdict
 
 import metrology.measure as measure_module
-from cutting.edge import make_edge
-from cutting.exact_sweep import SweptVolumes
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.trajectory import ideal_passes
 from virtual_machine.job import load_job
 
 STAGES = {

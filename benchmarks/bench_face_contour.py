@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 
-from cutting.face_contour import SWEEP_TOLERANCE, FaceCoupling, cut_slots
+from cutting.face_contour.slots import SWEEP_TOLERANCE, FaceCoupling, cut_slots
 
 
 def main() -> None:

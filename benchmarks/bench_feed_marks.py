@@ -3,7 +3,7 @@
     python benchmarks/bench_feed_marks.py                          # spur_external, conjugate, feed 0.2/0.1/0.05
     python benchmarks/bench_feed_marks.py helical_internal --edge involute --feeds 0.2 0.05
 
-For each feed the finishing pass's exact swept volume (cutting.exact_sweep: no chord
+For each feed the finishing pass's exact swept volume (cutting.skiving.exact_sweep: no chord
 error) is probed along the flank normals of one tooth over the measurement's profile evaluation range,
 in two transverse sections (z = 0 and z = 0.07 mm, between generating lines). The deviation (transverse,
 excess material positive) is evaluated like a measuring machine does: f_Halpha, f_falpha. Deviations
@@ -19,10 +19,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from cutting.edge import make_edge
-from cutting.exact_sweep import SweptVolumes
 from cutting.flank import SIDES, flank_normals, flank_points
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.trajectory import ideal_passes
 from metrology.flank_lines import evaluate
 from metrology.measure import MeasureOptions, profile_range
 from virtual_machine.job import load_job

@@ -35,12 +35,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import trimesh
 
-from cutting.edge import make_edge
-from cutting.engine import cut_passes
 from cutting.gear_file import write_gear_stl
-from cutting.ideal_cut import default_workers
-from cutting.removal import Chip, expected_genus
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.engine import cut_passes
+from cutting.skiving.ideal_cut import default_workers
+from cutting.skiving.removal import Chip, expected_genus
+from cutting.skiving.trajectory import ideal_passes
 from virtual_machine.job import PROCESS_KEYS, load_job
 from virtual_machine.output.progress import Progress
 

@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from cutting.edge import make_edge
-from cutting.exact_sweep import SweptVolumes
-from cutting.sampled_motion import sampled_passes
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.sampled_motion import sampled_passes
+from cutting.skiving.trajectory import ideal_passes
 from metrology.measure import measure_gear
 from virtual_machine.job import load_job
 from virtual_machine.processes.skiving.cosim import cosimulate

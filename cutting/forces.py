@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from cutting.materials import Material, rake_factor
-from cutting.sweep import PoseFunction, place, place_few
+from cutting.skiving.sweep import PoseFunction, place, place_few
 
 
 @dataclass

@@ -6,7 +6,7 @@ error. The file is therefore the solid simplified by manifold (edge collapses as
 half the given tolerance, see SIMPLIFY_SHARE: the file's bound is the sweep error plus that tolerance), then written
 in float32, as STL is. Float32 can fold two vertices of a sub-nanometre edge onto one point (where the stock's cells
 were united); such edges are collapsed in the file so that it reads back watertight. The micrometre truth is not the
-file: it is the exact swept surface (``cutting/exact_sweep.py``).
+file: it is the exact swept surface (``cutting/skiving/exact_sweep.py``).
 """
 
 from __future__ import annotations

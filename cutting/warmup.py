@@ -1,6 +1,6 @@
 """Compile every numba kernel a run needs, once, by cutting and probing a tiny gear.
 
-The kernels (cutting/exact_kernels.py, exact_solve.py, dexel_kernels.py) are cached beside their modules
+The kernels (cutting/skiving/exact_kernels.py, exact_solve.py, dexel_kernels.py) are cached beside their modules
 (``cache=True``): the editable install runs this module (build_backend/skive_build.py), so the first ``skive run``
 after the install loads them instead of compiling them (about a minute on two cores). Run it by hand after changing a
 kernel: ``python -m cutting.warmup``.
@@ -13,16 +13,16 @@ import time
 
 import numpy as np
 
-from cutting.dexel_cut import cut_dexel
-from cutting.dexel_lines import DexelSpacing
-from cutting.edge import make_edge
-from cutting.exact_sweep import SweptVolumes
 from cutting.forces import EngagementLoad, _engagement_sums, repeated_means
 from cutting.gear import Gear
-from cutting.sampled_motion import ideal_samples
-from cutting.skiving import SkivingSetup
-from cutting.sweep import place_few
-from cutting.trajectory import ideal_passes
+from cutting.skiving.dexel_cut import cut_dexel
+from cutting.skiving.dexel_lines import DexelSpacing
+from cutting.skiving.edge import make_edge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.sampled_motion import ideal_samples
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.sweep import place_few
+from cutting.skiving.trajectory import ideal_passes
 
 DEG = math.pi / 180
 

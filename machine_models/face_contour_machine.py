@@ -3,12 +3,12 @@ generated with MjSpec.
 
 Machine frame: z up along the work axis, the slotted face at z = 0, the point M (radius L, where the cutting speed V
 is radial) on machine +x. The tool head turns in a vertical plane above M; its plane is turned by the setting angle
-lambda from the radial line OM (cutting/face_contour.py: the tool plane's horizontal direction u = (cos -lambda,
+lambda from the radial line OM (cutting/face_contour/slots.py: the tool plane's horizontal direction u = (cos -lambda,
 sin -lambda), the tool axis n = (sin lambda, cos lambda)). Bodies and joints:
 
 - ``work_spindle``  hinge ``A`` about -z: table, fixture and blank; A is the seed's workpiece angle a (the workpiece
   frame turns by -a in the machine, so the head advances by +a in it, as in eq. 5). Site ``blank_frame`` = the
-  workpiece frame of cutting/face_contour.py (axis z, slotted face at z = 0, slot k's centre line at 2 pi k / m);
+  workpiece frame of cutting/face_contour/slots.py (axis z, slotted face at z = 0, slot k's centre line at 2 pi k / m);
 - ``infeed_slide``  slide ``Z`` (vertical, on the column): Z = - the seed's feed term (S per tool revolution down to
   the depth); Z = 0 puts the tip of an element at psi = 0 on the face (with the eccentric at its start);
 - ``swivel``        welded to the slide, turned by -lambda about z (the fixed swivel of the setting angle);
@@ -45,7 +45,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from cutting.face_contour import FaceCoupling, setting_angle
+from cutting.face_contour.slots import FaceCoupling, setting_angle
 from machine_models.drives import couple, couple_linear, stage_frequency
 from machine_models.parameters import ARCSEC, DriveStage, common_problems, override, rigid
 from machine_models.parts import (

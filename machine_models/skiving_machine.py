@@ -1,6 +1,6 @@
 """The skiving machine as an MJCF model, generated with MjSpec from the job and :class:`SkivingMachineParams`.
 
-Machine frame = the work frame at rest (cutting/skiving.py): z up along the work axis, the common
+Machine frame = the work frame at rest (cutting/skiving/setup.py): z up along the work axis, the common
 perpendicular of the axes on +x. Bodies and joints (seed 000 notation):
 
 - ``work_spindle``  hinge ``B2`` about z: table, fixture and blank (B2 + B4 of the seed are one joint);
@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from cutting.skiving import SkivingSetup
+from cutting.skiving.setup import SkivingSetup
 from machine_models.drives import couple
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.parts import (
@@ -60,7 +60,7 @@ class MachineLayout:
 
 
 def layout_of(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
-    from cutting.trajectory import ideal_passes
+    from cutting.skiving.trajectory import ideal_passes
 
     first = ideal_passes(setup)[0]
     return MachineLayout(

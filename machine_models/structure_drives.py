@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import mujoco
 
-from cutting.skiving import SkivingSetup
+from cutting.skiving.setup import SkivingSetup
 from machine_models.drives import couple, couple_linear
 from machine_models.parameters import SkivingMachineParams
 from machine_models.parts import GREY, inertial, motor, visual

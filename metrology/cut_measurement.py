@@ -1,6 +1,7 @@
 """Measuring a cut: the exact swept surface for micrometre truth, the mesh beside it, and how far they differ.
 
-The gear of a cut is what its passages removed. Its exact swept surface (:class:`cutting.exact_sweep.SweptVolumes`,
+The gear of a cut is what its passages removed. Its exact swept surface
+(:class:`cutting.skiving.exact_sweep.SweptVolumes`,
 no chord error) is the workpiece measured first; the manifold solid the booleans left (gear.stl, cut to an
 engineering tolerance) is measured the same way, and the two are compared point by point along the same traces:
 they may differ by the mesh's sweep error, which the cut reports as a bound.
@@ -14,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from cutting.edge import CuttingEdge
 from cutting.errors import InputError
-from cutting.exact_sweep import SweptVolumes
 from cutting.gear import Gear
-from cutting.trajectory import PassMotion
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.trajectory import PassMotion
 from metrology.measure import MeasureOptions, measure_gear
 from metrology.sections import MeshData
 from metrology.workpiece import UnmeasurableError

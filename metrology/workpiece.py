@@ -3,7 +3,7 @@
 A workpiece answers two questions: along a line, where does material begin (:meth:`Workpiece.probe`), and is a
 point material (:meth:`Workpiece.inside`). Two workpieces answer them: a mesh
 (:class:`metrology.mesh_probe.MeshWorkpiece`, any file ``skive measure`` is given) and the exact swept volumes of
-a cut (:class:`cutting.exact_sweep.SweptVolumes`). The measurement uses only these answers and the nominal gear,
+a cut (:class:`cutting.skiving.exact_sweep.SweptVolumes`). The measurement uses only these answers and the nominal gear,
 so one evaluation serves both.
 
 Probing a flank: the probe is placed on the nominal flank (turned by the datum) and moved along the flank normal;

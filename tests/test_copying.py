@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from checks import finite_max
 
-from cutting.copying_path import corrections, plan_copying
 from cutting.errors import InputError
 from cutting.flank import flank_normals, flank_points
-from cutting.form_mill import BezierChain, DiscMill, designed_section, section_rolls, tip_index
-from cutting.form_removal import cut_gear
-from cutting.form_sweep import MilledGear
+from cutting.form_milling.copying_path import corrections, plan_copying
+from cutting.form_milling.mill import BezierChain, DiscMill, designed_section, section_rolls, tip_index
+from cutting.form_milling.removal import cut_gear
+from cutting.form_milling.sweep import MilledGear
 from cutting.gear import Gear, form_roll_length
 from cutting.modification import FlankDesign, Modification, roll
 from metrology.measure import MeasureOptions, measure_gear
@@ -39,7 +39,7 @@ def nominal_mill(gear: Gear, clearance: float = 0.2, radius: float = 25.0) -> Di
 
 def straight_passes(gear: Gear, mill: DiscMill, shift: tuple[float, float] = (0.0, 0.0), spaces=(19, 0, 1)):
     """Straight passes along z of both flanks of ``spaces``, the path point moved by ``shift`` (x, y) [mm]."""
-    from cutting.copying_path import poses_on_path
+    from cutting.form_milling.copying_path import poses_on_path
 
     z = np.arange(-20.0, 20.001, 0.05)
     out = []
@@ -103,7 +103,7 @@ def test_a_moved_path_moves_the_flank_by_the_move_along_its_normal():
     base = MilledGear(GEAR, mill, straight_passes(GEAR, mill))
     moved = MilledGear(GEAR, mill, straight_passes(GEAR, mill, (dx, dy)))
     L = np.linspace(form_roll_length(GEAR) + 0.2, roll(GEAR, GEAR.tip_diameter_value) - 0.2, 9)
-    from cutting.form_mill import section_normals
+    from cutting.form_milling.mill import section_normals
 
     for side, tooth in (("left", 0), ("right", 1)):
         p = flank_points(GEAR, side, L / GEAR.base_radius, 0.0, tooth)
@@ -252,7 +252,7 @@ def test_bad_form_jobs_are_refused_with_the_key_and_the_fix(kwargs, key, words):
 
 # ---- the mill's cutting force -----------------------------------------------------------------------------------
 def test_the_force_model_removes_each_pass_area_over_the_face_and_follows_kienzle(planned):
-    from cutting.form_forces import RADIAL_RATIO, MillLoad
+    from cutting.form_milling.forces import RADIAL_RATIO, MillLoad
     from cutting.materials import material
 
     plan, _, _ = planned

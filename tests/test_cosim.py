@@ -75,8 +75,8 @@ def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
 def test_the_dexel_cosimulation_equals_a_cut_afterwards_from_its_recorded_motion(runs) -> None:
     """The removal that kept up with the machine (passage by passage, each on the samples around its window) and
     the dexel cut of the motion the machine recorded, made afterwards pass by pass: the same chips, the same gear."""
-    from cutting.dexel_cut import cut_dexel
-    from cutting.sampled_motion import sampled_passes
+    from cutting.skiving.dexel_cut import cut_dexel
+    from cutting.skiving.sampled_motion import sampled_passes
     from virtual_machine.job import dexel_spacing
 
     loaded, _ = runs

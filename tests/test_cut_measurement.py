@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 from checks import JOBS, finite_max
 
-from cutting.edge import make_edge
-from cutting.exact_sweep import SweptVolumes
 from cutting.flank import SIDES, flank_normals, flank_points
 from cutting.gear import Gear
-from cutting.ideal_cut import cut_ideal, to_trimesh
-from cutting.skiving import SkivingSetup
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.ideal_cut import cut_ideal, to_trimesh
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 from metrology.cut_measurement import measure_cut
 from metrology.datum import check_mesh, establish_datum, measuring_radius
 from metrology.flank_lines import evaluate

@@ -11,14 +11,14 @@ import numpy as np
 import pytest
 from small_jobs import small_job
 
-from cutting.dexel import DexelWorkpiece
-from cutting.dexel_lines import GROWTH, DexelLines, DexelSpacing, GridLines, graded
-from cutting.edge import CuttingEdge
-from cutting.exact_sweep import PassTable
 from cutting.gear import Gear
-from cutting.sampled_motion import SampledMotion
-from cutting.skiving import SkivingSetup
-from cutting.trajectory import ideal_passes
+from cutting.skiving.dexel import DexelWorkpiece
+from cutting.skiving.dexel_lines import GROWTH, DexelLines, DexelSpacing, GridLines, graded
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_sweep import PassTable
+from cutting.skiving.sampled_motion import SampledMotion
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 
 DEG = math.pi / 180
 EXACT = 5e-5  # 0.05 um: the issue's bound on an exact crossing (measured ~1e-9 mm)
@@ -214,7 +214,7 @@ def two_pass_job():
 def both_cuts():
     """The job cut with the ideal motion by the dexel workpiece (its solid stated within 10 um, the default
     process.sweep_error) and by the manifold reference (5 um tubes)."""
-    from cutting.ideal_cut import cut_ideal
+    from cutting.skiving.ideal_cut import cut_ideal
 
     job = two_pass_job()
     st = job.skiving

@@ -6,9 +6,17 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from cutting.edge import _envelope_bound, _mate, _on_flank, conjugate_edge, involute_edge, make_edge, tooth_intrusion
 from cutting.gear import Gear
-from cutting.skiving import SkivingSetup
+from cutting.skiving.edge import (
+    _envelope_bound,
+    _mate,
+    _on_flank,
+    conjugate_edge,
+    involute_edge,
+    make_edge,
+    tooth_intrusion,
+)
+from cutting.skiving.setup import SkivingSetup
 
 DEG = math.pi / 180
 PHI = np.linspace(-0.7, 0.7, 4001)  # cutter angles through one tooth passage

@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from cutting.edge import CuttingEdge, make_edge
-from cutting.exact_sweep import PassTable, SweptVolumes, surface_from_intervals
 from cutting.flank import flank_normals, flank_points
 from cutting.gear import Gear
-from cutting.sampled_motion import ideal_samples
-from cutting.skiving import SkivingSetup
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import CuttingEdge, make_edge
+from cutting.skiving.exact_sweep import PassTable, SweptVolumes, surface_from_intervals
+from cutting.skiving.sampled_motion import ideal_samples
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 from metrology.measure import MeasureOptions, profile_range
 
 DEG = math.pi / 180
@@ -234,8 +234,8 @@ def test_the_compiled_estimate_stays_within_its_bound_of_the_exact_distance():
     (quadratic in time) and the outline's raster. Against the exact crossing (the motion solved to 1e-10 mm) and
     the exact distance to the polygon, over points near the edge of many passages: within ESTIMATE_ERROR
     (1.67 um); measured 0.06 um (the exact node distances make the bilinear lookup far better than its bound)."""
-    from cutting.exact_kernels import _sdf, in_plane
-    from cutting.exact_sweep import ESTIMATE_ERROR, RASTER_BAND, RASTER_CELL, RASTER_PAD
+    from cutting.skiving.exact_kernels import _sdf, in_plane
+    from cutting.skiving.exact_sweep import ESTIMATE_ERROR, RASTER_BAND, RASTER_CELL, RASTER_PAD
 
     sv = finishing(0.2)
     tb, ct = sv.tables[0], sv._compiled
@@ -311,7 +311,7 @@ def _flank_lines(g: Gear) -> tuple[np.ndarray, np.ndarray]:
 def test_the_compiled_pose_is_the_motions_pose(kind):
     """What the compiled item solve evaluates: the tooth frame of a passage at any time (for a sampled motion
     between samples and beyond them, where it clips) equals PassTable.exact_pose to rounding."""
-    from cutting.exact_solve import _tooth_pose
+    from cutting.skiving.exact_solve import _tooth_pose
 
     sv = finishing(0.2) if kind == "ideal" else sampled(0.2)
     tb, solver = sv.tables[0], sv._solver
@@ -356,7 +356,7 @@ def test_the_compiled_item_solve_gives_the_python_intervals(kind, monkeypatch):
 def test_a_motion_without_a_compiled_pose_takes_the_numpy_item_solve():
     """The same passages with the pose behind a Python object: no compiled pose, so the numpy path; it gives the
     compiled path's surface."""
-    from cutting.exact_solve import IDEAL, SAMPLED, compiled_pose
+    from cutting.skiving.exact_solve import IDEAL, SAMPLED, compiled_pose
 
     sv = finishing(0.2)
     tb = sv.tables[0]
@@ -376,8 +376,8 @@ def test_the_bucketed_outline_lookup_is_numpys_interp():
     """The compiled outline margin finds a chain's segment from a bucket of x instead of bisecting: on the default
     job's edge, at 20k x across and beyond the chains (ends, vertices, repeated x), it gives np.interp's value bit
     for bit, so the margin is Outline.margin's."""
-    from cutting.exact_solve import _interp_from, compiled_outline, outline_margin
-    from cutting.exact_sweep import Outline
+    from cutting.skiving.exact_solve import _interp_from, compiled_outline, outline_margin
+    from cutting.skiving.exact_sweep import Outline
     from virtual_machine.job import default_job_path, load_job
 
     job = load_job(default_job_path())

@@ -10,7 +10,7 @@ import pytest
 from checks import finite_max
 from scipy.optimize import brentq
 
-from cutting.face_contour import (
+from cutting.face_contour.slots import (
     FLAT_TOLERANCE,
     SWEEP_TOLERANCE,
     FaceCoupling,

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from checks import finite_max
 
-from cutting.face_contour import (
+from cutting.face_contour.slots import (
     FLAT_TOLERANCE,
     SWEEP_TOLERANCE,
     FaceCoupling,

@@ -10,7 +10,7 @@ import pytest
 import trimesh
 
 from cutting.gear_file import write_gear_stl
-from cutting.ideal_cut import to_trimesh
+from cutting.skiving.ideal_cut import to_trimesh
 
 
 def cube_with_fold(offset: float = 1e-8) -> mf.Manifold:

@@ -5,12 +5,12 @@ from dataclasses import replace
 
 import pytest
 
-from cutting.edge import involute_edge
 from cutting.errors import InputError
 from cutting.gear import Gear
-from cutting.holder import check_holder_side
-from cutting.skiving import SkivingSetup
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import involute_edge
+from cutting.skiving.holder import check_holder_side
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 
 DEG = math.pi / 180
 

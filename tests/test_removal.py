@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 import trimesh
 
-from cutting.edge import involute_edge
 from cutting.errors import InputError
 from cutting.gear import Gear
-from cutting.removal import CutResult, Stock, cut
-from cutting.skiving import SkivingSetup
-from cutting.solids import blank
-from cutting.sweep import sample_window, tube
-from cutting.trajectory import check_poses, ideal_passes
+from cutting.skiving.edge import involute_edge
+from cutting.skiving.removal import CutResult, Stock, cut
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.solids import blank
+from cutting.skiving.sweep import sample_window, tube
+from cutting.skiving.trajectory import check_poses, ideal_passes
 from metrology.measure import measure
 from metrology.sections import MeshData
 
@@ -109,7 +109,7 @@ def test_ideal_cut_of_a_small_gear():
 @pytest.mark.slow
 def test_parallel_workers_cut_the_same_gear():
     """Two worker processes (each owning half of the tooth spaces) give the same gear and chips as one."""
-    from cutting.engine import cut_passes
+    from cutting.skiving.engine import cut_passes
 
     st = small_setup()
     edge = involute_edge(st, 30)
@@ -137,7 +137,7 @@ def _section(solid, z: float) -> tuple[float, float]:
 def test_slab_planes_leave_no_trace_in_a_cut_face():
     """A face three slabs wide, cut by two workers: the section exactly on a slab plane is the section a
     hair beside it (same perimeter, nothing inside the root circle)."""
-    from cutting.engine import cut_passes
+    from cutting.skiving.engine import cut_passes
 
     st = small_setup()
     g = Gear(16, 1.0, 20 * DEG, 0.0, 6.0)
@@ -156,7 +156,7 @@ def test_union_puts_vertices_near_a_slab_plane_back_on_it():
     unite into one solid without a sliver void."""
     import manifold3d as mf
 
-    from cutting.removal import union_cells
+    from cutting.skiving.removal import union_cells
 
     lower = mf.Manifold.cube((10.0, 10.0, 1.0)).translate((0.0, 0.0, -1.0))
     upper = mf.Manifold.cube((10.0, 10.0, 1.0)).translate((0.0, 0.0, 0.0))
@@ -186,11 +186,12 @@ def _mesh64(solid) -> dict:
 def test_union_evaluates_each_sector_column_before_joining_them() -> None:
     """The cells' union is built in two evaluated stages (the one-batch union of every cell left tunnels on a slab
     plane of a 2 um cut of a small gear: genus 2); checked here on a blank that was not cut: the stages give the
-    blank itself (genus 0, its volume), and a cut gear's genus is checked after every cut (cutting.ideal_cut)."""
+    blank itself (genus 0, its volume), and a cut gear's genus is checked after every cut
+    (cutting.skiving.ideal_cut)."""
     import math as _m
 
     from cutting.gear import Gear
-    from cutting.removal import Stock, expected_genus, union_cells
+    from cutting.skiving.removal import Stock, expected_genus, union_cells
 
     g = Gear(20, 1.0, _m.radians(20), 0.0, 4.0)
     stock = Stock(g, slab=1.0)

@@ -11,10 +11,10 @@ from checks import JOBS
 from click.testing import CliRunner
 from small_jobs import small_job
 
-from cutting.edge import make_edge
-from cutting.removal import passage_range
-from cutting.sampled_motion import SampledMotion, ideal_samples
-from cutting.trajectory import ideal_passes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.removal import passage_range
+from cutting.skiving.sampled_motion import SampledMotion, ideal_samples
+from cutting.skiving.trajectory import ideal_passes
 from virtual_machine.cli import main
 from virtual_machine.job import load_job
 

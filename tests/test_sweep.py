@@ -6,12 +6,12 @@ import manifold3d as mf
 import numpy as np
 import pytest
 
-from cutting.edge import involute_edge
 from cutting.gear import Gear
-from cutting.removal import in_blank_envelope
-from cutting.skiving import SkivingSetup
-from cutting.solids import blank
-from cutting.sweep import ZippedSweep, outline_points, place, sample_blocks, sample_window, split_sides, tube
+from cutting.skiving.edge import involute_edge
+from cutting.skiving.removal import in_blank_envelope
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.solids import blank
+from cutting.skiving.sweep import ZippedSweep, outline_points, place, sample_blocks, sample_window, split_sides, tube
 
 DEG = math.pi / 180
 

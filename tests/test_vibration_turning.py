@@ -15,7 +15,7 @@ import manifold3d as mf
 import numpy as np
 import pytest
 
-from cutting.vibration_turning import (
+from cutting.turning.vibration import (
     FeedVibration,
     TurningSetup,
     crest_height,

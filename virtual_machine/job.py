@@ -18,7 +18,7 @@ from typing import Any
 from cutting.errors import InputError, Problem
 from cutting.gear import Gear, check_gear
 from cutting.modification import FlankDesign, Modification, design_problems
-from cutting.skiving import SkivingSetup, check_setup
+from cutting.skiving.setup import SkivingSetup, check_setup
 from machine_models.sizes import SIZE_NAMES
 
 REQUIRED = object()
@@ -528,8 +528,8 @@ class Job:
     modification: Modification | None = None  # the designed flank topography ([modification])
     mill: dict[str, Any] | None = None  # the profiled disc mill ([mill]) of a form-milling job
     turning: dict[str, Any] | None = None  # [turning] of a turning job (its [thread] the lathe's feed as a lead)
-    vibration: Any = None  # the feed vibration (cutting.vibration_turning.FeedVibration) or None
-    coupling: Any = None  # the face coupling (cutting.face_contour.FaceCoupling) of a face-contour job
+    vibration: Any = None  # the feed vibration (cutting.turning.vibration.FeedVibration) or None
+    coupling: Any = None  # the face coupling (cutting.face_contour.slots.FaceCoupling) of a face-contour job
 
     @property
     def skiving(self) -> SkivingSetup:
@@ -684,7 +684,7 @@ def _coupling(c: dict[str, Any]):
     amplitude the straight-slot one (both from the setting sheet)."""
     import dataclasses
 
-    from cutting.face_contour import FaceCoupling, flat_bottom_eccentricity, straight_slot_amplitude
+    from cutting.face_contour.slots import FaceCoupling, flat_bottom_eccentricity, straight_slot_amplitude
 
     coupling = FaceCoupling(
         m=c["slots"],
@@ -735,7 +735,7 @@ def _parse_turning_job(data: dict[str, Any], source: str) -> Job:
     t = parsed["turning"]
     vibration = None
     if not problems:
-        from cutting.vibration_turning import FeedVibration, TurningSetup
+        from cutting.turning.vibration import FeedVibration, TurningSetup
 
         try:
             if vib_values is not None:
@@ -797,7 +797,7 @@ def _parse_form_job(data: dict[str, Any], source: str) -> Job:
     if set(GEAR_KEYS) <= set(g):
         gear = _gear_from(g)
         problems += check_gear(gear, "gear")
-        from cutting.form_mill import check_copying_gear
+        from cutting.form_milling.mill import check_copying_gear
 
         problems += [
             Problem("gear", "internal" if gear.internal else f"helix_angle = {g['helix_angle']}", why, "")
@@ -897,8 +897,9 @@ def load_gear_section(path: str | Path) -> tuple[Gear, dict[str, Any]]:
 
 
 def dexel_spacing(job: Job):
-    """The dexel lines of a skiving job: the process's spacings, else the gear's defaults (cutting.dexel_lines)."""
-    from cutting.dexel_lines import DexelSpacing
+    """The dexel lines of a skiving job: the process's spacings, else the gear's defaults
+    (cutting.skiving.dexel_lines)."""
+    from cutting.skiving.dexel_lines import DexelSpacing
 
     p = job.process
     return DexelSpacing.for_gear(job.gear, p["axial_feed"], p.get("dexel_profile_spacing"), p.get("dexel_face_spacing"))

@@ -1,7 +1,7 @@
 """Files of a simulated run: the motion record, the pose trajectory (the cutting engine's input) and a summary.
 
 ``trajectory.npz`` holds, per feed stroke i, ``pass{i}_t`` [s from the stroke's start], ``pass{i}_rot``
-(n, 3, 3) and ``pass{i}_trans`` (n, 3) [mm]: the cutter frame in the blank frame (cutting/skiving.py
+(n, 3, 3) and ``pass{i}_trans`` (n, 3) [mm]: the cutter frame in the blank frame (cutting/skiving/setup.py
 conventions), plus the axis values that produced them (``pass{i}_cutter_angle`` [rad], ``pass{i}_carriage``,
 ``pass{i}_centre_distance`` [mm]). ``motion.npz`` holds the per-tick record (see :class:`MotionRecord`).
 """

@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from cutting.errors import InputError, Problem
-from cutting.path_correction import PathCorrection
+from cutting.skiving.path_correction import PathCorrection
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import size_for, size_params
 from machine_models.skiving_machine import MM, build_spec
@@ -458,7 +458,7 @@ def relative_pose(setup, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     The bodies between the two frames are rigid, so this is the forward kinematics of the model
     (blank_frame = Rz(B2 + work_phase); cutter_frame at (X, 0, P3), Rx(tilt) Rz(B1 + cutter_phase));
     tests check it against MuJoCo's own site poses."""
-    from cutting.skiving import rot_x, rot_z
+    from cutting.skiving.setup import rot_x, rot_z
 
     back = rot_z(-(q[:, 1] + setup.work_phase))
     rot = back @ rot_x(setup.tilt) @ rot_z(q[:, 0] + setup.cutter_phase)

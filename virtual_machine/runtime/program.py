@@ -11,8 +11,8 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from cutting.path_correction import PathCorrection
-from cutting.skiving import SkivingSetup
+from cutting.skiving.path_correction import PathCorrection
+from cutting.skiving.setup import SkivingSetup
 from virtual_machine.structures.mechatronic import CncState
 
 
@@ -53,7 +53,7 @@ def runup_time(setup: SkivingSetup, settings: ProgramSettings) -> float:
 def program_duration(setup: SkivingSetup, settings: ProgramSettings | None = None) -> float:
     """Machine time of the whole program [s] (the return of S3 at feed rate counted as a rapid: an estimate for
     progress bars)."""
-    from cutting.trajectory import ideal_passes
+    from cutting.skiving.trajectory import ideal_passes
 
     settings = settings or ProgramSettings()
     passes = ideal_passes(setup)
@@ -79,7 +79,7 @@ def program(
     ``correction`` (a flank modification's path, seed 003): during the finishing stroke the CNC sets the radial
     slide to the pass's centre distance plus da(s) and asks summator 9 for the extra work turn dphi2(s), in
     ``work_pulses_per_rad`` command pulses per radian, at the carriage position s it has commanded."""
-    from cutting.trajectory import ideal_passes
+    from cutting.skiving.trajectory import ideal_passes
 
     settings = settings or ProgramSettings()
     passes = ideal_passes(setup)

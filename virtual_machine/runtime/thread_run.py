@@ -80,7 +80,7 @@ def build_thread_structure(
     job: Job, params: ThreadLatheParams, angle0: tuple[float, float], tuning=None, vibration=None
 ):
     """The controllers of the job's form with its setting sheet: ThreadMechanical / MasterSlave / EqualCoordinates.
-    ``vibration`` (:class:`cutting.vibration_turning.FeedVibration`): the feed vibration of vibration turning,
+    ``vibration`` (:class:`cutting.turning.vibration.FeedVibration`): the feed vibration of vibration turning,
     made by the slave's command (master-slave only: the feed axis follows the spindle's encoder)."""
     m = job.machine
     lay = thread_layout(job, params)

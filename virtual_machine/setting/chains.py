@@ -1,6 +1,6 @@
 """The realised ratios of a structure's chains, from its setting sheet (machine_models.structure_drives).
 
-Signs follow the ideal kinematics of cutting/skiving.py: the tool turns positive, the work by the signed speed
+Signs follow the ideal kinematics of cutting/skiving/setup.py: the tool turns positive, the work by the signed speed
 ratio, B4 by the signed differential rotation per mm, the carriage in the feed direction."""
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ kx = P / (i0 P_TV); equal coordinates kv and kx = c kv / P with c = i01 P_TV.
 T is the lead of the gear helix, pi mn z2 / sin(beta2). The sign conventions of skive: the additional
 rotation B4 and the "1 + s/T" of S3 carry the signs of the helix hand, the feed direction and the work's
 direction of rotation (s/T -> dir2 s_z / p_z with s_z = -s for a downward feed and dir2 = -1 for an external
-gear, which turns against the cutter), see :func:`feed_over_lead` and :mod:`cutting.skiving`.
+gear, which turns against the cutter), see :func:`feed_over_lead` and :mod:`cutting.skiving.setup`.
 
 A divider (frequency divider = pulse counter + coefficient block) emits one pulse per k input pulses:
 f_out = f_ref / k. Seed 000's ky for S4 is printed as ks t_TV / (c2 T); deriving it from the same
@@ -208,7 +208,7 @@ def feed_over_lead(job: Job) -> float:
     """dir2 s_z / p_z: the carriage travel per work revolution over the signed lead, times the work's direction of
     rotation (+1 with the cutter, -1 against it); 0 for spur.
 
-    The work turns phi2 = r phi0 - 2 pi z / p_z (cutting.skiving), with z = s_z |phi2| / 2 pi, so per work turn
+    The work turns phi2 = r phi0 - 2 pi z / p_z (cutting.skiving.setup), with z = s_z |phi2| / 2 pi, so per work turn
     the cutter turns (1 + dir2 s_z / p_z) / |r|: B4 slows the work (per cutter turn) when this is positive. An
     external gear turns against the cutter (dir2 = -1), an internal one with it: the sign is the gear's as much as
     the feed's.

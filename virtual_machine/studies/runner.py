@@ -203,7 +203,7 @@ def run_study(
 
 
 def default_study_workers() -> int:
-    from cutting.ideal_cut import default_workers
+    from cutting.skiving.ideal_cut import default_workers
 
     return default_workers()
 

@@ -24,7 +24,7 @@ class FaceContour(Process):
     title = "face contour (continuous indexing)"
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from cutting.face_contour import setting_sheet
+        from cutting.face_contour.slots import setting_sheet
         from virtual_machine.processes.face_contour.stages import format_setting_sheet, tool_speed
 
         return Product("setup", finite_json(setting_sheet(job.coupling, tool_speed(job))), format_setting_sheet(job))

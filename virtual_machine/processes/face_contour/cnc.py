@@ -1,5 +1,5 @@
 """The CNC of the face-contour machine (seed 004, continuous indexing), its simulation loop, and the cut and the
-measurement of the motion the machine really makes, with the geometry of :mod:`cutting.face_contour`.
+measurement of the motion the machine really makes, with the geometry of :mod:`cutting.face_contour.slots`.
 
 **Electronic gearbox** (seed 000 fig. 4, equal-coordinates scheme, as seed 004 asks for continuous indexing): every
 axis counts the pulses of **reference generator 14** (p pulses per head revolution):
@@ -7,7 +7,7 @@ axis counts the pulses of **reference generator 14** (p pulses per head revoluti
 - tool head H: the generator's pulses themselves (divider 6 with kv = 1: the generator's frequency sets the head's
   speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p;
 - work spindle A: **frequency divider** 7 with k = m (the indexing ratio 1/m, eq. 11) -> **summator** 9, whose
-  second input carries the cyclic-ratio modulation - A (1 - cos q phi) of :func:`cutting.face_contour.
+  second input carries the cyclic-ratio modulation - A (1 - cos q phi) of :func:`cutting.face_contour.slots.
   workpiece_angle` (control "cyclic_ratio"; the CNC's function generator of the head's command angle) -> A;
 - eccentric E (control "eccentric"): a rate multiplier N (N pulses per generator pulse): the eccentric e geared N
   times to the head, E = N phi;
@@ -30,9 +30,9 @@ leave. It runs up, and records, at the servo rate, the element tips' poses in th
 ``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest.
 
 **Cut and measure** the recorded motion: :func:`cut_recorded` sweeps the elements' plates (the plate corners of
-:func:`cutting.face_contour.plate_corners`, here from the recorded frames) as hulls through the face blank;
+:func:`cutting.face_contour.slots.plate_corners`, here from the recorded frames) as hulls through the face blank;
 :func:`measure_recorded` measures the slot bottom and sides exactly on the recorded path (cubic splines of the
-poses in time, roots bisected), as :func:`cutting.face_contour.measure_exact` does on the ideal path.
+poses in time, roots bisected), as :func:`cutting.face_contour.slots.measure_exact` does on the ideal path.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ import mujoco
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from cutting.face_contour import (
+from cutting.face_contour.slots import (
     SWEEP_TOLERANCE,
     FaceCoupling,
     FaceCut,
@@ -135,7 +135,8 @@ class FacePassRecord:
     following_error: np.ndarray
 
     def deviation(self, c: FaceCoupling) -> np.ndarray:
-        """Recorded tip - the seed's tip (:func:`cutting.face_contour.element_path`, final pass) at the recorded head
+        """Recorded tip - the seed's tip (:func:`cutting.face_contour.slots.element_path`, final pass) at the
+        recorded head
         angle, per element (E, n, 3) [um]: what the machine's coupling of A, E and Z to the head does wrong."""
         ideal = np.stack([element_path(c, self.phi, j, final=True) for j in range(len(self.tip))])
         return (self.tip - ideal) * 1e3
@@ -575,7 +576,7 @@ class _PassPath:
 
 def recorded_corners(c: FaceCoupling, tip: np.ndarray, edge: np.ndarray, radial: np.ndarray) -> np.ndarray:
     """The element plate's four corners (..., 4, 3) from a recorded frame (tip [mm], edge = tool axis, radial =
-    head centre -> tip): those of :func:`cutting.face_contour.plate_corners`, whose frame comes from the ideal
+    head centre -> tip): those of :func:`cutting.face_contour.slots.plate_corners`, whose frame comes from the ideal
     motion instead (the tip edge's ends, then the top's)."""
     w_tip = 0.5 * c.edge_width
     w_top = w_tip + c.element_height * math.tan(c.flank_angle)
@@ -609,7 +610,7 @@ def recorded_hulls(c: FaceCoupling, p: FacePassRecord, tol: float = SWEEP_TOLERA
 
 def cut_recorded(record: FaceContourRecord, tol: float = SWEEP_TOLERANCE) -> FaceCut:
     """The face blank with the recorded passes' swept volumes removed (one batched boolean), as
-    :func:`cutting.face_contour.cut_slots` does with the ideal motion; ``tol`` [mm] the chord error."""
+    :func:`cutting.face_contour.slots.cut_slots` does with the ideal motion; ``tol`` [mm] the chord error."""
     t0 = time.perf_counter()
     c = record.coupling
     pieces, worst = [], 0.0
@@ -624,7 +625,7 @@ def cut_recorded(record: FaceContourRecord, tol: float = SWEEP_TOLERANCE) -> Fac
 def recorded_bottom(record: FaceContourRecord, radii: np.ndarray, slot: int = 0) -> np.ndarray:
     """Slot ``slot``'s bottom z [mm] at ``radii`` on its radial centre line, from the recorded pass: the lowest
     height of any element's tip edge passing over the point (the root of (P - tip) . u = 0, u the horizontal
-    normal of the edge, on the splined poses), as :func:`cutting.face_contour.exact_bottom` on the ideal path."""
+    normal of the edge, on the splined poses), as :func:`cutting.face_contour.slots.exact_bottom` on the ideal path."""
     c, p = record.coupling, record.pass_of(slot)
     turn = 2 * math.pi * slot / c.m
     r = np.asarray(radii, dtype=float)
@@ -651,7 +652,7 @@ def recorded_bottom(record: FaceContourRecord, radii: np.ndarray, slot: int = 0)
 
 def recorded_sides(record: FaceContourRecord, radii: np.ndarray, height: float, slot: int = 0) -> np.ndarray:
     """Polar angles [rad] of slot ``slot``'s sides at ``radii`` and z = ``height`` from the recorded pass, (2, n):
-    the - side and the + side (as :func:`cutting.face_contour.exact_sides`): the ends of the plates' sections at
+    the - side and the + side (as :func:`cutting.face_contour.slots.exact_sides`): the ends of the plates' sections at
     that height, their crossings of the circles r bisected on the splined poses."""
     c, p = record.coupling, record.pass_of(slot)
     r = np.asarray(radii, dtype=float)
@@ -690,8 +691,9 @@ def measure_recorded(
     height: float | None = None,
 ) -> list[SlotMeasure]:
     """The recorded slots measured exactly on the recorded motion (bottom, sides at ``height``, default half the
-    depth, and the centre at radius L), as :func:`cutting.face_contour.measure_exact` measures the ideal slots; the
-    spacing follows with :func:`cutting.face_contour.slot_spacing`."""
+    depth, and the centre at radius L), as :func:`cutting.face_contour.slots.measure_exact` measures the ideal
+    slots; the
+    spacing follows with :func:`cutting.face_contour.slots.slot_spacing`."""
     c = record.coupling
     radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
     height = -0.5 * c.depth if height is None else height

@@ -1,8 +1,9 @@
 """Face tooth contours by continuous indexing (seed 004) as `skive setup`, `skive cut` and `skive run` do them.
 
 - `skive setup`: the setting sheet (setting angle lambda, |V| along the slot, the flat-bottom e, the straight-slot
-  ratio amplitude) of :func:`cutting.face_contour.setting_sheet`.
-- `skive cut`: the ideal kinematics cut the first ``process.slots_cut`` slots (:func:`cutting.face_contour.cut_slots`).
+  ratio amplitude) of :func:`cutting.face_contour.slots.setting_sheet`.
+- `skive cut`: the ideal kinematics cut the first ``process.slots_cut`` slots
+(:func:`cutting.face_contour.slots.cut_slots`).
 - `skive run`: the face-contour machine (MuJoCo, its electronic gearbox) cuts them; the slots are cut from the
   motion it recorded (:mod:`virtual_machine.processes.face_contour.cnc`).
 
@@ -22,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from cutting.face_contour import (
+from cutting.face_contour.slots import (
     FaceCoupling,
     cut_slots,
     measure_exact,

@@ -1,13 +1,13 @@
 """Form milling by the copying method (seed 003) as `skive setup`, `skive cut` and `skive run` do it.
 
-- :func:`plan_job`: the seed's 15 steps for the job's design (:func:`cutting.copying_path.plan_copying`).
+- :func:`plan_job`: the seed's 15 steps for the job's design (:func:`cutting.form_milling.copying_path.plan_copying`).
 - :func:`cut_form_job` (`skive cut`): the ideal machine follows the planned path exactly.
 - :func:`run_form_job` (`skive run`): the simulated form-milling machine (MuJoCo, its CNC) follows it; the poses
   it really made are what cuts. The accuracy check is repeated on what the machine cut (space 0 and its
   neighbours) and the path corrected, up to ``process.machine_iterations`` runs; the last run is the gear.
 
 Either way the gear is the blank minus the mill's swept volumes: gear.stl from manifold3d, space after space,
-and the measurement on the exact swept surface of the same passes (:class:`cutting.form_sweep.MilledGear`),
+and the measurement on the exact swept surface of the same passes (:class:`cutting.form_milling.sweep.MilledGear`),
 with gear.stl measured beside it.
 """
 
@@ -24,7 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from cutting.copying_path import (
+from cutting.errors import InputError, Problem
+from cutting.flank import SIDES
+from cutting.form_milling.copying_path import (
     CHECK_TOLERANCE,
     CopyingPlan,
     FlankPath,
@@ -32,11 +34,9 @@ from cutting.copying_path import (
     correction_from_residual,
     plan_copying,
 )
-from cutting.errors import InputError, Problem
-from cutting.flank import SIDES
-from cutting.form_forces import RADIAL_RATIO, MillLoad
-from cutting.form_removal import cut_gear
-from cutting.form_sweep import MilledGear, MillPassPoses
+from cutting.form_milling.forces import RADIAL_RATIO, MillLoad
+from cutting.form_milling.removal import cut_gear
+from cutting.form_milling.sweep import MilledGear, MillPassPoses
 from cutting.gear import form_roll_length
 from cutting.gear_file import write_gear_stl
 from cutting.materials import material
@@ -231,7 +231,7 @@ def cnc_passes(plan: CopyingPlan) -> list:
 
 
 def mill_load(job: Job, plan: CopyingPlan) -> MillLoad:
-    """The steady cutting force of each pass (:mod:`cutting.form_forces`) for the job's material and process."""
+    """The steady cutting force of each pass (:mod:`cutting.form_milling.forces`) for the job's material and process."""
     p = job.process
     return MillLoad(job.gear, plan.mill, material(p["material"]), p["feed"], p["mill_speed"], plan.clearance)
 
@@ -247,7 +247,7 @@ def load_of(ml: MillLoad):
 
 
 def recorded_poses(plan: CopyingPlan, record) -> list[MillPassPoses]:
-    """The poses the machine made, per pass, in the gear frame of :mod:`cutting.form_mill` (the CNC's frame has
+    """The poses the machine made, per pass, in the gear frame of :mod:`cutting.form_milling.mill` (the CNC's frame has
     space k at 2 pi k / z, ours at 2 pi (k + 1/2) / z: turned by pi / z)."""
     turn = math.pi / plan.gear.teeth
     c, s = math.cos(turn), math.sin(turn)
@@ -315,7 +315,7 @@ def run_form_job(
         "material": ml.material.key,
         "kc11": ml.material.kc11,
         "mc": ml.material.mc,
-        "model": "steady force of each pass from the section it removes (cutting/form_forces.py)",
+        "model": "steady force of each pass from the section it removes (cutting/form_milling/forces.py)",
         "mean_chip_thickness_mm": ml.chip_thickness,
         "removed_area_mm2": ml.areas,
         "main_force_N": {s: ml.main_force(s) for s in SIDES},

@@ -4,7 +4,7 @@
 - simulate: the machine runs through the passes without cutting (:mod:`virtual_machine.runtime.machine_run`):
 trajectory.npz,
   motion.npz, simulation.json, sync_error.png;
-- cut: the ideal kinematics (or a simulated trajectory) cut the gear (:mod:`cutting.ideal_cut`), measured on its
+- cut: the ideal kinematics (or a simulated trajectory) cut the gear (:mod:`cutting.skiving.ideal_cut`), measured on its
   exact swept surface and on gear.stl;
 - run: the simulated machine cuts it under its cutting forces (:mod:`virtual_machine.processes.skiving.run`),
 measured, reported.
@@ -90,8 +90,8 @@ class Skiving(Process):
         import json
 
         from cutting.gear_file import write_gear_stl
-        from cutting.ideal_cut import cut_ideal, default_workers
-        from cutting.trajectory import ideal_passes
+        from cutting.skiving.ideal_cut import cut_ideal, default_workers
+        from cutting.skiving.trajectory import ideal_passes
         from metrology.charts import finite, write_charts
         from virtual_machine.job import dexel_spacing
         from virtual_machine.output.formatting import chip_record, format_gear_stl, format_measurement, format_removal
@@ -116,7 +116,7 @@ class Skiving(Process):
             plan = plan_path(job)
             motions = plan.motions
         if trajectory is not None:
-            from cutting.sampled_motion import sampled_passes
+            from cutting.skiving.sampled_motion import sampled_passes
             from virtual_machine.output.motion_io import load_trajectory
 
             motions = sampled_passes(st, load_trajectory(trajectory))

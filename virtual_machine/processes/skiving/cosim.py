@@ -1,7 +1,7 @@
 """Machine and cut together: the simulated machine moves, the removal cuts every tooth passage as soon as the
 machine has moved through it, and the chip's cutting force acts back on the machine.
 
-Granularity: one tooth engagement. A passage is cut (cutting.removal.PassCutter) once the recorded motion covers
+Granularity: one tooth engagement. A passage is cut (cutting.skiving.removal.PassCutter) once the recorded motion covers
 its engagement window; its chip gives the engagement's Kienzle load (cutting.forces). A passage's own force is
 needed while it is being cut, before its chip exists, so the force acting during an engagement is the load of
 the newest chip already cut, carried forward by whole cutter pitches (rotated with the work and moved with the
@@ -23,13 +23,13 @@ from dataclasses import dataclass, field
 import manifold3d as mf
 import numpy as np
 
-from cutting.dexel_cut import removal_summary
-from cutting.edge import CuttingEdge, make_edge
 from cutting.forces import EngagementLoad, engagement_load, repeated_means
-from cutting.holder import check_holder_side
 from cutting.materials import Material, material
-from cutting.path_correction import PathCorrection
-from cutting.removal import (
+from cutting.skiving.dexel_cut import removal_summary
+from cutting.skiving.edge import CuttingEdge, make_edge
+from cutting.skiving.holder import check_holder_side
+from cutting.skiving.path_correction import PathCorrection
+from cutting.skiving.removal import (
     Chip,
     CutResult,
     engagement_half_angle,
@@ -38,9 +38,9 @@ from cutting.removal import (
     passage_count,
     tooth_pose,
 )
-from cutting.sampled_motion import SampledMotion
-from cutting.sweep import outline_points, simplify_outline, split_sides
-from cutting.trajectory import ideal_passes
+from cutting.skiving.sampled_motion import SampledMotion
+from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
+from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.job import Job, dexel_spacing
 from virtual_machine.processes.skiving.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
@@ -105,7 +105,7 @@ class CoSimulation:
     edge: CuttingEdge | None = None  # the cutting edge the removal swept
     removal: str = "dexel"  # "dexel" or "manifold"
     lag: int = 0  # passages the machine ran ahead of the newest chip
-    dexel: dict | None = None  # the dexel removal's figures (cutting.dexel_cut.removal_summary)
+    dexel: dict | None = None  # the dexel removal's figures (cutting.skiving.dexel_cut.removal_summary)
 
     def chip_change(self) -> float:
         """Median relative change of the chip volume between consecutive engagements of a pass: the size of the

@@ -3,7 +3,7 @@
 Three backends with one interface. :class:`DexelRemoval` (the default) cuts the passages on the dexel workpiece,
 a batch at a time, in this process (the kernel runs on every core). The manifold removal (the reference) has
 :class:`InlineRemoval`, which cuts each passage at once in this process, and
-:class:`ParallelRemoval` gives each worker process a share of the tooth spaces (as cutting.engine does): every
+:class:`ParallelRemoval` gives each worker process a share of the tooth spaces (as cutting.skiving.engine does): every
 worker receives every passage and cuts the cells it owns, so a passage's chip is the sum of the workers' parts and
 is finished when the slowest worker has done it. Workers take the passages in order (one queue each), so chips
 finish in order. The result does not depend on the number of workers: each cell sees the same subtractions in
@@ -20,14 +20,14 @@ from collections.abc import Sequence
 import manifold3d as mf
 import numpy as np
 
-from cutting.dexel import DexelWorkpiece
-from cutting.dexel_cut import chip_of
-from cutting.dexel_lines import DexelSpacing, gear_phase
-from cutting.dexel_solid import dexel_solid
-from cutting.edge import CuttingEdge
-from cutting.exact_sweep import PassTable
 from cutting.gear import Gear
-from cutting.removal import (
+from cutting.skiving.dexel import DexelWorkpiece
+from cutting.skiving.dexel_cut import chip_of
+from cutting.skiving.dexel_lines import DexelSpacing, gear_phase
+from cutting.skiving.dexel_solid import dexel_solid
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_sweep import PassTable
+from cutting.skiving.removal import (
     Chip,
     CutResult,
     PassCutter,
@@ -37,9 +37,9 @@ from cutting.removal import (
     from_arrays,
     to_arrays,
 )
-from cutting.sampled_motion import SampledMotion
-from cutting.sweep import outline_points, simplify_outline
-from cutting.trajectory import PassMotion
+from cutting.skiving.sampled_motion import SampledMotion
+from cutting.skiving.sweep import outline_points, simplify_outline
+from cutting.skiving.trajectory import PassMotion
 
 #: the samples of one passage: t [s from the stroke's start], rot, trans [mm], cutter angle, carriage, centre distance
 Samples = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -78,7 +78,7 @@ class DexelRemoval:
         self._pending: list[tuple[int, int, Samples]] = []
         #: (pass, passage) -> the motion its chip was cut along, until the co-simulation takes it for the force
         self.motions: dict[tuple[int, int], SampledMotion] = {}
-        self.land_touched = 0  # land rays the cut touched (cutting.dexel_solid.tube_ends), as of the last solid
+        self.land_touched = 0  # land rays the cut touched (cutting.skiving.dexel_solid.tube_ends), as of the last solid
 
     def submit(self, index: int, m: int, samples: Samples) -> None:
         if self.workpiece is None:

@@ -66,12 +66,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.edge import make_edge
 from cutting.errors import InputError, Problem
 from cutting.gear import Gear
 from cutting.materials import material, rake_factor
-from cutting.skiving import SkivingSetup
-from cutting.sweep import outline_points, place, simplify_outline, split_sides
+from cutting.skiving.edge import make_edge
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.sweep import outline_points, place, simplify_outline, split_sides
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS

@@ -26,11 +26,11 @@ from typing import Any
 
 import numpy as np
 
-from cutting.edge import CuttingEdge, make_edge
-from cutting.exact_sweep import SweptVolumes
 from cutting.flank import SIDES
-from cutting.path_correction import PathCorrection, corrected_motion
-from cutting.trajectory import PassMotion, ideal_passes
+from cutting.skiving.edge import CuttingEdge, make_edge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.path_correction import PathCorrection, corrected_motion
+from cutting.skiving.trajectory import PassMotion, ideal_passes
 from metrology.measure import MeasureOptions, measure_gear
 from virtual_machine.job import Job
 
@@ -204,7 +204,7 @@ def iterate_on_machine(
     included): start from the ideal machine's path, cut with ``run(correction)`` (a co-simulation), measure the
     exact swept surface of the motion the machine made against the design, and correct with the same J (the
     machine's own corrections move the flanks as the ideal kinematics' do: measured within 2 %)."""
-    from cutting.sampled_motion import sampled_passes
+    from cutting.skiving.sampled_motion import sampled_passes
 
     opt = MeasureOptions.from_job(job.measurement, job.modification)
 

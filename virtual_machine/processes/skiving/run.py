@@ -19,13 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from cutting.edge import CuttingEdge
 from cutting.errors import InputError, Problem
 from cutting.gear_file import GearFile, write_gear_stl
-from cutting.ideal_cut import default_workers
-from cutting.removal import CutResult
-from cutting.sampled_motion import sampled_passes
-from cutting.trajectory import PassMotion
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.ideal_cut import default_workers
+from cutting.skiving.removal import CutResult
+from cutting.skiving.sampled_motion import sampled_passes
+from cutting.skiving.trajectory import PassMotion
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh

@@ -4,8 +4,8 @@ The lathe is set up as for a thread whose lead is the feed S0 (master-slave: the
 spindle's encoder 6 through counter 7 and block 8); the feed vibration is added to the slave's command at the
 spindle's angle (:class:`virtual_machine.structures.thread_group.ThreadMasterSlave`), so the carriage really has
 to make it: what the turned surface shows is the path the simulated carriage made (B1, P2 recorded), not the
-command. The surface, its crests and the chip breaks come from :mod:`cutting.vibration_turning` on that path
-(:class:`cutting.vibration_turning.SampledTurning`); `skive run` also cuts it with manifold3d and measures the
+command. The surface, its crests and the chip breaks come from :mod:`cutting.turning.vibration` on that path
+(:class:`cutting.turning.vibration.SampledTurning`); `skive run` also cuts it with manifold3d and measures the
 solid's crests beside the exact envelope.
 """
 
@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from cutting.vibration_turning import SampledTurning, TurningSetup, cut_workpiece, turned_surface_summary
+from cutting.turning.vibration import SampledTurning, TurningSetup, cut_workpiece, turned_surface_summary
 from machine_models.parameters import override
 from machine_models.thread_lathe import ThreadLatheParams
 from metrology.charts import finite

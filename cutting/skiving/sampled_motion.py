@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.skiving import SkivingSetup
-from cutting.trajectory import check_poses
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import check_poses
 
 
 def _log(r: np.ndarray) -> np.ndarray:
@@ -47,7 +47,7 @@ def _hermite(u: np.ndarray) -> tuple[np.ndarray, ...]:
 
 @dataclass
 class SampledMotion:
-    """One pass from samples; the same interface as :class:`cutting.trajectory.PassMotion` for the engine."""
+    """One pass from samples; the same interface as :class:`cutting.skiving.trajectory.PassMotion` for the engine."""
 
     setup: SkivingSetup
     index: int

@@ -4,7 +4,7 @@ The measurement probes some 10^5 lines, and each line passes near some 200 tooth
 pair the work is a few dozen flops in an irregular pattern (a bisection over the pose table, a quadratic
 interpolation, a raster lookup) that numpy can only vectorise through large temporaries. These kernels do it per
 line, in parallel over clusters of nearby lines, and settle every pair the pose table can settle with a proven
-bound; :mod:`cutting.exact_sweep` then solves only the rest exactly, with the motion itself.
+bound; :mod:`cutting.skiving.exact_sweep` then solves only the rest exactly, with the motion itself.
 
 A pair's state on a segment [d_c, d_c+1] of the line: NOT (the passage removes nothing of it), REMOVED (all of it),
 UNSURE. The estimate of the signed distance e of the line's in-plane point to the edge outline is within

@@ -22,7 +22,7 @@ from functools import cached_property
 
 import numpy as np
 
-from cutting.form_mill import DiscMill
+from cutting.form_milling.mill import DiscMill
 from cutting.gear import Gear
 from cutting.materials import Material
 

@@ -2,7 +2,7 @@
 
 A point Q of the work frame is removed by a tooth passage if, at the instant t* at which the moving rake plane
 passes through Q, Q lies inside the tooth's outline in that plane (while a tooth cuts, every point crosses its
-rake plane once, in one direction: :mod:`cutting.sweep`). The workpiece is the blank minus what every passage of
+rake plane once, in one direction: :mod:`cutting.skiving.sweep`). The workpiece is the blank minus what every passage of
 every pass sweeps. Along a probe line Q(d) = P + d u, one passage removes the part where the rake-plane image
 xy(d) of Q(d) lies inside the outline; the ends of that part are the roots in d of the outline's margin at
 xy(d), with t*(d) solved exactly for each d. Both roots are found to 1e-9 mm, so the surface has no chord error:
@@ -26,14 +26,14 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from cutting.edge import CuttingEdge
-from cutting.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
-from cutting.exact_solve import ItemSolver, compiled_outline, pose_table
 from cutting.gear import Gear
-from cutting.removal import passage_range
-from cutting.sweep import outline_points, simplify_outline
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
+from cutting.skiving.exact_solve import ItemSolver, compiled_outline, pose_table
+from cutting.skiving.removal import passage_range
+from cutting.skiving.sweep import outline_points, simplify_outline
+from cutting.skiving.trajectory import PassMotion
 from cutting.threads import run_chunks
-from cutting.trajectory import PassMotion
 
 #: a line's crossing is solved to this [mm] (and the rake-plane instant to 1e-10 mm of the plane's distance)
 CROSSING_TOLERANCE = 1e-9
@@ -64,7 +64,7 @@ SETTLE_MARGIN = 0.012
 
 
 class Outline:
-    """The edge polygon in its rake plane, as two chains monotone in x (the tooth of :mod:`cutting.edge` is
+    """The edge polygon in its rake plane, as two chains monotone in x (the tooth of :mod:`cutting.skiving.edge` is
     centred on +x: the right flank and half the tip below, the left flank and the other half above), so that
     the inside test and the margin are exact for the polygon and cost a binary search.
 
@@ -87,7 +87,7 @@ class Outline:
 
     @cached_property
     def compiled(self) -> tuple:
-        """What the compiled margin reads (:func:`cutting.exact_solve.compiled_outline`), made once: the dexel
+        """What the compiled margin reads (:func:`cutting.skiving.exact_solve.compiled_outline`), made once: the dexel
         removal builds a solver per passage."""
         return compiled_outline(self)
 
@@ -165,7 +165,7 @@ class PassTable:
 
     @classmethod
     def build(cls, motion: PassMotion, edge: CuttingEdge) -> PassTable:
-        """The passages of a skiving pass, windowed as :func:`cutting.removal.cut` windows them."""
+        """The passages of a skiving pass, windowed as :func:`cutting.skiving.removal.cut` windows them."""
         z0 = motion.setup.cutter.teeth
         half, m_first, m_last = passage_range(motion, edge)
         m = np.arange(m_first, m_last + 1)
@@ -582,7 +582,7 @@ class SweptVolumes:
         return tuple(np.concatenate([q[k] for q in parts]) for k in range(3))
 
     def _settle(self, p, u, ds, stride, air_cov, solid):
-        """:func:`cutting.exact_kernels.settle_lines` on these lines: (items, counts, covered, flag)."""
+        """:func:`cutting.skiving.exact_kernels.settle_lines` on these lines: (items, counts, covered, flag)."""
         n, ct = len(p), self._compiled
         items = np.zeros((n, ITEMS_PER_LINE, 4), np.int64)
         counts = np.zeros(n, np.int64)
@@ -604,7 +604,7 @@ class SweptVolumes:
 
     def _solve_items(self, p, u, ds, li, items) -> tuple[np.ndarray, ...]:
         """The exact removal of each (line, passage, segment) item: the margin at both ends, the root between;
-        compiled (:mod:`cutting.exact_solve`) when every motion has a compiled pose, else in numpy."""
+        compiled (:mod:`cutting.skiving.exact_solve`) when every motion has a compiled pose, else in numpy."""
         g, lo_j, hi_j, f = items.T
         ends = np.concatenate([f, f + 1])
         key_line, key_g, key_s = np.tile(li, 2), np.tile(g, 2), ends
@@ -737,7 +737,7 @@ def _clusters(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 class _CompiledTables:
     """Every pass table's poses as one array per quantity (passage g over all passes, in order), the balls on a
-    grid, and the outline's exact raster: what :func:`cutting.exact_kernels.settle_lines` reads."""
+    grid, and the outline's exact raster: what :func:`cutting.skiving.exact_kernels.settle_lines` reads."""
 
     def __init__(self, tables: Sequence[PassTable], centres: np.ndarray, radius: np.ndarray, outline: Outline):
         sizes = [len(tb.m) for tb in tables]

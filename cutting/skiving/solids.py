@@ -7,8 +7,8 @@ import math
 import manifold3d as mf
 import numpy as np
 
-from cutting.edge import CuttingEdge
 from cutting.gear import Gear
+from cutting.skiving.edge import CuttingEdge
 
 CIRCLE_SEGMENTS = 720
 

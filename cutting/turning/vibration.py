@@ -606,7 +606,7 @@ def cut_workpiece(
     The nose (:func:`nose_polygon`, up to 0.05 mm above r0) is placed at the path's samples
     (:func:`path_samples`, chord error within ``tolerance`` [mm]) in the axial half plane of each. ``method``:
     "hull", the convex hull of each two consecutive placements, a turn's hulls united (batch_boolean) and
-    subtracted one turn after another (as cutting/form_removal.py; ~0.35 s a turn here); "loft", each run of
+    subtracted one turn after another (as cutting/form_milling/removal.py; ~0.35 s a turn here); "loft", each run of
     placements (at most half a turn) as one solid, the nose CrossSection extruded and warped onto the helix
     (straight between placements like the hulls' edges, ~0.1 s a turn), all united and subtracted at once.
     """

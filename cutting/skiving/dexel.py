@@ -1,15 +1,18 @@
 """The dexel workpiece: the blank as material intervals along fixed lines, cut exactly, passage by passage.
 
-The lines are :class:`cutting.dexel_lines.DexelLines` (fans across every tooth space, slice by slice); each holds
-the material it still has as intervals. A tooth passage, given as a row of a :class:`cutting.exact_sweep.PassTable`
+The lines are :class:`cutting.skiving.dexel_lines.DexelLines` (fans across every tooth space, slice by slice); each
+holds
+the material it still has as intervals. A tooth passage, given as a row of a
+:class:`cutting.skiving.exact_sweep.PassTable`
 (its pose table over its window and the motion it came from, ideal or sampled), trims every line it can reach
-(:func:`cutting.dexel_kernels.cut_lines`): the crossing of a line with the passage's swept region is solved by the
+(:func:`cutting.skiving.dexel_kernels.cut_lines`): the crossing of a line with the passage's swept region is solved
+by the
 exact measurement's kernels, so there is no facet and no chord error along a line. Passages are taken in the order
 the machine made them, so each passage's chip is what it removed of the material the earlier ones left: volume,
 centroid, chip thickness along the edge and contact length (:class:`DexelChip`), what the force model takes.
 
 The solid (gear.stl, the recording's snapshots) is made from the lines' end points once per pass by
-:mod:`cutting.dexel_solid`; the measurement probes the exact swept surface itself.
+:mod:`cutting.skiving.dexel_solid`; the measurement probes the exact swept surface itself.
 """
 
 from __future__ import annotations
@@ -20,13 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.dexel_kernels import MAX_PIECES, OVERFLOW, STATS, cut_cells
-from cutting.dexel_lines import DexelLines, DexelSpacing, LineSet
-from cutting.edge import CuttingEdge
-from cutting.exact_kernels import pack_table
-from cutting.exact_solve import ItemSolver
-from cutting.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, Outline, PassTable
 from cutting.gear import Gear
+from cutting.skiving.dexel_kernels import MAX_PIECES, OVERFLOW, STATS, cut_cells
+from cutting.skiving.dexel_lines import DexelLines, DexelSpacing, LineSet
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_kernels import pack_table
+from cutting.skiving.exact_solve import ItemSolver
+from cutting.skiving.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, Outline, PassTable
 from cutting.threads import run_chunks
 
 #: the rasters of the outline's signed distance for the march [mm]: a fine one (cell, band of exact distances) near
@@ -58,7 +61,8 @@ class DexelChip:
 
 
 class DexelWorkpiece:
-    """A blank as dexel lines (a :class:`cutting.dexel_lines.LineSet`: a gear's fans, :meth:`for_gear`, or any other
+    """A blank as dexel lines (a :class:`cutting.skiving.dexel_lines.LineSet`: a gear's fans, :meth:`for_gear`, or
+    any other
        family), cut passage by passage by the motions of :class:`PassTable` rows.
     :meth:`cut` takes tables in time order and
        returns the chips; :attr:`removed` sums them; :meth:`surface` gives each line's material start (the cut
@@ -97,8 +101,9 @@ class DexelWorkpiece:
     def for_gear(
         cls, gear: Gear, edge: CuttingEdge, spacing: DexelSpacing, rim: float | None = None, phase: float = 0.0
     ):
-        """The blank of ``gear`` as fans across its tooth spaces (:class:`cutting.dexel_lines.DexelLines`), turned by
-        ``phase`` [rad] onto the spaces the motion cuts (:func:`cutting.dexel_lines.gear_phase`)."""
+        """The blank of ``gear`` as fans across its tooth spaces (:class:`cutting.skiving.dexel_lines.DexelLines`),
+        turned by
+        ``phase`` [rad] onto the spaces the motion cuts (:func:`cutting.skiving.dexel_lines.gear_phase`)."""
         return cls(DexelLines(gear, spacing, rim, phase), edge)
 
     @property

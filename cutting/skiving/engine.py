@@ -19,10 +19,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cutting.edge import CuttingEdge
 from cutting.gear import Gear
-from cutting.removal import DEFAULT_SLAB, CutResult, Stock, cut, from_arrays, passage_count, to_arrays
-from cutting.trajectory import PassMotion
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.removal import DEFAULT_SLAB, CutResult, Stock, cut, from_arrays, passage_count, to_arrays
+from cutting.skiving.trajectory import PassMotion
 
 #: progress(pass_index, passages_done, passages_total)
 Progress = Callable[[int, int, int], None]

@@ -3,7 +3,7 @@
 The stock is kept as cells: one angular sector per tooth space (twisted with the helix) cut into axial
 slabs, so each subtraction involves only a cell a tooth passage reaches and the cost follows what is cut,
 not the whole blank. A tooth passage is the interval in which one cutter tooth crosses the mesh zone; it
-is sampled to the allowed sweep error and swept as one sub-tube per cell it reaches (:mod:`cutting.sweep`).
+is sampled to the allowed sweep error and swept as one sub-tube per cell it reaches (:mod:`cutting.skiving.sweep`).
 Cells meet in real overlaps (sectors) or in exact planes (slabs, see :func:`sector_columns`).
 """
 
@@ -16,14 +16,22 @@ from dataclasses import dataclass, field
 import manifold3d as mf
 import numpy as np
 
-from cutting.edge import CuttingEdge
-from cutting.exact_solve import pose_table
 from cutting.flank import twist_rate
 from cutting.gear import Gear
-from cutting.skiving import rot_z
-from cutting.solids import blank
-from cutting.sweep import ZippedSweep, outline_points, place, place_few, sample_blocks, simplify_outline, split_sides
-from cutting.trajectory import PassMotion
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_solve import pose_table
+from cutting.skiving.setup import rot_z
+from cutting.skiving.solids import blank
+from cutting.skiving.sweep import (
+    ZippedSweep,
+    outline_points,
+    place,
+    place_few,
+    sample_blocks,
+    simplify_outline,
+    split_sides,
+)
+from cutting.skiving.trajectory import PassMotion
 
 
 @dataclass
@@ -39,7 +47,8 @@ class Chip:
     sweeps: int
     start: float = 0.0
     end: float = 0.0
-    #: from the dexel removal (cutting.dexel.DexelChip): uncut chip thickness normal to the nominal boundary, largest
+    #: from the dexel removal (cutting.skiving.dexel.DexelChip): uncut chip thickness normal to the nominal
+    #: boundary, largest
     #: and mean over the chip [mm], the profile length it covers [mm], and its centroid [mm]; None from manifold
     thickness_max: float | None = None
     thickness_mean: float | None = None

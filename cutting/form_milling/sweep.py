@@ -3,7 +3,7 @@
 A disc mill is a solid of revolution (its teeth, many and fine, make its envelope of revolution: the feed per
 tooth leaves marks of f_z^2 / 8R, nanometres here). A point Q of the gear frame is removed by a pass if at some
 instant of the pass Q lies inside the mill: with the mill's centre C(t) and axis a(t), u = (Q - C).a and
-w = |Q - C - u a|, Q is inside when w < R(u) (:class:`cutting.form_mill.DiscMill`). Along a pass the margin
+w = |Q - C - u a|, Q is inside when w < R(u) (:class:`cutting.form_milling.mill.DiscMill`). Along a pass the margin
 g(t) = w - R(u) is least where Q crosses the mill's axial plane (the seed's profiling plane), so each pass
 contributes min_t g, found from the pose table (sorted along the feed) and refined at the vertex of the
 parabola through the least sample and its neighbours (poses interpolated between samples): the margin is
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.form_mill import DiscMill
+from cutting.form_milling.mill import DiscMill
 from cutting.gear import Gear
 
 GOLDEN = (math.sqrt(5) - 1) / 2

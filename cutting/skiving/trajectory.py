@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cutting.errors import InputError, Problem
-from cutting.skiving import SkivingSetup
+from cutting.skiving.setup import SkivingSetup
 
 
 @dataclass(frozen=True)

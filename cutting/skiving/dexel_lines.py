@@ -6,7 +6,7 @@ fans in transverse planes: in each slice z_j and for each tooth space k, rays st
 it, spread so that they meet the nominal space boundary (tooth land, flank, root, flank, land; from one tooth's
 centre line to the next one's) at even steps of arc length. Seen from C a tooth space is star-shaped: each ray
 meets the cut surface once, so the rays' end points are the surface and the fan between them is the space's
-removed region (:mod:`cutting.dexel_solid`). Along a ray the volume element is rho d(rho) d(alpha) dz, so a
+removed region (:mod:`cutting.skiving.dexel_solid`). Along a ray the volume element is rho d(rho) d(alpha) dz, so a
 removed interval [rho_1, rho_2] of ray i in slice j stands for (rho_2^2 - rho_1^2) / 2 * dalpha_i * dz_j of
 material: the chips are exact quadratures of what the passages remove.
 

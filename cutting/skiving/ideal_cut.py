@@ -11,14 +11,14 @@ import manifold3d as mf
 import numpy as np
 import trimesh
 
-from cutting.dexel_cut import cut_dexel
-from cutting.dexel_lines import DexelSpacing
-from cutting.edge import CuttingEdge, make_edge
-from cutting.engine import cut_passes
-from cutting.holder import check_holder_side
-from cutting.removal import DEFAULT_SLAB, CutResult, expected_genus
-from cutting.skiving import SkivingSetup
-from cutting.trajectory import ideal_passes
+from cutting.skiving.dexel_cut import cut_dexel
+from cutting.skiving.dexel_lines import DexelSpacing
+from cutting.skiving.edge import CuttingEdge, make_edge
+from cutting.skiving.engine import cut_passes
+from cutting.skiving.holder import check_holder_side
+from cutting.skiving.removal import DEFAULT_SLAB, CutResult, expected_genus
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 
 
 @dataclass
@@ -54,7 +54,7 @@ def cut_ideal(
     spacing: DexelSpacing | None = None,
 ) -> CutReport:
     """Cut every pass with the ideal motion, or along ``motions`` (e.g. a simulated machine's sampled passes,
-    cutting.sampled_motion). ``progress(pass_index, done, total)`` reports tooth passages. ``removal``: "dexel"
+    cutting.skiving.sampled_motion). ``progress(pass_index, done, total)`` reports tooth passages. ``removal``: "dexel"
     (``spacing``: the lines, default the gear's) or "manifold" (``finishing_tol``/``roughing_tol``: the tubes' sweep
     errors, ``workers``, ``slab``); the dexel solid is stated to be within ``finishing_tol`` of the exact surface."""
     t_start = time.perf_counter()

@@ -9,7 +9,7 @@ crowning, tip relief, twist) the path cannot make: that takes a modified cutter.
 
 :class:`PathCorrection` holds the two corrections at knots over the carriage position and interpolates them with
 a cubic spline (a chain of cubic Bezier segments, C2 at the knots); :func:`corrected_motion` samples the ideal
-motion of a pass with them applied, as a :class:`cutting.sampled_motion.SampledMotion` that the removal and the
+motion of a pass with them applied, as a :class:`cutting.skiving.sampled_motion.SampledMotion` that the removal and the
 exact swept surface take like any other.
 """
 
@@ -22,9 +22,9 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from cutting.sampled_motion import SampledMotion
-from cutting.skiving import rot_z
-from cutting.trajectory import PassMotion
+from cutting.skiving.sampled_motion import SampledMotion
+from cutting.skiving.setup import rot_z
+from cutting.skiving.trajectory import PassMotion
 
 
 @dataclass(frozen=True, eq=False)

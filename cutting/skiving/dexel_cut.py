@@ -1,9 +1,10 @@
 """Cutting passes with the dexel workpiece: the ideal motion (`skive cut`) or any sampled one, pass by pass.
 
-Each pass's passages are the exact measurement's pass table (:class:`cutting.exact_sweep.PassTable`: the same
-windows as :func:`cutting.removal.passage_range`), cut in time order in chunks (for the progress bar; the chunks do
+Each pass's passages are the exact measurement's pass table (:class:`cutting.skiving.exact_sweep.PassTable`: the same
+windows as :func:`cutting.skiving.removal.passage_range`), cut in time order in chunks (for the progress bar; the
+chunks do
 not change the cut: every line takes its passages in time order either way). The gear solid is made once, at the
-end, from the lines' end points (:mod:`cutting.dexel_solid`).
+end, from the lines' end points (:mod:`cutting.skiving.dexel_solid`).
 """
 
 from __future__ import annotations
@@ -15,13 +16,13 @@ from dataclasses import dataclass, field
 
 import manifold3d as mf
 
-from cutting.dexel import DexelChip, DexelWorkpiece
-from cutting.dexel_lines import DexelSpacing, gear_phase
-from cutting.dexel_solid import dexel_solid
-from cutting.edge import CuttingEdge
-from cutting.exact_sweep import PassTable
 from cutting.gear import Gear
-from cutting.removal import Chip, CutResult
+from cutting.skiving.dexel import DexelChip, DexelWorkpiece
+from cutting.skiving.dexel_lines import DexelSpacing, gear_phase
+from cutting.skiving.dexel_solid import dexel_solid
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_sweep import PassTable
+from cutting.skiving.removal import Chip, CutResult
 
 #: passages cut per call (a progress step)
 CHUNK = 256
@@ -35,7 +36,7 @@ class DexelCut:
     workpiece: DexelWorkpiece
     pass_seconds: list[float] = field(default_factory=list)
     solid_seconds: float = 0.0
-    land_touched: int = 0  # land rays the cut touched (cutting.dexel_solid.tube_ends)
+    land_touched: int = 0  # land rays the cut touched (cutting.skiving.dexel_solid.tube_ends)
 
     def summary(self) -> dict:
         """The removal's figures for measurement.json."""
@@ -48,7 +49,7 @@ class DexelCut:
 
 def removal_summary(wp: DexelWorkpiece, land_touched: int = 0) -> dict:
     """A dexel workpiece's lines and the work its cut took; ``land_touched``: the land rays the cut touched, which the
-    solid draws as uncut (cutting.dexel_solid.tube_ends)."""
+    solid draws as uncut (cutting.skiving.dexel_solid.tube_ends)."""
     ln = wp.lines
     est, table, exact, crossings, pairs = (int(v) for v in wp.work)
     return {

@@ -1,5 +1,5 @@
 """Form milling's removal with manifold3d: the mill's swept volume taken out of the blank, one tooth space after
-another (the chips, the forces' volumes, gear.stl; the micrometre truth is :mod:`cutting.form_sweep`).
+another (the chips, the forces' volumes, gear.stl; the micrometre truth is :mod:`cutting.form_milling.sweep`).
 
 The mill (a solid of revolution) is cut into frusta along its axis where its profile bends by more than the
 tolerance; a frustum is convex, so what it sweeps between two poses that differ by a straight move is the
@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import manifold3d as mf
 import numpy as np
 
-from cutting.form_mill import DiscMill
-from cutting.form_sweep import MillPassPoses
+from cutting.form_milling.mill import DiscMill
+from cutting.form_milling.sweep import MillPassPoses
 from cutting.gear import Gear
-from cutting.solids import blank
+from cutting.skiving.solids import blank
 
 
 def profile_slices(mill: DiscMill, tol: float) -> tuple[np.ndarray, np.ndarray]:

@@ -1,7 +1,7 @@
 """The solid of a dexel workpiece: each tooth space's removed region as a closed mesh from the dexel end points,
 taken from the blank by manifold3d in one batch boolean.
 
-A tooth space's fans (:mod:`cutting.dexel_lines`) see the cut surface from their centres C: in each slice the
+A tooth space's fans (:mod:`cutting.skiving.dexel_lines`) see the cut surface from their centres C: in each slice the
 space's air is the star-shaped polygon C, P_0, ..., P_n (P_i the end point of ray i: the start of the material that
 holds the gear body). Lofting the slices' polygons gives a closed tube: the surface quads between neighbouring rays
 and slices, the two outer rays' walls down to C, and caps beyond the end faces (the face slices copied out along
@@ -16,8 +16,8 @@ from __future__ import annotations
 import manifold3d as mf
 import numpy as np
 
-from cutting.dexel_lines import DexelLines
-from cutting.solids import blank
+from cutting.skiving.dexel_lines import DexelLines
+from cutting.skiving.solids import blank
 
 #: uncut rays (tooth lands) end this far [mn] before the blank
 LAND_PULLBACK = 0.05

@@ -1,6 +1,6 @@
 """The exact solve of a probe line's unsettled (passage, segment) items, compiled (numba).
 
-:meth:`cutting.exact_sweep.SweptVolumes.settled_intervals` leaves some items the pose table cannot settle; each
+:meth:`cutting.skiving.exact_sweep.SweptVolumes.settled_intervals` leaves some items the pose table cannot settle; each
 needs the removal margin at both ends of its segment (the rake-plane crossing bracketed over the table, the crossing
 instant solved on the motion itself to 1e-10 mm, the outline's margin there) and, where the sign changes, the
 root in d. In numpy that is a few dozen flops per item spread over hundreds of small-array calls (the vectorised
@@ -9,8 +9,8 @@ pose above all), so Python overhead dominates; here it is one loop per item, in 
 The kernels reproduce :meth:`SweptVolumes._margin_exact` and :meth:`SweptVolumes._root` step for step (the same
 bisection, the same Illinois iterations and stopping rules, the same arithmetic order): the surface they give
 is the Python path's within rounding. They need the pose as a compiled function: :func:`compiled_pose` gives it
-for the ideal motion (:class:`cutting.trajectory.PassMotion`) and the sampled one
-(:class:`cutting.sampled_motion.SampledMotion`); any other motion keeps the Python path.
+for the ideal motion (:class:`cutting.skiving.trajectory.PassMotion`) and the sampled one
+(:class:`cutting.skiving.sampled_motion.SampledMotion`); any other motion keeps the Python path.
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
-from cutting.sampled_motion import SampledMotion
-from cutting.skiving import SkivingSetup
+from cutting.skiving.sampled_motion import SampledMotion
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import PassMotion
 from cutting.threads import run_chunks
-from cutting.trajectory import PassMotion
 
 #: the kinds of compiled pose
 IDEAL, SAMPLED = 0, 1
@@ -122,7 +122,7 @@ def pose_table(motion, t: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
 
 class ItemSolver:
     """The compiled item solve of a set of pass tables: every table's pose parameters side by side (passage g over
-    all tables, in order, as :class:`cutting.exact_sweep._CompiledTables` numbers them)."""
+    all tables, in order, as :class:`cutting.skiving.exact_sweep._CompiledTables` numbers them)."""
 
     def __init__(self, motion: tuple, tables: tuple, outline: tuple):
         self.motion, self.tables, self.outline = motion, tables, outline
@@ -133,7 +133,7 @@ class ItemSolver:
     @classmethod
     def build(cls, tables: Sequence, packed: np.ndarray, outline) -> ItemSolver | None:
         """From the pass tables (``motion``, ``t`` (m, P), ``angle`` (m,)), their packed pose table and the
-        :class:`cutting.exact_sweep.Outline`; None unless every table's motion has a compiled pose."""
+        :class:`cutting.skiving.exact_sweep.Outline`; None unless every table's motion has a compiled pose."""
         poses = [compiled_pose(tb.motion) for tb in tables]
         if not poses or any(q is None for q in poses):
             return None
@@ -307,7 +307,8 @@ OUTLINE_BUCKETS = 512
 
 
 def compiled_outline(outline) -> tuple:
-    """What :func:`outline_margin` reads of a :class:`cutting.exact_sweep.Outline`: its lower and upper chains (x, y),
+    """What :func:`outline_margin` reads of a :class:`cutting.skiving.exact_sweep.Outline`: its lower and upper
+    chains (x, y),
     x0, x1, and per chain the index of its last point at or before each of OUTLINE_BUCKETS even steps over its x
     range (so that a lookup starts next to its point instead of bisecting the chain)."""
     out = []

@@ -14,10 +14,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cutting.edge import CuttingEdge
 from cutting.errors import InputError, Problem
-from cutting.sweep import place
-from cutting.trajectory import PassMotion
+from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.sweep import place
+from cutting.skiving.trajectory import PassMotion
 
 #: Length of the holder checked behind the cutter body [mm]: a spindle nose is rarely longer.
 HOLDER_LENGTH = 150.0
@@ -54,7 +54,7 @@ def check_holder_side(
         return
     g = motions[0].setup.gear
     r_tip, b2, eps = g.tip_radius, g.face_width / 2, 1e-3
-    r_outer = g.root_radius + 3 * g.mn  # the ring's outside (cutting.solids.blank)
+    r_outer = g.root_radius + 3 * g.mn  # the ring's outside (cutting.skiving.solids.blank)
     pts = holder_side_points(edge.r_low, width, holder_diameter / 2)
     hub = (pts[:, 2] > -width - 1e-9) & (np.hypot(pts[:, 0], pts[:, 1]) <= edge.r_low + 1e-9)  # for the message
     for motion in motions:

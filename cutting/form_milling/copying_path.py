@@ -9,7 +9,7 @@ the radial k_r (y, along the height), i.e. a level and a slope of that flank's p
 
 The steps (seed fig. 1), as :func:`plan_copying` runs them:
 
-1. initial data: the designed flank sections (:func:`cutting.form_mill.designed_section`);
+1. initial data: the designed flank sections (:func:`cutting.form_milling.mill.designed_section`);
 2. initial path points (eq. 1) from the design's thickness deviation at the pitch cylinder at z_i (the seed
    takes them between the symmetry plane and the end face; a design need not be symmetric, so both halves);
 3. the profiling plane through each path point, normal to the path (the seed puts it through each segment's
@@ -40,7 +40,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from cutting.flank import SIDES, Side, flank_normals, flank_points
-from cutting.form_mill import (
+from cutting.form_milling.mill import (
     BezierChain,
     DiscMill,
     designed_section,
@@ -49,7 +49,7 @@ from cutting.form_mill import (
     section_rolls,
     tip_index,
 )
-from cutting.form_sweep import MilledGear, MillPassPoses
+from cutting.form_milling.sweep import MilledGear, MillPassPoses
 from cutting.gear import Gear, form_roll_length
 from cutting.modification import Modification, roll
 

@@ -3,21 +3,23 @@
 The lines are grouped in cells (one fan: a tooth space in one slice); a cell's lines share their candidate
 passages, and cells are cut in parallel. Per line, the passages that can reach it are taken in the order the machine
 made them. A passage removes from the line the points whose rake-plane image lies inside the edge outline at the
-instant the rake plane passes them (:mod:`cutting.exact_sweep`); only the line's remaining material matters, so each
+instant the rake plane passes them (:mod:`cutting.skiving.exact_sweep`); only the line's remaining material matters,
+so each
 material interval is marched through:
 
 - far from the edge, the pose table and a signed distance raster of the outline give the in-plane distance e(d)
-  of the line's point to the outline within ``delta`` (as :func:`cutting.exact_kernels.in_plane` gives it to the
+  of the line's point to the outline within ``delta`` (as :func:`cutting.skiving.exact_kernels.in_plane` gives it to the
   measurement's estimate); e is 1-Lipschitz in the plane, so a step whose in-plane track is shorter than
   |e| - delta cannot cross the outline: far from the passage the steps are long, near it they shrink to ``fine``;
 - on a fine step the margin of the outline polygon itself is taken at the table's in-plane point (within
   ``POSE_ERROR`` of the truth: the pose is quadratic between table samples), its sign change found by the Illinois
   method, and the crossing polished with the margin solved exactly on the motion
-  (:func:`cutting.exact_solve.margin_at`, the measurement's own solve) until it moves less than ``tol``; where the
+  (:func:`cutting.skiving.exact_solve.margin_at`, the measurement's own solve) until it moves less than ``tol``;
+  where the
   table's margin is within ``POSE_ERROR`` of zero the exact margin decides.
 
 What a passage removes of a line is subtracted from its material intervals, and the chip's share is summed per
-(cell, passage): volume (the polar quadrature of :mod:`cutting.dexel_lines`), first moment (centroid), removed
+(cell, passage): volume (the polar quadrature of :mod:`cutting.skiving.dexel_lines`), first moment (centroid), removed
 length, chip thickness normal to the nominal boundary (largest, and summed over the footprint), the footprint on the
 boundary and the profile length it covers.
 """
@@ -29,8 +31,8 @@ import math
 import numpy as np
 from numba import njit
 
-from cutting.exact_kernels import in_plane
-from cutting.exact_solve import margin_at, outline_margin
+from cutting.skiving.exact_kernels import in_plane
+from cutting.skiving.exact_solve import margin_at, outline_margin
 
 #: the in-plane track between two estimates may bow: its chord is lengthened by this factor (as the measurement's)
 TRACK_BOW = 1.05
@@ -442,7 +444,7 @@ def cut_cells(
     ``mat_n``: the material intervals (n, MAX_PIECES), updated; ``boxes`` = (ball centre
     (G, S, 3), ball radius (G, S), box centre (G, S, 3), axes (G, S, 3, 3), half (G, S, 3), samples per subwindow);
     ``tab`` = (packed table, the rasters of :func:`_distance`); ``motion``, ``tables``, ``outline``: the exact
-    solve's (:class:`cutting.exact_solve.ItemSolver`). ``out[pair]`` (STATS) per (cell, passage) pair;
+    solve's (:class:`cutting.skiving.exact_solve.ItemSolver`). ``out[pair]`` (STATS) per (cell, passage) pair;
     ``flags[line]`` |= OVERFLOW when a line would hold more than MAX_PIECES intervals; ``work[k]`` = estimates,
     table margins, exact margins, crossings, (line, passage) pairs of cell k."""
     ball_c, ball_r, box_c, box_a, box_h, per = boxes
