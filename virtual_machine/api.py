@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from virtual_machine.job import Job, default_job_path, load_job, with_machine
+from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes import Product, process_for
 
@@ -102,7 +103,6 @@ def run(
 def measure(mesh: str | Path, job: str | Path | None = None, out: str | Path | None = None) -> dict[str, Any]:
     """Measure a gear mesh (STL, PLY, OBJ, 3MF, GLB) as the gear of ``job``'s [gear] section (default: the default
     job's), as a gear measuring machine does; with ``out``, write measurement.json and the charts there."""
-    import json
 
     from metrology.charts import finite, write_charts
     from metrology.datum import load_mesh
@@ -116,7 +116,7 @@ def measure(mesh: str | Path, job: str | Path | None = None, out: str | Path | N
     if out is not None:
         folder = Path(out)
         folder.mkdir(parents=True, exist_ok=True)
-        (folder / "measurement.json").write_text(json.dumps(doc, indent=2, allow_nan=False))
+        write_json(folder / "measurement.json", doc)
         write_charts(folder, result)
     return doc
 

@@ -11,6 +11,7 @@ import click
 from cutting.errors import InputError, Problem
 from virtual_machine.job import STRUCTURES, default_job_path, load_job, with_machine
 from virtual_machine.output.formatting import format_measurement
+from virtual_machine.output.json_file import json_text
 from virtual_machine.output.progress import Progress, Reporter
 from virtual_machine.processes import process_for
 
@@ -67,7 +68,7 @@ def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) 
     except (InputError, ValueError, RuntimeError) as exc:
         _fail(exc)
     if as_json:
-        click.echo(json.dumps(doc, indent=2, allow_nan=False))
+        click.echo(json_text(doc))
     else:
         click.echo(format_measurement(doc, str(mesh)))
         if out is not None:

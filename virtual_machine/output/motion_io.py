@@ -8,12 +8,12 @@ conventions), plus the axis values that produced them (``pass{i}_cutter_angle`` 
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from virtual_machine.output.json_file import write_json
 from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory, error_stats
 from virtual_machine.runtime.physics import AXES
 
@@ -72,7 +72,7 @@ def save(rec: MotionRecord, out: Path, meta: dict[str, Any], teeth: int | None =
     if rec.model_xml:
         write_model(rec.model_xml, out)
     doc = {**meta, **summary(rec, teeth)}
-    (out / "simulation.json").write_text(json.dumps(doc, indent=2))
+    write_json(out / "simulation.json", doc)
     _chart(rec, out / "sync_error.png")
     return doc
 

@@ -16,8 +16,6 @@ these methods; :data:`virtual_machine.processes.PROCESSES` finds a job's process
 
 from __future__ import annotations
 
-import json
-import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,6 +23,7 @@ from typing import Any
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
+from virtual_machine.output.json_file import json_text
 from virtual_machine.output.progress import Reporter
 
 
@@ -54,18 +53,7 @@ class Product:
 
     def json(self) -> str:
         """``data`` as the CLI's --json prints it (no NaN or infinity: null)."""
-        return json.dumps(finite_json(self.data), indent=2, allow_nan=False)
-
-
-def finite_json(obj: object) -> object:
-    """JSON has no NaN or infinity: they become null (an infinite lead: a spur gear)."""
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if isinstance(obj, dict):
-        return {k: finite_json(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [finite_json(v) for v in obj]
-    return obj
+        return json_text(self.data)
 
 
 def written(out: Path, *names: str) -> list[Path]:

@@ -9,12 +9,13 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
+from metrology.charts import finite
 from virtual_machine.job import Job
+from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
-from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.processes.base import Process, Product, reporter_or_default, written
 
 FILES = ("coupling.stl", "measurement.json", "report.html")
 
@@ -27,7 +28,7 @@ class FaceContour(Process):
         from cutting.face_contour.slots import setting_sheet
         from virtual_machine.processes.face_contour.stages import format_setting_sheet, tool_speed
 
-        return Product("setup", finite_json(setting_sheet(job.coupling, tool_speed(job))), format_setting_sheet(job))
+        return Product("setup", finite(setting_sheet(job.coupling, tool_speed(job))), format_setting_sheet(job))
 
     def simulate(
         self,
@@ -42,7 +43,7 @@ class FaceContour(Process):
 
         _, summary = simulate_face_job(job)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "simulation.json").write_text(json.dumps(finite_json(summary), indent=2, allow_nan=False))
+        write_json(out / "simulation.json", summary)
         return Product("simulate", summary, format_simulation(summary), written(out, "simulation.json"), out)
 
     def cut(

@@ -72,6 +72,7 @@ from machine_models.face_contour_machine import (
 )
 from machine_models.parameters import ARCSEC
 from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
+from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
 
 __all__ = [
@@ -305,9 +306,10 @@ class ElectronicGearbox:
         self.ks.update(dt)
 
 
-class FaceServo:
-    """The drives of the machine: position loops and PI speed loops on the motor encoders (A, H, [E,] Z), inertia
-    feed-forward, torque limits with anti-windup. Addresses resolved once; ``axis0``: the axes' start positions."""
+class FaceServo(CascadeServo):
+    """The drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops and PI
+    speed loops on the motor encoders (A, H, [E,] Z); commands and ``torque``, ``error`` as (A, H, E, Z), E zero
+    without the eccentric. ``axis0``: the axes' start positions."""
 
     def __init__(
         self,
@@ -317,69 +319,26 @@ class FaceServo:
         tuning: FaceTuning,
         axis0: np.ndarray,
     ):
-        self.model, self.data, self.tuning = model, data, tuning
+        self.tuning = tuning
         self.eccentric = "E" in head_angle_joints(model)
-        self.idx = np.array([_A, _H, _E, _Z] if self.eccentric else [_A, _H, _Z])
+        idx = [_A, _H, _E, _Z] if self.eccentric else [_A, _H, _Z]
         lead = params.screw_pitch / (2 * math.pi)
-        g_all = np.array(
-            [
-                params.work_drive.ratio,
-                params.head_drive.ratio,
-                params.eccentric_drive.ratio,
-                params.z_drive.ratio * lead,
-            ]
-        )
-        self.g = g_all[self.idx]  # axis motion per motor radian (the CNC's nominal ratios)
-        motors = [MOTORS[i] for i in self.idx]
-        self.qm = np.array([int(model.joint(m).qposadr[0]) for m in motors])
-        self.vm = np.array([int(model.joint(m).dofadr[0]) for m in motors])
-        self.act = np.array([int(model.actuator(m).id) for m in motors])
-        self.peak = model.actuator_ctrlrange[self.act, 1].copy()
-        mujoco.mj_forward(model, data)
-        self.qm0 = data.qpos[self.qm].copy()
-        self.axis0 = axis0[self.idx].copy()
-        # inertia at each motor with the chain rigid (g^T M g) and the static torque it holds at the start
+        g = [
+            params.work_drive.ratio,
+            params.head_drive.ratio,
+            params.eccentric_drive.ratio,
+            params.z_drive.ratio * lead,
+        ]
         chains = {
-            _A: (("MA", 1.0), ("A", g_all[_A])),
-            _H: (("MH", 1.0), ("H", g_all[_H])),  # the head's absolute angle moves, the eccentric held
-            _E: (("ME", 1.0), ("E", g_all[_E]), ("H", -g_all[_E])),  # the head's absolute angle held by its drive
-            _Z: (("MZ", 1.0), ("TZ", params.z_drive.ratio), ("Z", g_all[_Z])),
+            _A: (("MA", 1.0), ("A", g[_A])),
+            _H: (("MH", 1.0), ("H", g[_H])),  # the head's absolute angle moves, the eccentric held
+            _E: (("ME", 1.0), ("E", g[_E]), ("H", -g[_E])),  # the head's absolute angle held by its drive
+            _Z: (("MZ", 1.0), ("TZ", params.z_drive.ratio), ("Z", g[_Z])),
         }
-        load = data.qfrc_bias - data.qfrc_gravcomp
-        n = len(self.idx)
-        self.inertia, hold = np.zeros(n), np.zeros(n)
-        for k, i in enumerate(self.idx):
-            vec = np.zeros(model.nv)
-            for joint, ratio in chains[i]:
-                vec[model.joint(joint).dofadr[0]] = ratio
-            res = np.zeros(model.nv)
-            mujoco.mj_mulM(model, data, res, vec)
-            self.inertia[k] = vec @ res
-            hold[k] = vec @ load
-        w = 2 * math.pi * np.asarray(tuning.velocity_bandwidth, dtype=float)[self.idx]
-        self.kp = self.inertia * w
-        self.ki = self.kp * w / 4
-        self.kv = np.asarray(tuning.position_gain, dtype=float)[self.idx]
-        self.integral = np.clip(hold, -self.peak, self.peak)
-        self.torque = np.zeros(4)
-        self.error = np.zeros(4)
-
-    def update(self, dt: float, pos: np.ndarray, vel: np.ndarray, acc: np.ndarray) -> None:
-        """One servo tick: commanded positions, speeds, accelerations (A, H, E, Z) -> motor torques in ``ctrl``
-        (held over the physics sub-steps); ``torque`` and ``error`` (A, H, E, Z; E zero without the eccentric)."""
-        d, g, i = self.data, self.g, self.idx
-        e = pos[i] - (self.axis0 + g * (d.qpos[self.qm] - self.qm0))
-        ew = (vel[i] + self.kv * e) / g - d.qvel[self.vm]
-        integral = self.integral + self.ki * ew * dt
-        u = self.inertia * acc[i] / g + self.kp * ew + integral
-        sat = np.abs(u) > self.peak
-        if sat.any():
-            u = np.clip(u, -self.peak, self.peak)
-            integral = np.where(sat & (np.sign(u) == np.sign(ew)), self.integral, integral)
-        self.integral = integral
-        self.torque[i] = u
-        self.error[i] = e
-        d.ctrl[self.act] = u
+        axes = [
+            ServoAxis(MOTORS[i], g[i], chains[i], tuning.velocity_bandwidth[i], tuning.position_gain[i]) for i in idx
+        ]
+        super().__init__(model, data, axes, np.asarray(axis0)[idx], index=idx, size=4)
 
 
 def _diagnose(layout: FaceMachineLayout, params: FaceMachineParams, t: float) -> str:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import hashlib
 import html
-import json
 import math
 import time
 from pathlib import Path
@@ -31,8 +30,8 @@ from cutting.face_contour.slots import (
     setting_sheet,
     slot_spacing,
 )
-from metrology.charts import finite
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.output.json_file import write_json
 
 UM = 1e3
 ARCSEC = math.pi / 180 / 3600
@@ -241,7 +240,7 @@ def _write(out: Path, doc: dict[str, Any], cut) -> None:
     mesh = cut.solid.to_mesh()
     tm = trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts), process=False)
     tm.export(out / "coupling.stl")
-    (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
+    write_json(out / "measurement.json", doc)
 
 
 def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:

@@ -14,9 +14,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from cutting.errors import InputError, Problem
+from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.progress import Reporter
-from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.processes.base import Process, Product, reporter_or_default, written
 
 FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png", "*.png")
 
@@ -29,7 +30,7 @@ class FormMilling(Process):
         from virtual_machine.processes.form_milling.stages import format_plan, plan_job
 
         plan = plan_job(job, checks=0)
-        return Product("setup", finite_json(plan.summary()), format_plan(plan))
+        return Product("setup", finite(plan.summary()), format_plan(plan))
 
     def simulate(self, job: Job, out: Path, **_options) -> Product:
         raise InputError(

@@ -31,6 +31,7 @@ import numpy as np
 
 from machine_models.form_mill import FormMillLayout, FormMillParams, build_form_mill_spec, stage_omega_h
 from machine_models.parameters import ARCSEC
+from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
 
 AXES = ("A", "X", "Y", "Z", "S")  # the CNC's axes; A rad, X Y Z m, S rad
@@ -241,9 +242,9 @@ def _plan(
     return out
 
 
-class FormMillServo:
-    """The five drives of the machine: position loops (A X Y Z) and PI velocity loops (A X Y Z S) on the motor
-    encoders, inertia feed-forward, torque limits with anti-windup. Addresses resolved once."""
+class FormMillServo(CascadeServo):
+    """The five drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops
+    (A X Y Z) and PI velocity loops (A X Y Z S) on the motor encoders; the spindle S has a velocity loop only."""
 
     def __init__(
         self,
@@ -253,75 +254,20 @@ class FormMillServo:
         params: FormMillParams,
         tuning: CncTuning,
     ):
-        self.model, self.data, self.tuning = model, data, tuning
+        self.tuning = tuning
         lead = layout.screw_pitch / (2 * math.pi)
-        #: axis motion per motor radian (the CNC's nominal ratios): rad/rad, m/rad
-        self.g = np.array(
-            [
-                params.work_drive.ratio,
-                params.x_drive.ratio * lead,
-                params.y_drive.ratio * lead,
-                params.z_drive.ratio * lead,
-                params.spindle_drive.ratio,
-            ]
-        )
-        self.qm = np.array([int(model.joint(m).qposadr[0]) for m in MOTORS])
-        self.vm = np.array([int(model.joint(m).dofadr[0]) for m in MOTORS])
-        self.qa = np.array([int(model.joint(a).qposadr[0]) for a in AXES])
-        self.act = np.array([int(model.actuator(m).id) for m in MOTORS])
-        self.peak = model.actuator_ctrlrange[self.act, 1].copy()
-        mujoco.mj_forward(model, data)
-        self.qm0 = data.qpos[self.qm].copy()  # encoder zero: the home keyframe
-        self.axis0 = data.qpos[self.qa].copy()
-        # inertia at each motor with the chain rigid (g^T M g), and the static torque each motor holds at home
-        # (the Z weight less the counterbalance; the drive holds it before its brake opens)
-        self.inertia, hold = np.zeros(5), np.zeros(5)
-        chain = {
-            0: (("MA", 1.0), ("A", self.g[0])),
-            4: (("MS", 1.0), ("S", self.g[4])),
-        }
-        for i, s in enumerate("XYZ", start=1):
+        g = [params.work_drive.ratio]
+        chains = [(("MA", 1.0), ("A", params.work_drive.ratio))]
+        for s in "XYZ":
             drive = getattr(params, f"{s.lower()}_drive").ratio
-            chain[i] = ((f"M{s}", 1.0), (f"T{s}", drive), (s, self.g[i]))
-        load = data.qfrc_bias - data.qfrc_gravcomp
-        for i, terms in chain.items():
-            vec = np.zeros(model.nv)
-            for joint, ratio in terms:
-                vec[model.joint(joint).dofadr[0]] = ratio
-            res = np.zeros(model.nv)
-            mujoco.mj_mulM(model, data, res, vec)
-            self.inertia[i] = vec @ res
-            hold[i] = vec @ load
-        w = 2 * math.pi * np.asarray(tuning.velocity_bandwidth, dtype=float)
-        self.kp = self.inertia * w
-        self.ki = self.kp * w / 4
-        self.kv = np.append(np.asarray(tuning.position_gain, dtype=float), 0.0)  # S: velocity loop only
-        self.integral = np.clip(hold, -self.peak, self.peak)
-        self.torque = np.zeros(5)
-        self.error = np.zeros(5)
-
-    def measured(self) -> np.ndarray:
-        """Axis positions from the motor encoders (A rad, X Y Z m, S rad)."""
-        return self.axis0 + self.g * (self.data.qpos[self.qm] - self.qm0)
-
-    def update(self, dt: float, pos: np.ndarray, vel: np.ndarray, acc: np.ndarray) -> np.ndarray:
-        """One servo tick: commanded positions, speeds, accelerations (A X Y Z S; S position ignored) -> motor
-        torques written to ``ctrl`` (held over the physics sub-steps)."""
-        d, g = self.data, self.g
-        e = pos - (self.axis0 + g * (d.qpos[self.qm] - self.qm0))
-        ew = (vel + self.kv * e) / g - d.qvel[self.vm]
-        integral = self.integral + self.ki * ew * dt
-        u = self.inertia * acc / g + self.kp * ew + integral
-        sat = np.abs(u) > self.peak
-        if sat.any():
-            u = np.clip(u, -self.peak, self.peak)
-            wind = sat & (np.sign(u) == np.sign(ew))
-            integral = np.where(wind, self.integral, integral)
-        self.integral = integral
-        self.torque = u
-        self.error = e
-        d.ctrl[self.act] = u
-        return u
+            g.append(drive * lead)
+            chains.append(((f"M{s}", 1.0), (f"T{s}", drive), (s, drive * lead)))
+        g.append(params.spindle_drive.ratio)
+        chains.append((("MS", 1.0), ("S", params.spindle_drive.ratio)))
+        gains = (*tuning.position_gain, 0.0)
+        axes = [ServoAxis(m, g[k], chains[k], tuning.velocity_bandwidth[k], gains[k]) for k, m in enumerate(MOTORS)]
+        self.qa = np.array([int(model.joint(a).qposadr[0]) for a in AXES])  # the axes themselves (the record)
+        super().__init__(model, data, axes, data.qpos[self.qa].copy())  # encoders zero at the home keyframe
 
 
 def _diagnose(layout: FormMillLayout, params: FormMillParams, t: float) -> str:

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import hashlib
 import html
-import json
 import math
 import time
 from collections.abc import Callable
@@ -41,12 +40,13 @@ from cutting.gear import form_roll_length
 from cutting.gear_file import write_gear_stl
 from cutting.materials import material
 from cutting.modification import roll
-from metrology.charts import finite, write_charts
+from metrology.charts import write_charts
 from metrology.cut_measurement import compare, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions, measure_gear
 from metrology.workpiece import UnmeasurableError
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.output.json_file import write_json
 
 Stage = Callable[[str], None]
 CHECK_POINTS = 11
@@ -351,7 +351,7 @@ def _run_facts(job: Job, path: Path, record, durations: dict[str, float]) -> dic
 def _write(doc: dict[str, Any], out: Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     charts = write_charts(out / "charts", doc)
-    (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
+    write_json(out / "measurement.json", doc)
     return charts
 
 

@@ -15,9 +15,11 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from metrology.charts import finite
 from virtual_machine.job import Job
+from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
-from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.processes.base import Process, Product, reporter_or_default, written
 
 RUN_FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png")
 
@@ -31,7 +33,7 @@ class Skiving(Process):
         from virtual_machine.setting.sheet import setup_sheet
 
         sheet = setup_sheet(job, structure)
-        return Product("setup", finite_json(sheet.to_json()), format_sheet(sheet, job.source))
+        return Product("setup", finite(sheet.to_json()), format_sheet(sheet, job.source))
 
     def simulate(
         self,
@@ -87,8 +89,6 @@ class Skiving(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        import json
-
         from cutting.gear_file import write_gear_stl
         from cutting.skiving.ideal_cut import cut_ideal, default_workers
         from cutting.skiving.trajectory import ideal_passes
@@ -163,7 +163,7 @@ class Skiving(Process):
 
             result["modification_path"] = path_summary(plan)
         doc = finite(result)
-        (out / "measurement.json").write_text(json.dumps(doc, indent=2, allow_nan=False))
+        write_json(out / "measurement.json", doc)
         write_charts(out, result)
         lines = [format_measurement(doc, str(out / "gear.stl"))]
         if plan is not None:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 import platform
 import time
 from collections.abc import Callable, Sequence
@@ -33,6 +32,7 @@ from metrology.measure import MeasureOptions
 from metrology.workpiece import UnmeasurableError
 from virtual_machine.job import Job, load_job
 from virtual_machine.output.formatting import format_sheet
+from virtual_machine.output.json_file import write_json
 from virtual_machine.output.motion_io import summary
 from virtual_machine.output.report import run_chart, write_report
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
@@ -109,7 +109,7 @@ def run_job(
         measurement["modification_path"] = modification_path
     doc = finite(measurement)
     doc["run"] = run_metadata(job, Path(path), sim, durations, stl)
-    (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
+    write_json(out / "measurement.json", doc)
     sheet = format_sheet(setup_sheet(job), str(path))
     title = f"skive run: {Path(path).name}"
     write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
@@ -161,7 +161,7 @@ def _unmeasurable(
     """Keep what the run made (gear.stl, and measurement.json with the run's facts and the error) and say why the
     gear could not be measured, with the machine's synchronisation while it cut: what an engineer looks at first."""
     run = run_metadata(job, path, sim, durations, stl)
-    (out / "measurement.json").write_text(json.dumps(finite({"error": str(exc), "run": run}), indent=2))
+    write_json(out / "measurement.json", {"error": str(exc), "run": run})
     sync = run["synchronisation"]["sync_error_in_cut"] or {}
     machine = (
         f"the synchronisation error while cutting was {sync['rms_um']:.1f} um RMS, {sync['peak_to_peak_um']:.0f} um "

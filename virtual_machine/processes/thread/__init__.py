@@ -8,14 +8,15 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
 from cutting.errors import InputError, Problem
+from metrology.charts import finite
 from virtual_machine.job import Job
+from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
-from virtual_machine.processes.base import Process, Product, finite_json, written
+from virtual_machine.processes.base import Process, Product, written
 
 
 class ThreadCutting(Process):
@@ -27,7 +28,7 @@ class ThreadCutting(Process):
         from virtual_machine.setting.sheet import setup_sheet
 
         sheet = setup_sheet(job, structure)
-        return Product("setup", finite_json(sheet.to_json()), format_sheet(sheet, job.source))
+        return Product("setup", finite(sheet.to_json()), format_sheet(sheet, job.source))
 
     def simulate(
         self,
@@ -93,12 +94,12 @@ def _stroke(job: Job, out: Path, duration: float | None, measurement: bool) -> P
         "lead_drift_um": drift,
         "travel_mm": travel,
     }
-    (out / "simulation.json").write_text(json.dumps(doc, indent=2))
+    write_json(out / "simulation.json", doc)
     data = doc
     if measurement:
         lead = {"lead_mm": rec.lead, "form": rec.form, **(doc["lead_error_on_thread"] or {}), "drift_um": drift}
         data = {"thread": lead, "run": doc}
-        (out / "measurement.json").write_text(json.dumps(data, indent=2))
+        write_json(out / "measurement.json", data)
     s = doc["lead_error_on_thread"]
     lines = [
         f"THREAD SIMULATION  {job.source}  ({rec.form}), lead {rec.lead} mm",

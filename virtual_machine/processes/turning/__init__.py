@@ -8,13 +8,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from cutting.errors import InputError, Problem
+from metrology.charts import finite
 from virtual_machine.job import Job
+from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
-from virtual_machine.processes.base import Process, Product, finite_json, reporter_or_default, written
+from virtual_machine.processes.base import Process, Product, reporter_or_default, written
 
 FILES = ("workpiece.stl", "measurement.json", "report.html")
 
@@ -28,7 +29,7 @@ class VibrationTurning(Process):
         from virtual_machine.processes.turning.stages import format_prediction, ideal_setup
 
         doc = turned_surface_summary(ideal_setup(job), job.process["revolutions"])
-        return Product("setup", finite_json(doc), format_prediction(job))
+        return Product("setup", finite(doc), format_prediction(job))
 
     def simulate(
         self,
@@ -43,7 +44,7 @@ class VibrationTurning(Process):
 
         doc, _, _ = simulate_summary(job)
         out.mkdir(parents=True, exist_ok=True)
-        (out / "simulation.json").write_text(json.dumps(finite_json(doc), indent=2, allow_nan=False))
+        write_json(out / "simulation.json", doc)
         return Product("simulate", doc, format_run(doc), written(out, "simulation.json"), out)
 
     def cut(self, job: Job, out: Path, **_options) -> Product:

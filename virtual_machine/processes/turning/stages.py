@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import hashlib
 import html
-import json
 import math
 import time
 from collections.abc import Callable
@@ -25,8 +24,8 @@ import numpy as np
 from cutting.turning.vibration import SampledTurning, TurningSetup, cut_workpiece, turned_surface_summary
 from machine_models.parameters import override
 from machine_models.thread_lathe import ThreadLatheParams
-from metrology.charts import finite
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.output.json_file import write_json
 
 #: settling after the spindle's run-up before the measured revolutions start [s]
 SETTLE = 0.2
@@ -165,7 +164,7 @@ def run_turning(job: Job, path: Path, out: Path, rrd: Path | None = None, stage=
         "durations_s": {k: round(v, 3) for k, v in durations.items()},
         "spindle_rpm": spindle_speed(job) * 60,
     }
-    (out / "measurement.json").write_text(json.dumps(finite(doc), indent=2, allow_nan=False))
+    write_json(out / "measurement.json", doc)
     _report(out / "report.html", path, doc, job)
     if rrd is not None:
         stage("recording")
