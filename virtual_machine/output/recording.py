@@ -379,7 +379,7 @@ def log_cutter_paths(rec: rr.RecordingStream, passes: Sequence[PassTrajectory]) 
 
 
 # ---- 4. time series --------------------------------------------------------------------------------------
-def _send_series(rec: rr.RecordingStream, entity: str, t: np.ndarray, values: np.ndarray, names: list[str]) -> None:
+def send_series(rec: rr.RecordingStream, entity: str, t: np.ndarray, values: np.ndarray, names: list[str]) -> None:
     """A bulk scalar series with its line names (static SeriesLines)."""
     rec.log(entity, rr.SeriesLines(names=names), static=True)
     rec.send_columns(
@@ -409,12 +409,12 @@ def log_signals(
     for group, axes in AXIS_GROUPS.items():
         unit = "mm" if group == "slides" else "rad"
         columns = [AXES.index(a) for a in axes]
-        _send_series(rec, f"{SIGNALS}/axes/{group}", t, motion.q[:, columns], [f"{a} [{unit}]" for a in axes])
-    _send_series(rec, f"{SIGNALS}/sync_error", t, motion.sync_um, ["sync error [um]"])
-    _send_series(rec, f"{SIGNALS}/torque", t, motion.torque, [f"{a} [N m]" for a in motion.actuators])
+        send_series(rec, f"{SIGNALS}/axes/{group}", t, motion.q[:, columns], [f"{a} [{unit}]" for a in axes])
+    send_series(rec, f"{SIGNALS}/sync_error", t, motion.sync_um, ["sync error [um]"])
+    send_series(rec, f"{SIGNALS}/torque", t, motion.torque, [f"{a} [N m]" for a in motion.actuators])
     legend = ", ".join(f"{k} {s}" for k, s in enumerate(SEGMENTS))
-    _send_series(rec, f"{SIGNALS}/program/segment", t, motion.segment, [f"segment ({legend})"])
-    _send_series(rec, f"{SIGNALS}/program/cutting", t, motion.cutting.astype(float), ["cutter can touch the blank"])
+    send_series(rec, f"{SIGNALS}/program/segment", t, motion.segment, [f"segment ({legend})"])
+    send_series(rec, f"{SIGNALS}/program/cutting", t, motion.cutting.astype(float), ["cutter can touch the blank"])
     times, texts = segment_events(motion)
     rec.send_columns(
         f"{SIGNALS}/program/events",
@@ -424,7 +424,7 @@ def log_signals(
     for name, (ts, values) in series.items():
         width = 1 if np.ndim(values) == 1 else np.shape(values)[1]
         names = [name] if width == 1 else [f"{name}[{k}]" for k in range(width)]
-        _send_series(rec, f"{SIGNALS}/extra/{_part(name)}", ts, values, names)
+        send_series(rec, f"{SIGNALS}/extra/{_part(name)}", ts, values, names)
 
 
 # ---- 5. measurement --------------------------------------------------------------------------------------

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import html
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -86,9 +87,21 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
-def _image(path: Path) -> str:
-    data = base64.b64encode(Path(path).read_bytes()).decode()
-    return f'<img alt="{html.escape(Path(path).stem)}" src="data:image/png;base64,{data}">'
+def image_tag(png: Path | bytes, alt: str | None = None) -> str:
+    """A PNG (a file, or its bytes) embedded in the page; ``alt`` defaults to the file's stem."""
+    data = png if isinstance(png, bytes) else Path(png).read_bytes()
+    text = alt if alt is not None else Path(png).stem
+    return f'<img alt="{html.escape(text)}" src="data:image/png;base64,{base64.b64encode(data).decode()}">'
+
+
+def write_page(path: Path, title: str, body: Sequence[str]) -> Path:
+    """One self-contained HTML page in the reports' style: the ``body`` fragments under ``title``."""
+    page = (
+        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>'
+        f"<style>{STYLE}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
+    )
+    Path(path).write_text(page)
+    return Path(path)
 
 
 def write_report(
@@ -154,9 +167,9 @@ def write_report(
         "<h2>Size</h2>",
         html_table(["", "measured", "nominal"], thickness),
         "<h2>Profile, helix and pitch</h2>",
-        *[_image(c) for c in charts],
+        *[image_tag(c) for c in charts],
         "<h2>Synchronisation error, cutting force and chips over time</h2>",
-        _image(run_png),
+        image_tag(run_png),
         "<h2>Run</h2>",
         html_table(["", ""], facts),
         html_table(["stage", "wall time [s]"], stages),
@@ -165,12 +178,7 @@ def write_report(
         "<h2>Job file</h2>",
         f"<pre>{html.escape(job_text)}</pre>",
     ]
-    page = (
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>'
-        f"<style>{STYLE}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
-    )
-    Path(path).write_text(page)
-    return Path(path)
+    return write_page(path, title, body)
 
 
 def _mesh_rows(mesh: dict | None) -> list[str]:

@@ -8,14 +8,13 @@ self-contained (charts embedded as PNG data, no script, no external resource) an
 
 from __future__ import annotations
 
-import base64
 import html
 import io
 import math
 from pathlib import Path
 from typing import Any
 
-from virtual_machine.output.report import STYLE, html_table
+from virtual_machine.output.report import html_table, image_tag, write_page
 from virtual_machine.studies.budget import Budget, ParameterBudget
 from virtual_machine.studies.spec import Study
 
@@ -51,12 +50,7 @@ def write_study_report(
         "<h2>Cases</h2>",
         _cases_table(study, records),
     ]
-    page = (
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{_e(title)}</title>'
-        f"<style>{STYLE}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
-    )
-    Path(path).write_text(page)
-    return Path(path)
+    return write_page(path, title, body)
 
 
 # --- sections ---------------------------------------------------------------------------------------------------
@@ -219,7 +213,7 @@ def _tornado_section(study: Study, budget: Budget) -> list[str]:
         f"<p>Each bar runs from the parameter's base value (vertical line) to its value with the part at {at}, "
         "every other part at its base; the parts with the widest span on top.</p>"
     )
-    return [note, *(_image(png, "tornado") for png in tornado_pngs(study.method, budget.parameters))]
+    return [note, *(image_tag(png, "tornado") for png in tornado_pngs(study.method, budget.parameters))]
 
 
 def _cases_table(study: Study, records: dict[str, dict[str, Any]]) -> str:
@@ -308,10 +302,6 @@ def _tornado_axis(ax: Any, p: ParameterBudget) -> None:
 
 
 # --- formatting -------------------------------------------------------------------------------------------------
-
-
-def _image(png: bytes, alt: str) -> str:
-    return f'<img alt="{_e(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
 
 
 def _e(text: str) -> str:

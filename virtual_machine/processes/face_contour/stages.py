@@ -190,15 +190,15 @@ def _record(rrd: Path, record, stl: Path) -> None:
     import rerun as rr
     import trimesh
 
-    from virtual_machine.output.recording import _send_series
+    from virtual_machine.output.recording import send_series
 
     rrd.parent.mkdir(parents=True, exist_ok=True)
     rec = rr.RecordingStream("skive_face_contour", send_properties=False)
     rec.save(str(rrd))
     rr.set_log_time_enabled(False, recording=rec)
     t = np.asarray(record.trace_t, dtype=float)
-    _send_series(rec, "machine/axes", t, record.trace_q, ["A [rad]", "phi [rad]", "E [rad]", "Z [mm]"])
-    _send_series(
+    send_series(rec, "machine/axes", t, record.trace_q, ["A [rad]", "phi [rad]", "E [rad]", "Z [mm]"])
+    send_series(
         rec,
         "machine/synchronisation",
         t,
@@ -244,7 +244,7 @@ def _write(out: Path, doc: dict[str, Any], cut) -> None:
 
 
 def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
-    from virtual_machine.output.report import STYLE, html_table
+    from virtual_machine.output.report import html_table, write_page
 
     rows = [[s["slot"], s["bottom_shape"], s["bottom_form_um"], *s["side_bow_um"]] for s in doc["slots"]]
     body = [
@@ -257,7 +257,4 @@ def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
         f"<pre>{html.escape(format_setting_sheet(job))}</pre>",
         f"<pre>{html.escape(Path(path).read_text())}</pre>",
     ]
-    page.write_text(
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>skive run</title><style>{STYLE}</style>'
-        "</head><body>\n" + "\n".join(body) + "\n</body></html>\n"
-    )
+    write_page(page, "skive run", body)

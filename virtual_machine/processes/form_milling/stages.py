@@ -357,7 +357,7 @@ def _write(doc: dict[str, Any], out: Path) -> list[Path]:
 
 def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], plan: CopyingPlan) -> None:
     from virtual_machine.output.formatting import class_table
-    from virtual_machine.output.report import STYLE, _image, html_table
+    from virtual_machine.output.report import html_table, image_tag, write_page
 
     iso = doc["iso1328"]
     cls = (iso.get("class") or {}).get("overall")
@@ -384,7 +384,7 @@ def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], pla
         html_table(["parameter", "left", "right", "tolerance", "class"], rows),
         "<h2>Accuracy check (step 15): largest residual against the design [um]</h2>",
         html_table(["where", "round", "residual [um]"], checks),
-        *[_image(c) for c in charts],
+        *[image_tag(c) for c in charts],
         "<h2>Run</h2>",
         html_table(["", ""], facts),
         "<h2>Path and mill</h2>",
@@ -392,10 +392,7 @@ def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], pla
         "<h2>Job file</h2>",
         f"<pre>{html.escape(Path(path).read_text())}</pre>",
     ]
-    page.write_text(
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>skive run</title><style>{STYLE}</style>'
-        "</head><body>\n" + "\n".join(body) + "\n</body></html>\n"
-    )
+    write_page(page, "skive run", body)
 
 
 def _record(rrd: Path, job: Job, record, stl_path: Path, doc: dict[str, Any], charts: list[Path]) -> None:
@@ -403,15 +400,15 @@ def _record(rrd: Path, job: Job, record, stl_path: Path, doc: dict[str, Any], ch
     import rerun as rr
     import trimesh
 
-    from virtual_machine.output.recording import _send_series
+    from virtual_machine.output.recording import send_series
 
     rrd.parent.mkdir(parents=True, exist_ok=True)
     rec = rr.RecordingStream("skive_form_milling", send_properties=False)
     rec.save(str(rrd))
     rr.set_log_time_enabled(False, recording=rec)
     t = np.asarray(record.trace_t, dtype=float)
-    _send_series(rec, "machine/axes", t, record.trace_q[:, :4], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]"])
-    _send_series(rec, "machine/following_error", t, record.trace_error, ["A [arcsec]", "X [um]", "Y [um]", "Z [um]"])
+    send_series(rec, "machine/axes", t, record.trace_q[:, :4], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]"])
+    send_series(rec, "machine/following_error", t, record.trace_error, ["A [arcsec]", "X [um]", "Y [um]", "Z [um]"])
     mesh = trimesh.load(stl_path, force="mesh")
     rec.log(
         "gear",

@@ -201,7 +201,7 @@ def _stl(solid) -> bytes:
 
 
 def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
-    from virtual_machine.output.report import STYLE, html_table
+    from virtual_machine.output.report import html_table, write_page
 
     m, c = doc["machine"], doc["commanded"]
     rows = [
@@ -225,17 +225,14 @@ def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
         "<h2>Job file</h2>",
         f"<pre>{html.escape(Path(path).read_text())}</pre>",
     ]
-    page.write_text(
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>skive run</title><style>{STYLE}</style>'
-        "</head><body>\n" + "\n".join(body) + "\n</body></html>\n"
-    )
+    write_page(page, "skive run", body)
 
 
 def _record(rrd: Path, rec, sampled: SampledTurning, job: Job) -> None:
     """The carriage's path against the command and the uncut chip thickness over machine time."""
     import rerun as rr
 
-    from virtual_machine.output.recording import _send_series
+    from virtual_machine.output.recording import send_series
 
     rrd.parent.mkdir(parents=True, exist_ok=True)
     stream = rr.RecordingStream("skive_turning", send_properties=False)
@@ -244,7 +241,7 @@ def _record(rrd: Path, rec, sampled: SampledTurning, job: Job) -> None:
     commanded = commanded_path(job, sampled)
     k0 = len(rec.t) - len(sampled.theta)
     t = rec.t[k0:]
-    _send_series(stream, "lathe/carriage_mm", t, np.column_stack([sampled.z, commanded]), ["made", "commanded"])
+    send_series(stream, "lathe/carriage_mm", t, np.column_stack([sampled.z, commanded]), ["made", "commanded"])
     thickness = np.asarray(sampled.uncut_thickness(sampled.theta))
-    _send_series(stream, "lathe/uncut_chip_mm", t, np.clip(thickness, -1.0, 1.0)[:, None], ["uncut chip"])
+    send_series(stream, "lathe/uncut_chip_mm", t, np.clip(thickness, -1.0, 1.0)[:, None], ["uncut chip"])
     stream.flush()
