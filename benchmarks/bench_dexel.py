@@ -88,7 +88,7 @@ def spacings(a) -> None:
         with tempfile.TemporaryDirectory() as tmp:
             stl = write_gear_stl(rep.result.gear, Path(tmp) / "gear.stl", 0.0)
             mesh = check_mesh(stl.mesh, "gear.stl")
-            doc, _ = measure_cut(st.gear, rep.edge, ideal_passes(st), mesh, opts, 0.01)
+            doc, _ = measure_cut(st.gear, SweptVolumes(st.gear, rep.edge, ideal_passes(st)), mesh, opts, 0.01)
         rows.append((spec, rep, wall, doc, stl))
         ref = ref if ref is not None else chip_table(rep)
     print(f"\n{a.job}: {len(st.passes)} passes, {machine:.2f} s of machine time, feed {st.axial_feed} mm/rev")

@@ -1,47 +1,42 @@
 """Measuring a cut: the exact swept surface for micrometre truth, the mesh beside it, and how far they differ.
 
-The gear of a cut is what its passages removed. Its exact swept surface
-(:class:`cutting.skiving.exact_sweep.SweptVolumes`,
-no chord error) is the workpiece measured first; the manifold solid the booleans left (gear.stl, cut to an
-engineering tolerance) is measured the same way, and the two are compared point by point along the same traces:
-they may differ by the mesh's sweep error, which the cut reports as a bound.
+The gear of a cut is what its passages removed. Its exact swept surface (the caller hands it over, e.g.
+:class:`cutting.skiving.exact_sweep.SweptVolumes`: no chord error) is the workpiece measured first; the manifold
+solid the booleans left (gear.stl, cut to an engineering tolerance) is measured the same way, and the two are
+compared point by point along the same traces: they may differ by the mesh's sweep error, which the cut reports as
+a bound.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from cutting.errors import InputError
 from cutting.gear import Gear
-from cutting.skiving.edge import CuttingEdge
-from cutting.skiving.exact_sweep import SweptVolumes
-from cutting.skiving.trajectory import PassMotion
 from metrology.measure import MeasureOptions, measure_gear
 from metrology.sections import MeshData
-from metrology.workpiece import UnmeasurableError
+from metrology.workpiece import UnmeasurableError, Workpiece
 
 UM = 1e3
 
 
 def measure_cut(
     gear: Gear,
-    edge: CuttingEdge,
-    motions: Sequence[PassMotion],
+    exact: Workpiece,
     mesh: MeshData | None,
     opt: MeasureOptions,
     sweep_bound: float,
     mesh_name: str = "gear.stl",
     simplification: float = 0.0,
 ) -> tuple[dict[str, Any], dict[str, Any] | None]:
-    """The measurement of the exact swept surface of ``motions`` (the document ``skive cut``/``run`` write), with a
-    ``mesh`` block comparing it to the measurement of ``mesh`` (None: not measured); and that mesh measurement.
-    ``sweep_bound`` [mm]: the mesh's reported sweep error in the passes that shape the flanks; ``simplification``
-    [mm]: how far the file's simplification may have moved its surface besides (``cutting/gear_file.py``)."""
-    exact = SweptVolumes(gear, edge, motions)
+    """The measurement of ``exact``, the cut's exact swept surface as its caller made it (the document ``skive
+    cut``/``run`` write), with a ``mesh`` block comparing it to the measurement of ``mesh`` (None: not measured);
+    and that mesh measurement. ``sweep_bound`` [mm]: the mesh's reported sweep error in the passes that shape the
+    flanks; ``simplification`` [mm]: how far the file's simplification may have moved its surface besides
+    (``cutting/gear_file.py``)."""
     doc = measure_gear(exact, gear, opt, exact.name)
     if mesh is None:
         return doc, None

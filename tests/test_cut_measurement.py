@@ -52,7 +52,7 @@ def small_cut():
     report = manifold_cut(1.5e-3)
     mesh = check_mesh(to_trimesh(report.result.gear))
     doc, mesh_doc = measure_cut(
-        st.gear, report.edge, ideal_passes(st), mesh, MeasureOptions(), report.result.sweep_error
+        st.gear, SweptVolumes(st.gear, report.edge, ideal_passes(st)), mesh, MeasureOptions(), report.result.sweep_error
     )
     return st, report, doc, mesh_doc
 

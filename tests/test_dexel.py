@@ -15,7 +15,7 @@ from cutting.gear import Gear
 from cutting.skiving.dexel import DexelWorkpiece
 from cutting.skiving.dexel_lines import GROWTH, DexelLines, DexelSpacing, GridLines, graded
 from cutting.skiving.edge import CuttingEdge
-from cutting.skiving.exact_sweep import PassTable
+from cutting.skiving.exact_sweep import PassTable, SweptVolumes
 from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.setup import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
@@ -261,7 +261,9 @@ def test_both_solids_measure_within_their_bounds_of_the_exact_surface():
             stl = write_gear_stl(report.result.gear, Path(tmp) / "gear.stl", 0.0)
             mesh = check_mesh(stl.mesh, "gear.stl")
         bound = report.result.pass_sweep_error[len(st.passes) - 1]
-        doc, _ = measure_cut(st.gear, report.edge, ideal_passes(st), mesh, MeasureOptions(), bound)
+        doc, _ = measure_cut(
+            st.gear, SweptVolumes(st.gear, report.edge, ideal_passes(st)), mesh, MeasureOptions(), bound
+        )
         block = doc["mesh"]
         assert block["within_bound"], (removal, block["trace_difference_um"], block["trace_bound_um"])
         assert abs(block["difference_um"]["f_p"]) < 1.0 and abs(block["difference_um"]["F_alpha"]) < 2.0, removal

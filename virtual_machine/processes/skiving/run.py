@@ -21,6 +21,7 @@ import numpy as np
 from cutting.errors import InputError, Problem
 from cutting.gear_file import GearFile, write_gear_stl
 from cutting.skiving.edge import CuttingEdge
+from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.ideal_cut import default_workers
 from cutting.skiving.removal import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
@@ -141,13 +142,14 @@ def measure_written_cut(
     gear.stl held to the finishing pass's sweep error plus the file's simplification."""
     opts = MeasureOptions.from_job(job.measurement, job.modification)
     bound = cut.pass_sweep_error.get(len(job.skiving.passes) - 1, cut.sweep_error)
+    exact = SweptVolumes(job.gear, edge, motions)  # the truth the measuring machine probes: no chord error
     try:
         mesh = check_mesh(stl.mesh, str(stl_path))
     except InputError as exc:  # the file does not close: say so beside the exact measurement, which stands
-        measurement, _ = measure_cut(job.gear, edge, motions, None, opts, bound)
+        measurement, _ = measure_cut(job.gear, exact, None, opts, bound)
         measurement["mesh"] = unmeasured_mesh(str(stl_path), str(exc), len(stl.mesh.faces))
         return measurement
-    measurement, _ = measure_cut(job.gear, edge, motions, mesh, opts, bound, str(stl_path), stl.simplification)
+    measurement, _ = measure_cut(job.gear, exact, mesh, opts, bound, str(stl_path), stl.simplification)
     return measurement
 
 
