@@ -143,3 +143,9 @@ class Reporter:
         for bar in self._tasks:
             bar.close()
         self._tasks.clear()
+
+    def __enter__(self) -> Reporter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()  # a stage's bars end with it, also when it fails

@@ -59,9 +59,8 @@ class FaceContour(Process):
     ) -> Product:
         from virtual_machine.processes.face_contour.stages import cut_face_job, format_result
 
-        rep = reporter_or_default(reporter)
-        doc = cut_face_job(job, out, rep.stage)
-        rep.close()
+        with reporter_or_default(reporter) as rep:
+            doc = cut_face_job(job, out, rep.stage)
         text = format_result(doc) + f"\n\nwrote {out / 'coupling.stl'}, measurement.json"
         return Product("cut", doc, text, written(out, *FILES), out)
 
@@ -77,9 +76,8 @@ class FaceContour(Process):
     ) -> Product:
         from virtual_machine.processes.face_contour.stages import format_result, run_face_job
 
-        rep = reporter_or_default(reporter)
-        doc = run_face_job(job, Path(job.source), out, None, rep.stage, rrd)
-        rep.close()
+        with reporter_or_default(reporter) as rep:
+            doc = run_face_job(job, Path(job.source), out, None, rep.stage, rrd)
         text = format_result(doc) + (
             f"\n\nwrote {out / 'coupling.stl'}, measurement.json, report.html" + (f", {rrd}" if rrd else "")
         )

@@ -54,9 +54,8 @@ class FormMilling(Process):
 
         if trajectory is not None:
             raise InputError(Problem("--trajectory", str(trajectory), "is for skiving jobs", "use `skive run` instead"))
-        rep = reporter_or_default(reporter)
-        doc = cut_form_job(job, out, rep.stage)
-        rep.close()
+        with reporter_or_default(reporter) as rep:
+            doc = cut_form_job(job, out, rep.stage)
         text = "\n".join(
             [
                 format_measurement(doc, str(out / "gear.stl")),
@@ -91,10 +90,8 @@ class FormMilling(Process):
             if bars:
                 bars[-1].update_to(fraction)
 
-        try:
+        with rep:
             doc = run_form_job(job, Path(job.source), out, rrd, progress, announce)
-        finally:
-            rep.close()
         wall = sum(v for k, v in doc["run"]["durations_s"].items() if k != "machine")
         text = "\n".join(
             [

@@ -29,11 +29,7 @@ class Skiving(Process):
     title = "gear skiving"
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from virtual_machine.output.formatting import format_sheet
-        from virtual_machine.setting.sheet import setup_sheet
-
-        sheet = setup_sheet(job, structure)
-        return Product("setup", finite(sheet.to_json()), format_sheet(sheet, job.source))
+        return sheet_product(job, structure)
 
     def simulate(
         self,
@@ -57,10 +53,8 @@ class Skiving(Process):
             bar.update_to(t)
 
         t0 = time.perf_counter()
-        try:
+        with rep:
             rec = simulate(job, duration=duration, progress=progress)
-        finally:
-            rep.close()
         wall = time.perf_counter() - t0
         meta = {
             "job": job.source,
@@ -120,17 +114,18 @@ class Skiving(Process):
             from virtual_machine.output.motion_io import load_trajectory
 
             motions = sampled_passes(st, load_trajectory(trajectory))
-        report = cut_ideal(
-            st,
-            kind,
-            job.process["sweep_error"],
-            job.process["roughing_sweep_error"],
-            progress,
-            workers,
-            motions=motions,
-            removal=removal,
-            spacing=dexel_spacing(job),
-        )
+        with rep:  # the passes' bars end with the cut
+            report = cut_ideal(
+                st,
+                kind,
+                job.process["sweep_error"],
+                job.process["roughing_sweep_error"],
+                progress,
+                workers,
+                motions=motions,
+                removal=removal,
+                spacing=dexel_spacing(job),
+            )
         rep.stage("measurement: the exact swept surface and the mesh")
         out.mkdir(parents=True, exist_ok=True)
         stl = write_gear_stl(report.result.gear, out / "gear.stl", job.process["stl_tolerance"])
@@ -198,15 +193,23 @@ class Skiving(Process):
             if name != "machine and cut":
                 rep.stage(name)
 
-        try:
+        with rep:
             doc = run_job(job, out, rrd, progress, announce, workers, None, removal)
-        finally:
-            rep.close()
         lines = [format_measurement(doc, str(out / "gear.stl"))]
         if doc.get("modification_path"):
             lines.append(format_path(doc["modification_path"]))
         lines.append(format_run(doc["run"], out, rrd))
         return Product("run", doc, "\n".join(lines), written(out, *RUN_FILES) + ([rrd] if rrd else []), out)
+
+
+def sheet_product(job: Job, structure: str | None = None) -> Product:
+    """The setting sheet of a skiving or thread job (virtual_machine.setting.sheet: seed 000's S1-S4, seed 001's
+    thread group) as the setup stage's product."""
+    from virtual_machine.output.formatting import format_sheet
+    from virtual_machine.setting.sheet import setup_sheet
+
+    sheet = setup_sheet(job, structure)
+    return Product("setup", finite(sheet.to_json()), format_sheet(sheet, job.source))
 
 
 def format_simulation(doc: dict, job: Job, wall: float, out: Path) -> str:

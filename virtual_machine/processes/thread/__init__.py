@@ -12,7 +12,6 @@ import time
 from pathlib import Path
 
 from cutting.errors import InputError, Problem
-from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
@@ -24,11 +23,9 @@ class ThreadCutting(Process):
     title = "thread cutting"
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from virtual_machine.output.formatting import format_sheet
-        from virtual_machine.setting.sheet import setup_sheet
+        from virtual_machine.processes.skiving import sheet_product
 
-        sheet = setup_sheet(job, structure)
-        return Product("setup", finite(sheet.to_json()), format_sheet(sheet, job.source))
+        return sheet_product(job, structure)  # the thread group's sheet comes from the same setting sheets
 
     def simulate(
         self,

@@ -62,9 +62,8 @@ class VibrationTurning(Process):
     ) -> Product:
         from virtual_machine.processes.turning.stages import format_run, run_turning
 
-        rep = reporter_or_default(reporter)
-        doc = run_turning(job, Path(job.source), out, rrd, rep.stage)
-        rep.close()
+        with reporter_or_default(reporter) as rep:
+            doc = run_turning(job, Path(job.source), out, rrd, rep.stage)
         text = format_run(doc) + (
             f"\n\nwrote {out / 'workpiece.stl'}, measurement.json, report.html" + (f", {rrd}" if rrd else "")
         )
