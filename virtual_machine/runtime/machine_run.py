@@ -27,6 +27,7 @@ from virtual_machine.job import Job, flatten_model
 from virtual_machine.runtime.physics import AXES, MachinePhysics
 from virtual_machine.runtime.program import ProgramSettings, program
 from virtual_machine.setting.chains import chain_ratios
+from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.setting.sheet import setup_sheet
 from virtual_machine.structures.hydraulic import HydraulicS2, HydraulicS3
 from virtual_machine.structures.mechanical import MechanicalS1
@@ -115,14 +116,22 @@ def machine_params(job: Job) -> SkivingMachineParams:
     return override(size_params(machine_size(job)), flatten_model(job.machine.get("model")))
 
 
-def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, adaptive: bool | None = None):
-    """Structure S4 (equal coordinates) with the job's setting sheet; other structures follow (issue 5)."""
+def build_structure(
+    job: Job,
+    params: SkivingMachineParams,
+    phys: MachinePhysics,
+    adaptive: bool | None = None,
+    plan: SkivingPlan | None = None,
+):
+    """The controls of the job's structure with its setting sheet (``plan``: the run's, if handed on): S4
+    (equal coordinates) here, S1-S3 in :func:`_build_chain_structure`."""
     m = job.machine
+    plan = plan_of(job, plan)
     if m["structure"] in ("mechanical", "hydraulic-differential", "hydraulic-shaft"):
-        return _build_chain_structure(job, params, phys)
+        return _build_chain_structure(job, params, phys, plan)
     if m["structure"] != "mechatronic":
         raise NotImplementedError(f"machine.structure = {m['structure']!r}: unknown structure")
-    sheet = setup_sheet(job, "mechatronic")
+    sheet = plan.sheet("mechatronic")
     st = sheet.settings
     setup = job.skiving
     j_tool = params.tool_motor_inertia + params.tool_inertia * params.tool_drive.ratio**2
@@ -176,7 +185,7 @@ def build_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics
     )
 
 
-def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics):
+def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: MachinePhysics, plan: SkivingPlan):
     """S1 and S2: the main motor, and the CNC's or the hydraulic elements beside the chains of the model."""
     m = job.machine
     motor = InductionMotor(
@@ -198,10 +207,11 @@ def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: Machine
     if m["structure"] == "hydraulic-shaft":
         reverse = "up" if job.process["feed_direction"] == "down" else "down"
         back = dataclasses.replace(job, process=dict(job.process, feed_direction=reverse))
-        discs = tuple(setup_sheet(j, "hydraulic-shaft").settings["kx"].realisation["disc_windows"] for j in (job, back))
+        sheets = (plan.sheet("hydraulic-shaft"), setup_sheet(back, "hydraulic-shaft"))  # the return stroke's own
+        discs = tuple(s.settings["kx"].realisation["disc_windows"] for s in sheets)
         home = {j: phys.q(j) for j in ("B2", "TV", "GShD")}
         return HydraulicS3(motor, discs, stepping, m["command_pulses_per_rev"], m["encoder_lines"], home)
-    sheet = setup_sheet(job, "hydraulic-differential")
+    sheet = plan.sheet("hydraulic-differential")
     windows = tuple(sheet.settings[k].realisation.get("disc_windows") for k in ("kx", "ky", "is"))
     home = {j: phys.q(j) for j in ("B1", "B2", "TV", "GShD1", "GShD2", "GShD3")}
     return HydraulicS2(
@@ -237,6 +247,7 @@ class MachineRun:
     (virtual_machine/processes/skiving/cutting_load.py: InputError naming the motor); given ``params`` are taken as
     they are (tests,
     benchmarks). Without ``settings`` the run-up follows the machine's ``work_acceleration``.
+    ``plan``: the job's setup, ideal passes and setting sheets as an earlier stage made them (else made here).
 
     ``load``, if set, gives the cutting loads of a servo tick, ``load(t, dt)``: (force [N] on the workpiece,
     point [mm], moment [N m]) in the blank frame, one per engaged tooth, each the mean over [t, t + dt]; each is
@@ -252,20 +263,22 @@ class MachineRun:
         disturbance: Callable[[float], float] | None = None,
         disturbance_axis: str = "B2",
         correction: PathCorrection | None = None,
+        plan: SkivingPlan | None = None,
     ):
         self.job = job
+        self.plan = plan = plan_of(job, plan)
         if params is None:  # the job's own machine: refused before the run if its motors cannot hold the cut
             from virtual_machine.processes.skiving.cutting_load import check_machine_holds
 
             params = machine_params(job)
             check_machine_holds(job, params)
         self.params = params
-        self.setup = setup = job.skiving
+        self.setup = setup = plan.setup
         structure = job.machine["structure"]
         chains = chain_ratios(job) if structure != "mechatronic" else None
         self.spec = build_spec(setup, self.params, job.machine["lead_screw_pitch"], structure, chains)
         self.phys = phys = MachinePhysics(self.spec.compile(), self.params)
-        self.machine = machine = build_structure(job, self.params, phys)
+        self.machine = machine = build_structure(job, self.params, phys, plan=plan)
         self.servo_substeps = servo_substeps
         self.dt = phys.model.opt.timestep * servo_substeps
         p = job.machine["command_pulses_per_rev"]
@@ -273,7 +286,9 @@ class MachineRun:
         settings = settings or ProgramSettings(runup_acceleration=self.params.work_acceleration)
         check_correction(job, correction)
         self.work_pulses_per_rad = p / (2 * math.pi)  # B4 command pulses of the work axis per radian
-        self._ticks = program(setup, self.dt, ppm, machine, settings, correction, self.work_pulses_per_rad)
+        self._ticks = program(
+            setup, self.dt, ppm, machine, settings, correction, self.work_pulses_per_rad, passes=plan.passes
+        )
         self.corrections: list[float] = []  # the tangential correction asked for at each tick [rad]
         # the CNC of the servo structures watches the synchronisation (following error); a chain has no CNC loop
         self.following_limit = settings.following_error_limit if structure == "mechatronic" else math.inf
@@ -441,11 +456,13 @@ def simulate(
     disturbance_axis: str = "B2",
     progress: Callable[[float], None] | None = None,
     timing: dict[str, float] | None = None,
+    plan: SkivingPlan | None = None,
 ) -> MotionRecord:
     """Run the machine through the job's passes (no cutting). ``duration`` [s] stops early; ``disturbance(t)``
     is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes).
-    ``timing``, if given, receives the seconds spent in the physics and in the controllers (benchmarks)."""
-    run = MachineRun(job, params, servo_substeps, settings, disturbance, disturbance_axis)
+    ``timing``, if given, receives the seconds spent in the physics and in the controllers (benchmarks); ``plan``:
+    the job's plan if the caller has it."""
+    run = MachineRun(job, params, servo_substeps, settings, disturbance, disturbance_axis, plan=plan)
     run.advance(math.inf if duration is None else duration, progress)
     if timing is not None:
         timing.update(run.timing)

@@ -8,11 +8,12 @@ the B4 pulses of the helix) with a linear interpolator, so every pass starts in 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from cutting.skiving.path_correction import PathCorrection
 from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import PassMotion
 from virtual_machine.structures.mechatronic import CncState
 
 
@@ -50,13 +51,15 @@ def runup_time(setup: SkivingSetup, settings: ProgramSettings) -> float:
     return max(settings.runup, 1.5 * omega2 / settings.runup_acceleration)
 
 
-def program_duration(setup: SkivingSetup, settings: ProgramSettings | None = None) -> float:
+def program_duration(
+    setup: SkivingSetup, settings: ProgramSettings | None = None, passes: Sequence[PassMotion] | None = None
+) -> float:
     """Machine time of the whole program [s] (the return of S3 at feed rate counted as a rapid: an estimate for
-    progress bars)."""
+    progress bars). ``passes``: the setup's ideal passes if the caller has them."""
     from cutting.skiving.trajectory import ideal_passes
 
     settings = settings or ProgramSettings()
-    passes = ideal_passes(setup)
+    passes = ideal_passes(setup) if passes is None else passes
     total = runup_time(setup, settings) + settings.settle + sum(p.duration for p in passes)
     for i in range(len(passes) - 1):
         travel = abs(passes[i + 1].s_start - passes[i].s_start - passes[i].v_s * passes[i].duration)
@@ -72,17 +75,19 @@ def program(
     settings: ProgramSettings | None = None,
     correction: PathCorrection | None = None,
     work_pulses_per_rad: float = 0.0,
+    passes: Sequence[PassMotion] | None = None,
 ) -> Iterator[Tick]:
     """Ticks of the whole job. ``machine`` is the structure: the CNC reads the pulses it has issued
     (``screw_pulses``, ``b4_pulses``) and its B4 pulses for a screw position (``b4_for_screw``).
 
     ``correction`` (a flank modification's path, seed 003): during the finishing stroke the CNC sets the radial
     slide to the pass's centre distance plus da(s) and asks summator 9 for the extra work turn dphi2(s), in
-    ``work_pulses_per_rad`` command pulses per radian, at the carriage position s it has commanded."""
+    ``work_pulses_per_rad`` command pulses per radian, at the carriage position s it has commanded. ``passes``: the
+    setup's ideal passes if the caller has them (the run's plan)."""
     from cutting.skiving.trajectory import ideal_passes
 
     settings = settings or ProgramSettings()
-    passes = ideal_passes(setup)
+    passes = ideal_passes(setup) if passes is None else passes
     down = setup.feed_direction == "down"
     feed_dir = -1 if down else 1
     out_sign = -1.0 if setup.gear.internal else 1.0  # retracting increases a (external), decreases it (internal)

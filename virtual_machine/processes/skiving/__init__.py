@@ -20,6 +20,7 @@ from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, reporter_or_default, written
+from virtual_machine.setting.plan import SkivingPlan
 
 RUN_FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png")
 
@@ -44,7 +45,8 @@ class Skiving(Process):
         from virtual_machine.runtime.machine_run import simulate
 
         rep = reporter_or_default(reporter)
-        st = job.skiving
+        plan = SkivingPlan.of(job)
+        st = plan.setup
         total = duration or (sum(st.pass_times) + 0.5 + 1.2 * (len(st.passes) - 1))  # strokes, run-up, returns
         bar = rep.task("machine time", total, "s", value_format="{:.2f}")
 
@@ -54,7 +56,7 @@ class Skiving(Process):
 
         t0 = time.perf_counter()
         with rep:
-            rec = simulate(job, duration=duration, progress=progress)
+            rec = simulate(job, duration=duration, progress=progress, plan=plan)
         wall = time.perf_counter() - t0
         meta = {
             "job": job.source,
@@ -85,14 +87,14 @@ class Skiving(Process):
     ) -> Product:
         from cutting.gear_file import write_gear_stl
         from cutting.skiving.ideal_cut import cut_ideal, default_workers
-        from cutting.skiving.trajectory import ideal_passes
         from metrology.charts import finite, write_charts
         from virtual_machine.job import dexel_spacing
         from virtual_machine.output.formatting import chip_record, format_gear_stl, format_measurement, format_removal
         from virtual_machine.processes.skiving.run import measure_written_cut
 
         rep = reporter_or_default(reporter)
-        st = job.skiving
+        plan = SkivingPlan.of(job)
+        st = plan.setup
         bars: dict = {}
 
         def progress(i: int, done: int, total: int) -> None:
@@ -101,14 +103,14 @@ class Skiving(Process):
             bars[i].update_to(done)
 
         kind = edge or job.cutter_options["edge"]
-        motions = None
-        plan = None
+        motions = list(plan.passes)
+        path = None
         if job.modification is not None and trajectory is None:
             from virtual_machine.processes.skiving.modification_path import plan_path
 
             rep.stage("path for the flank modification (seed 003: radial and tangential corrections, accuracy check)")
-            plan = plan_path(job)
-            motions = plan.motions
+            path = plan_path(job, plan=plan)
+            motions = path.motions
         if trajectory is not None:
             from cutting.skiving.sampled_motion import sampled_passes
             from virtual_machine.output.motion_io import load_trajectory
@@ -129,13 +131,11 @@ class Skiving(Process):
         rep.stage("measurement: the exact swept surface and the mesh")
         out.mkdir(parents=True, exist_ok=True)
         stl = write_gear_stl(report.result.gear, out / "gear.stl", job.process["stl_tolerance"])
-        result = measure_written_cut(
-            job, report.edge, motions or ideal_passes(st), report.result, stl, out / "gear.stl"
-        )
+        result = measure_written_cut(job, report.edge, motions, report.result, stl, out / "gear.stl")
         r = report.result
         result["cut"] = {
             "edge": kind,
-            "motion": ("ideal" if plan is None else "ideal, finishing pass along the modification's path")
+            "motion": ("ideal" if path is None else "ideal, finishing pass along the modification's path")
             if trajectory is None
             else str(trajectory),
             "sweep_error_um": r.sweep_error * 1e3,
@@ -153,15 +153,15 @@ class Skiving(Process):
             "removal": report.removal,
             "chips": [chip_record(c) for c in r.chips],
         }
-        if plan is not None:
+        if path is not None:
             from virtual_machine.processes.skiving.modification_path import path_summary
 
-            result["modification_path"] = path_summary(plan)
+            result["modification_path"] = path_summary(path)
         doc = finite(result)
         write_json(out / "measurement.json", doc)
         write_charts(out, result)
         lines = [format_measurement(doc, str(out / "gear.stl"))]
-        if plan is not None:
+        if path is not None:
             lines.append(format_path(doc["modification_path"]))
         lines.append(format_removal(result["cut"], len(st.passes), sum(st.pass_times)))
         lines.append(format_gear_stl(result["cut"]["gear_stl"]))
@@ -183,7 +183,9 @@ class Skiving(Process):
         from virtual_machine.runtime.program import program_duration
 
         rep = reporter_or_default(reporter)
-        bar = rep.task("machine and cut", program_duration(job.skiving), "s of machine time", value_format="{:.2f}")
+        plan = SkivingPlan.of(job)
+        total = program_duration(plan.setup, passes=plan.passes)
+        bar = rep.task("machine and cut", total, "s of machine time", value_format="{:.2f}")
 
         def progress(t: float, passages: int) -> None:
             bar.set_total(t)
@@ -194,7 +196,7 @@ class Skiving(Process):
                 rep.stage(name)
 
         with rep:
-            doc = run_job(job, out, rrd, progress, announce, workers, None, removal)
+            doc = run_job(job, out, rrd, progress, announce, workers, None, removal, plan)
         lines = [format_measurement(doc, str(out / "gear.stl"))]
         if doc.get("modification_path"):
             lines.append(format_path(doc["modification_path"]))

@@ -40,11 +40,11 @@ from cutting.skiving.removal import (
 )
 from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
-from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.job import Job, dexel_spacing
 from virtual_machine.processes.skiving.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
 from virtual_machine.runtime.machine_run import SEGMENTS, MachineRun, MotionRecord, relative_pose
+from virtual_machine.setting.plan import SkivingPlan, plan_of
 
 FEED = SEGMENTS.index("feed")
 
@@ -155,6 +155,7 @@ def cosimulate(
     workers: int = 1,
     correction: PathCorrection | None = None,
     removal: str = "dexel",
+    plan: SkivingPlan | None = None,
 ) -> CoSimulation:
     """Run the job's machine and cut its gear from the motion it really makes, with the chips' forces acting on
     the machine (``forces=False``: the cut follows the machine, no force acts back). ``progress(machine_time,
@@ -164,18 +165,20 @@ def cosimulate(
     path corrections of a flank modification (virtual_machine/processes/skiving/modification_path.py), made by the
     CNC. ``removal``:
     "dexel" (the default: the dexel workpiece, cut a few passages at a time in this process; ``workers`` is moot)
-    or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes)."""
-    setup = job.skiving
+    or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes). ``plan``: the job's
+    setup, ideal passes and setting sheets if an earlier stage made them."""
+    plan = plan_of(job, plan)
+    setup = plan.setup
     kind = edge_kind or job.cutter_options["edge"]
     edge = make_edge(setup, kind)
-    plans = ideal_passes(setup)
+    plans = plan.passes
     check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
     n_pass = len(setup.passes)
     tols = [
         job.process["sweep_error"] if i == n_pass - 1 else job.process["roughing_sweep_error"] for i in range(n_pass)
     ]
     mat = material(job.process["material"])
-    run = MachineRun(job, params, servo_substeps, correction=correction)
+    run = MachineRun(job, params, servo_substeps, correction=correction, plan=plan)
     lag = max_lag(workers, removal)
     predictor = ForcePredictor(lag)
     run.load = predictor if forces else (lambda t, dt: ())  # no force, but the work accounting runs alike
@@ -195,7 +198,7 @@ def cosimulate(
     edge_pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
     pitch = 2 * math.pi / setup.cutter.teeth
     # each pass's own engagement: a deeper pass engages earlier, and its passages' samples must cover the window
-    halves = [engagement_half_angle(plan, edge) for plan in plans]
+    halves = [engagement_half_angle(p, edge) for p in plans]
     chunk = pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
     in_blank = functools.partial(in_blank_envelope, setup.gear)
     sim = CoSimulation(None, removal.result, material=mat, edge=edge, removal=removal_kind, lag=lag)

@@ -30,9 +30,10 @@ from cutting.flank import SIDES
 from cutting.skiving.edge import CuttingEdge, make_edge
 from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.path_correction import PathCorrection, corrected_motion
-from cutting.skiving.trajectory import PassMotion, ideal_passes
+from cutting.skiving.trajectory import PassMotion
 from metrology.measure import MeasureOptions, measure_gear
 from virtual_machine.job import Job
+from virtual_machine.setting.plan import SkivingPlan, plan_of
 
 KNOTS = 10  # n of the seed's z_i = i b / (2n)
 PROBE = 2e-3  # mm of flank movement used to measure J
@@ -91,13 +92,17 @@ def beyond_path(job: Job) -> dict[str, float]:
     return out
 
 
-def plan_path(job: Job, tolerance: float = 0.2e-3, max_iterations: int = 6) -> ModificationPath:
-    """Corrections of the finishing pass that make the job's modification, iterated on the exact cut."""
+def plan_path(
+    job: Job, tolerance: float = 0.2e-3, max_iterations: int = 6, plan: SkivingPlan | None = None
+) -> ModificationPath:
+    """Corrections of the finishing pass that make the job's modification, iterated on the exact cut (``plan``: the
+    job's ideal passes as an earlier stage made them)."""
     if job.modification is None:
         raise ValueError("the job has no [modification]: nothing to plan")
-    st = job.skiving
+    plan = plan_of(job, plan)
+    st = plan.setup
     edge = make_edge(st, job.cutter_options["edge"])
-    passes = ideal_passes(st)
+    passes = list(plan.passes)
     finishing = passes[-1]
     opt = MeasureOptions.from_job(job.measurement, job.modification)
     b = st.gear.face_width

@@ -37,7 +37,7 @@ from virtual_machine.output.json_file import write_json
 from virtual_machine.output.motion_io import summary
 from virtual_machine.output.report import run_chart, write_report
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
-from virtual_machine.setting.sheet import setup_sheet
+from virtual_machine.setting.plan import SkivingPlan, plan_of
 
 #: blank snapshots per pass in the recording (manifold removal; the dexel removal makes its solid once per pass)
 SNAPSHOTS_PER_PASS = 3
@@ -62,15 +62,20 @@ def run_job(
     workers: int | None = None,
     mesh_tolerance: float | None = None,
     removal: str = "dexel",
+    plan: SkivingPlan | None = None,
 ) -> dict[str, Any]:
     """Run ``job`` (or the job file at that path); write its files into ``out``; return the measurement document
     with ``run``.
     ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage;
     ``workers``: the manifold removal's processes (default one per core); ``mesh_tolerance`` [mm]: the solid's
-    tolerance (default the job's process.sweep_error); ``removal``: "dexel" or "manifold" (the reference)."""
+    tolerance (default the job's process.sweep_error); ``removal``: "dexel" or "manifold" (the reference); ``plan``:
+    the job's setup, ideal passes and setting sheets if the caller made them (every stage of the run takes it)."""
     announce = stage or (lambda name: None)
     durations: dict[str, float] = {}
-    job = with_mesh_tolerance(job if isinstance(job, Job) else load_job(job), mesh_tolerance)
+    given = job if isinstance(job, Job) else load_job(job)
+    job = with_mesh_tolerance(given, mesh_tolerance)
+    # the sweep error and the STL tolerance change neither the passes nor the setting sheets
+    plan = plan_of(given, plan) if job is given else dataclasses.replace(plan_of(given, plan), job=job)
     path = Path(job.source)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -79,16 +84,18 @@ def run_job(
     modification_path = None
     if job.modification is None:
         announce("machine and cut")
-        sim = cosimulate(job, progress=progress, snapshots_per_pass=snapshots, workers=workers, removal=removal)
+        sim = cosimulate(
+            job, progress=progress, snapshots_per_pass=snapshots, workers=workers, removal=removal, plan=plan
+        )
     else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one
-        sim, modification_path = _modification_runs(job, announce, snapshots, workers, removal)
+        sim, modification_path = _modification_runs(job, plan, announce, snapshots, workers, removal)
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
     stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process["stl_tolerance"])
     mesh = stl.mesh
     # the truth: the exact swept surface of the motion the machine made; the mesh measured beside it
-    motions = sampled_passes(job.skiving, sim.record.passes)
+    motions = sampled_passes(plan.setup, sim.record.passes)
     try:  # a workpiece the measuring machine cannot take (its datum or a ball seat fails) is the cut's fault
         measurement = measure_written_cut(job, sim.edge, motions, sim.cut, stl, out / "gear.stl")
     except (UnmeasurableError, InputError) as exc:
@@ -111,28 +118,32 @@ def run_job(
     doc = finite(measurement)
     doc["run"] = run_metadata(job, Path(path), sim, durations, stl)
     write_json(out / "measurement.json", doc)
-    sheet = format_sheet(setup_sheet(job), str(path))
+    sheet = format_sheet(plan.sheet(), str(path))
     title = f"skive run: {Path(path).name}"
     write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
     return doc
 
 
-def _modification_runs(job: Job, announce, snapshots: int, workers: int, removal: str) -> tuple[CoSimulation, dict]:
+def _modification_runs(
+    job: Job, plan: SkivingPlan, announce, snapshots: int, workers: int, removal: str
+) -> tuple[CoSimulation, dict]:
     """The path of the job's flank modification: planned on the ideal machine (J, feed-forward, accuracy check),
     then iterated on the simulated machine, one co-simulation per iteration; the best one is the run."""
     from virtual_machine.processes.skiving.modification_path import iterate_on_machine, path_summary, plan_path
 
     announce("path for the flank modification on the ideal machine (seed 003)")
-    plan = plan_path(job)
+    path = plan_path(job, plan=plan)
     count = [0]
 
     def run(correction):
         count[0] += 1
         announce(f"machine and cut along the path, iteration {count[0]}")
-        return cosimulate(job, snapshots_per_pass=snapshots, workers=workers, correction=correction, removal=removal)
+        return cosimulate(
+            job, snapshots_per_pass=snapshots, workers=workers, correction=correction, removal=removal, plan=plan
+        )
 
-    made = iterate_on_machine(job, plan, run)
-    return made.sim, path_summary(plan, made)
+    made = iterate_on_machine(job, path, run)
+    return made.sim, path_summary(path, made)
 
 
 def measure_written_cut(
