@@ -11,8 +11,8 @@ from checks import finite_max
 from scipy.optimize import brentq
 
 from cutting.face_contour.slots import (
-    FLAT_TOLERANCE,
     SWEEP_TOLERANCE,
+    ExactSlots,
     FaceCoupling,
     cut_slots,
     cutting_speed,
@@ -20,12 +20,10 @@ from cutting.face_contour.slots import (
     eccentric_tool_speed,
     element_path,
     exact_bottom,
-    measure_exact,
-    measure_mesh,
     path_velocity,
     setting_sheet,
-    slot_spacing,
 )
+from metrology.face_slots import FLAT_TOLERANCE, measure_mesh, measure_slots, slot_spacing
 
 UM = 1e-3
 
@@ -121,7 +119,7 @@ def test_fixed_setting_bottom_is_concave_as_the_path_predicts(coupling):
     exact = exact_bottom(c, ends)
     assert np.abs(exact - hand).max() < 0.1 * UM
     predicted = 0.5 * (hand[0] + hand[2]) - hand[1]  # bottom below the chord: concave
-    m = measure_exact(c)[0]
+    m = measure_slots(ExactSlots(c), c)[0]
     assert m.shape == "concave"
     assert predicted > 200 * UM
     assert m.form == pytest.approx(predicted, abs=0.1 * UM)
@@ -131,12 +129,13 @@ def test_fixed_setting_bottom_is_concave_as_the_path_predicts(coupling):
 def test_setting_sheet_eccentricity_makes_the_bottom_flat_and_more_reverses_it(coupling, flat):
     e = flat.e
     assert 0.5 < e / (coupling.R / coupling.eccentric_ratio**2) < 1.5  # near R / N^2
-    m = measure_exact(flat)[0]
+    m = measure_slots(ExactSlots(flat), flat)[0]
     assert m.shape == "flat"
     assert abs(m.form) <= 2 * UM
     assert np.ptp(m.bottom - np.interp(m.radii, m.radii[[0, -1]], m.bottom[[0, -1]])) <= 2 * UM
-    half = measure_exact(replace(flat, e=0.5 * e))[0]
-    more = measure_exact(replace(flat, e=1.5 * e))[0]
+    less_e, more_e = replace(flat, e=0.5 * e), replace(flat, e=1.5 * e)
+    half = measure_slots(ExactSlots(less_e), less_e)[0]
+    more = measure_slots(ExactSlots(more_e), more_e)[0]
     assert half.shape == "concave" and half.form > 10 * UM
     assert more.shape == "convex" and more.form < -10 * UM
     assert setting_sheet(coupling)["flat_bottom_e_mm"] == pytest.approx(e, abs=1e-9)
@@ -151,7 +150,7 @@ def test_manifold_cut_agrees_with_the_exact_slot(coupling, flat, control):
     tol = SWEEP_TOLERANCE
     assert cut.chord_error <= tol
     assert cut.solid.genus() == 1  # the annulus, no slivers left (the cut's time: benchmarks/bench_face_contour.py)
-    mesh, exact = measure_mesh(cut, c), measure_exact(c, (0, 1, 2))
+    mesh, exact = measure_mesh(cut, c), measure_slots(ExactSlots(c), c, (0, 1, 2))
     for a, b in zip(mesh, exact, strict=True):
         assert a.shape == b.shape
         assert np.abs(a.bottom - b.bottom).max() <= tol
@@ -167,9 +166,9 @@ def test_manifold_cut_agrees_with_the_exact_slot(coupling, flat, control):
 def test_cyclic_ratio_straightens_the_slot(coupling):
     """The slot's centre line bows by ~ s^2 / (R m) under the fixed setting; the cyclic ratio at the sheet's
     amplitude takes that bow out (the sides keep only their symmetric narrowing with the bottom's rise)."""
-    fixed = measure_exact(coupling)[0]
+    fixed = measure_slots(ExactSlots(coupling), coupling)[0]
     straight = replace(coupling, control="cyclic_ratio", ratio_amplitude=coupling.straight_slot_amplitude())
-    cyc = measure_exact(straight)[0]
+    cyc = measure_slots(ExactSlots(straight), straight)[0]
     half = 0.5 * (coupling.outer_radius - coupling.inner_radius)
     assert abs(fixed.side_bow.mean()) == pytest.approx(half**2 / (coupling.R * coupling.m), rel=0.1)
     assert abs(cyc.side_bow.mean()) < 0.5 * UM
@@ -186,7 +185,8 @@ def test_sector_elements_are_the_element_turned_by_beta_over_m():
     rot = np.array([[math.cos(-d), -math.sin(-d)], [math.sin(-d), math.cos(-d)]])
     assert np.abs(p0[:, :2] @ rot.T - p2[:, :2]).max() < 1e-9
     assert np.abs(p0[:, 2] - p2[:, 2]).max() < 1e-9
-    wide, one = measure_exact(c)[0], measure_exact(FaceCoupling())[0]
+    single = FaceCoupling()
+    wide, one = measure_slots(ExactSlots(c), c)[0], measure_slots(ExactSlots(single), single)[0]
     assert np.all(np.diff(wide.sides, axis=0) > np.diff(one.sides, axis=0))
 
 

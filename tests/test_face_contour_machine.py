@@ -17,15 +17,7 @@ import numpy as np
 import pytest
 from checks import finite_max
 
-from cutting.face_contour.slots import (
-    FLAT_TOLERANCE,
-    SWEEP_TOLERANCE,
-    FaceCoupling,
-    element_path,
-    measure_exact,
-    measure_mesh,
-    slot_spacing,
-)
+from cutting.face_contour.slots import SWEEP_TOLERANCE, ExactSlots, FaceCoupling, element_path
 from machine_models.face_contour_machine import (
     FaceMachineLayout,
     FaceMachineParams,
@@ -34,6 +26,7 @@ from machine_models.face_contour_machine import (
     relaxed_qpos,
 )
 from machine_models.parameters import ARCSEC
+from metrology.face_slots import FLAT_TOLERANCE, measure_mesh, measure_slots, slot_spacing
 from virtual_machine.processes.face_contour.cnc import (
     FaceContourRecord,
     FaceTuning,
@@ -256,7 +249,7 @@ def test_slot_spacing_and_form_from_the_recorded_motion(runs) -> None:
     revolution)."""
     rec, _ = runs["stiff"]
     c = rec.coupling
-    got, ideal = measure_recorded(rec), measure_exact(c, (0, 1, 2))
+    got, ideal = measure_recorded(rec), measure_slots(ExactSlots(c), c, (0, 1, 2))
     for a, b in zip(got, ideal, strict=True):
         assert a.shape == b.shape == "concave"
         assert np.abs(a.bottom - b.bottom).max() < 0.01e-3
@@ -282,7 +275,7 @@ def test_eccentric_control_gives_the_flat_bottom_on_the_ideal_machine(runs) -> N
     ideal bottom within 0.01 um; the manifold cut of the recorded motion reads flat too."""
     rec, _ = runs["stiff_eccentric"]
     c = rec.coupling
-    got, ideal = measure_recorded(rec)[0], measure_exact(c)[0]
+    got, ideal = measure_recorded(rec)[0], measure_slots(ExactSlots(c), c)[0]
     assert got.shape == ideal.shape == "flat"
     assert abs(got.form) <= FLAT_TOLERANCE
     assert np.abs(got.bottom - ideal.bottom).max() < 0.01e-3

@@ -11,7 +11,8 @@ import pytest
 from click.testing import CliRunner
 
 from cutting.errors import InputError
-from cutting.turning.vibration import crest_height, turned_surface_summary
+from cutting.turning.vibration import crest_height
+from metrology.turned_surface import turned_surface_summary
 from virtual_machine.cli import main
 from virtual_machine.job import parse_job
 from virtual_machine.processes.turning.stages import ideal_setup, simulate_summary

@@ -22,6 +22,7 @@ from cutting.turning.vibration import (
     cut_workpiece,
     uncut_thickness,
 )
+from metrology.turned_surface import crest_heights, roughness, solid_crests
 
 UM = 1e-3  # mm
 S0, R_EPS, DEPTH = 0.2, 0.8, 0.3
@@ -47,7 +48,7 @@ PHIS = (0.1234, 1.7, 3.3, 5.9)
 @pytest.fixture(scope="module")
 def rough() -> dict[str, object]:
     return {
-        name: s.roughness(72)
+        name: roughness(s, 72)
         for name, s in {
             "plain": PLAIN,
             "symmetric": SYMMETRIC,
@@ -96,7 +97,7 @@ def test_spacing_of_successive_turns_follows_the_phase_shift():
 
 def test_plain_turning_crest_is_the_exact_formula():
     for phi in PHIS:
-        c = PLAIN.crest_heights(phi)
+        c = crest_heights(PLAIN.surface(phi))
         assert len(c.height) >= 10
         assert np.max(np.abs(c.height - H_S0)) < ENVELOPE_TOL
         assert np.allclose(c.spacing, S0, atol=1e-6)
@@ -107,7 +108,7 @@ def test_plain_turning_crest_is_the_exact_formula():
 @pytest.mark.parametrize("setup", [SYMMETRIC, ASYM_SOFT, ASYM_HARD, vib(f=1.5)], ids=["sym", "soft", "hard", "f1.5"])
 def test_envelope_matches_the_prediction_from_the_path_positions(setup: TurningSetup):
     for phi in PHIS:
-        e, p = setup.crest_heights(phi), setup.predicted_crests(phi)
+        e, p = crest_heights(setup.surface(phi)), setup.predicted_crests(phi)
         assert len(e.z) == len(p.z) >= 5
         assert np.max(np.abs(e.z - p.z)) < 1e-5  # midway between two neighbouring paths (10 nm: flat crests)
         assert np.max(np.abs(e.height - p.height)) < ENVELOPE_TOL
@@ -120,7 +121,7 @@ def test_symmetric_vibration_with_delta_max_over_2s0_raises_the_crests(rough):
     assert sym.rt_max > 5 * plain.rt_max  # 37.1 against 6.27 um
     assert sym.crest_mean > 1.5 * plain.crest_mean  # 12.1 um
     assert sym.rt_max <= crest_height(SYMMETRIC.spacing_range()[1], R_EPS, DEPTH) + ENVELOPE_TOL
-    assert np.max(np.abs(sym.rt - SYMMETRIC.roughness(72, predicted=True).rt)) < ENVELOPE_TOL
+    assert np.max(np.abs(sym.rt - roughness(SYMMETRIC, 72, predicted=True).rt)) < ENVELOPE_TOL
 
 
 def test_asymmetric_vibration_lowers_the_crests_when_it_leads_the_phase_shift(rough):
@@ -142,19 +143,19 @@ def test_asymmetric_vibration_lowers_the_crests_when_it_leads_the_phase_shift(ro
 def test_where_asymmetry_does_not_lower_the_crests():
     """Against the phase shift (xi = 1/3 at f = 2.25) it raises them; at f = n + 1/2 the paths two turns apart
     are 2 S0 apart, so where the chip breaks (Delta = 0) the crest is h(2 S0) whatever the form."""
-    against = vib(xi=1 / 3).roughness(36, predicted=True)
-    assert against.rt_max > SYMMETRIC.roughness(36, predicted=True).rt_max + 10 * UM
+    against = roughness(vib(xi=1 / 3), 36, predicted=True)
+    assert against.rt_max > roughness(SYMMETRIC, 36, predicted=True).rt_max + 10 * UM
     for setup in (vib(f=1.5), vib(f=1.5, xi=3.0, form="hard")):
         breaks = setup.chip_breaks(8)
         assert len(breaks.angles) > 0
         phi = float(np.mod(breaks.angles[-1], 2 * math.pi))
-        assert setup.crest_heights(phi).rt == pytest.approx(H_2S0, abs=ENVELOPE_TOL)
+        assert crest_heights(setup.surface(phi)).rt == pytest.approx(H_2S0, abs=ENVELOPE_TOL)
 
 
 def test_integer_cycles_per_rev_turns_like_plain_turning():
     setup = vib(f=2.0)
     assert setup.spacing_range() == pytest.approx((S0, S0), abs=1e-12)
-    assert np.allclose(setup.crest_heights(0.7).height, H_S0, atol=ENVELOPE_TOL)
+    assert np.allclose(crest_heights(setup.surface(0.7)).height, H_S0, atol=ENVELOPE_TOL)
     assert len(setup.chip_breaks(8).angles) == 0
 
 
@@ -224,11 +225,11 @@ def test_bad_setup_is_refused_naming_the_field(kwargs: dict, field: str):
 
 def test_bad_calls_are_refused_naming_the_argument():
     with pytest.raises(ValueError, match="n_revs"):
-        SYMMETRIC.crest_heights(0.1, n_revs=6)
+        crest_heights(SYMMETRIC.surface(0.1, n_revs=6))
     with pytest.raises(ValueError, match="n_revs"):
         PLAIN.chip_breaks(2)
     with pytest.raises(ValueError, match="n_phi"):
-        PLAIN.roughness(0)
+        roughness(PLAIN, 0)
     with pytest.raises(ValueError, match="method"):
         cut_workpiece(PLAIN, 8, method="voxel")
     with pytest.raises(ValueError, match="tolerance"):
@@ -270,8 +271,8 @@ def test_manifold_solid_has_the_envelopes_crests(solids, name: str):
     assert cut.solid.status() == mf.Error.NoError and cut.solid.genus() == 0 and len(cut.solid.decompose()) == 1
     assert cut.chord_error <= MESH_TOL and cut.nose_error <= 0.1 * UM
     for phi in np.linspace(0.05, 6.2, 8):
-        exact = cut.setup.crest_heights(float(phi), cut.n_revs)
-        mesh = cut.crest_heights(float(phi))
+        exact = crest_heights(cut.setup.surface(float(phi), cut.n_revs))
+        mesh = solid_crests(cut, float(phi))
         pairs = _pairs(exact, mesh, 0.5 * UM) + [(h, g) for g, h in _pairs(mesh, exact, 0.5 * UM)]
         assert len(pairs) >= 6
         err = max(abs(h - g) for h, g in pairs)

@@ -1,6 +1,6 @@
 """Face tooth contours by continuous indexing (seed 004): the radial slots of a face coupling, cut by a tool head
-whose cutting elements and the workpiece turn in a fixed ratio; its setting sheet, the exact slot, the manifold cut
-and the measurement of both.
+whose cutting elements and the workpiece turn in a fixed ratio; its setting sheet, the exact slot and the manifold
+cut (measured by :mod:`metrology.face_slots`).
 
 Frames and the seed's quantities. The workpiece frame turns with the workpiece (axis z, the slotted face at z = 0,
 material below). The tool head (radius R to the element tips) turns in a vertical plane about a horizontal axis; its
@@ -44,11 +44,10 @@ every plunge pass is the final pass lifted by depth - feed >= 0: the slot is the
 element is a thin plate in the plane of the tool axis and its radius: a straight tip edge of width ``edge_width``
 along the tool axis, flanks opening by ``flank_angle``, ``element_height`` high.
 
-Measurement: the slot bottom along the slot's radial centre line (the lowest z the tip edge reaches over each point),
-its form (deviation from the straight line through its ends: + concave, - convex), the slot's side lines at a height
-(tangential deviation from the nominal radial line through the side at the middle radius, and their bow from the
-straight line through their ends) and the slot spacing; exactly from the path (roots on the element's motion, to
-1e-9 mm) and from the manifold solid (vertical rays, plane sections): they agree within the sweep's chord tolerance.
+The exact slot: the slot bottom along the slot's radial centre line (the lowest z the tip edge reaches over each
+point, :func:`exact_bottom`) and the slot's sides at a height (:func:`exact_sides`), roots on the element's motion
+(to 1e-9 mm); :class:`ExactSlots` hands them to the measurement (:mod:`metrology.face_slots`: bottom form, side
+lines, slot spacing), which measures the manifold solid of :func:`cut_slots` the same way.
 """
 
 from __future__ import annotations
@@ -64,12 +63,10 @@ import numpy as np
 from scipy.optimize import brentq
 
 __all__ = [
-    "FLAT_TOLERANCE",
     "SWEEP_TOLERANCE",
+    "ExactSlots",
     "FaceCoupling",
     "FaceCut",
-    "SlotMeasure",
-    "bottom_form",
     "cut_slots",
     "cutting_speed",
     "eccentric_speed",
@@ -79,19 +76,12 @@ __all__ = [
     "exact_sides",
     "face_blank",
     "flat_bottom_eccentricity",
-    "measure_exact",
-    "measure_mesh",
-    "measuring_radii",
-    "mesh_bottom",
-    "mesh_sides",
     "path_velocity",
     "phi_at_radius",
     "plate_corners",
     "setting_angle",
     "setting_sheet",
-    "side_lines",
     "slot_hulls",
-    "slot_spacing",
     "speed_direction",
     "straight_slot_amplitude",
     "workpiece_angle",
@@ -99,15 +89,11 @@ __all__ = [
 
 Control = Literal["fixed", "eccentric", "cyclic_ratio"]
 CONTROLS = ("fixed", "eccentric", "cyclic_ratio")
-#: a slot bottom whose form is within this [mm] is "flat"
-FLAT_TOLERANCE = 2e-3
 #: the manifold sweep's chord error [mm] (hull chords of the element's path, the blank's circles)
 SWEEP_TOLERANCE = 1e-3
 #: samples of a pass that bracket a root before bisection; bisection steps (1e-4 rad / 2^50: exact in double)
 SCAN_SAMPLES = 2001
 BISECTION_STEPS = 50
-#: measuring points along a slot
-MEASURING_POINTS = 41
 #: neighbouring hulls of a pass overlap by this fraction of a step
 OVERLAP = 0.02
 
@@ -508,11 +494,25 @@ def exact_sides(c: FaceCoupling, radii: np.ndarray, height: float, slot: int = 0
     return out + 2 * math.pi * slot / c.m
 
 
+@dataclass(frozen=True, eq=False)
+class ExactSlots:
+    """The exact slots of ``coupling`` as the measurement probes them (:class:`metrology.face_slots.SlottedFace`):
+    :func:`exact_bottom` (every slot's) and :func:`exact_sides`, roots on the elements' motion."""
+
+    coupling: FaceCoupling
+
+    def bottom(self, radii: np.ndarray, slot: int) -> np.ndarray:
+        return exact_bottom(self.coupling, radii)
+
+    def sides(self, radii: np.ndarray, height: float, slot: int) -> np.ndarray:
+        return exact_sides(self.coupling, radii, height, slot)
+
+
 def flat_bottom_eccentricity(c: FaceCoupling) -> float:
     """The eccentricity e [mm] that makes the slot bottom flat: the exact bottom at the middle radius on the straight
     line through the bottom at the inner and the outer radius (a depth gauge at the ends and the middle reads one
     line; what is left is a W of the order R (N^2 - 1) delta^4 / 24, delta the slot's half angle on the tool circle,
-    see :func:`measure_exact`). Solved (brentq, 1e-9 mm) on the exact bottom of the eccentric control with N =
+    see :mod:`metrology.face_slots`). Solved (brentq, 1e-9 mm) on the exact bottom of the eccentric control with N =
     ``eccentric_ratio``; near R (1 - cos delta) / (1 - cos N delta), and R / N^2 for a short slot."""
     ends = np.array([c.inner_radius, c.middle_radius, c.outer_radius])
 
@@ -530,87 +530,6 @@ def flat_bottom_eccentricity(c: FaceCoupling) -> float:
             raise ValueError(f"eccentric_ratio: no eccentricity flattens this slot with N = {N}")
         hi = min(1.5 * hi, limit)
     return brentq(middle, 0.0, hi, xtol=1e-9)
-
-
-# ---------------------------------------------------------------------------------------------------- measurement
-
-
-def bottom_form(radii: np.ndarray, z: np.ndarray) -> tuple[float, str]:
-    """The bottom's form [mm]: the largest deviation from the straight line through its ends, signed + where the
-    bottom lies below that line (concave, deeper inside), - above (convex); and its name ("flat" within
-    FLAT_TOLERANCE)."""
-    line = z[0] + (z[-1] - z[0]) * (radii - radii[0]) / (radii[-1] - radii[0])
-    d = line - z
-    form = float(d[np.argmax(np.abs(d))])
-    shape = "flat" if abs(form) <= FLAT_TOLERANCE else ("concave" if form > 0 else "convex")
-    return form, shape
-
-
-def side_lines(radii: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per side (rows of ``angles``): the tangential deviation [mm] from the nominal radial line through the side at
-    the middle radius (r sin(theta - theta_mid)), and the bow [mm]: the largest signed distance (+ towards larger
-    angles) of the side from the straight line through its ends."""
-    mid = len(radii) // 2
-    dev = radii * np.sin(angles - angles[:, mid : mid + 1])
-    pts = np.stack([radii * np.cos(angles), radii * np.sin(angles)], axis=-1)
-    chord = pts[:, -1] - pts[:, 0]
-    normal = np.stack([-chord[:, 1], chord[:, 0]], axis=-1) / np.linalg.norm(chord, axis=-1, keepdims=True)
-    dist = np.einsum("sik,sk->si", pts - pts[:, :1], normal)
-    bow = dist[np.arange(len(dist)), np.argmax(np.abs(dist), axis=1)]
-    return dev, bow
-
-
-@dataclass(frozen=True, eq=False)
-class SlotMeasure:
-    """One slot measured: ``radii`` [mm], ``bottom`` z [mm], ``form`` [mm] (+ concave) and ``shape``; ``sides``
-    (2, n) polar angles [rad] at ``height``, their ``side_deviation`` (2, n) [mm] from the nominal radial lines and
-    ``side_bow`` (2,) [mm]; ``centre`` the slot's angle at radius L [rad]."""
-
-    slot: int
-    radii: np.ndarray
-    bottom: np.ndarray
-    form: float
-    shape: str
-    height: float
-    sides: np.ndarray
-    side_deviation: np.ndarray
-    side_bow: np.ndarray
-    centre: float
-
-
-def _measure(
-    slot: int, radii: np.ndarray, height: float, bottom: np.ndarray, sides: np.ndarray, centre_sides: np.ndarray
-) -> SlotMeasure:
-    form, shape = bottom_form(radii, bottom)
-    dev, bow = side_lines(radii, sides)
-    return SlotMeasure(slot, radii, bottom, form, shape, height, sides, dev, bow, float(np.mean(centre_sides)))
-
-
-def measuring_radii(c: FaceCoupling, points: int = MEASURING_POINTS) -> np.ndarray:
-    return np.linspace(c.inner_radius, c.outer_radius, points)
-
-
-def measure_exact(
-    c: FaceCoupling, slots: tuple[int, ...] = (0,), radii: np.ndarray | None = None, height: float | None = None
-) -> list[SlotMeasure]:
-    """The slots measured on the exact swept geometry (sides at ``height``, default half the depth)."""
-    radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
-    height = -0.5 * c.depth if height is None else height
-    bottom = exact_bottom(c, radii)
-    out = []
-    for k in slots:
-        sides = exact_sides(c, radii, height, k)
-        centre = exact_sides(c, np.array([c.L]), height, k)[:, 0]
-        out.append(_measure(k, radii, height, bottom, sides, centre))
-    return out
-
-
-def slot_spacing(c: FaceCoupling, measures: list[SlotMeasure]) -> np.ndarray:
-    """Deviations [rad] of the angular pitch between consecutive measured slots from 2 pi / m (per slot number
-    step)."""
-    k = np.array([s.slot for s in measures], dtype=float)
-    a = np.array([s.centre for s in measures])
-    return np.diff(a) / np.diff(k) - 2 * math.pi / c.m
 
 
 # ---------------------------------------------------------------------------------------------------- manifold cut
@@ -729,59 +648,3 @@ def subtract_pieces(c: FaceCoupling, pieces: list[mf.Manifold], tol: float) -> m
         raise RuntimeError(f"the face cut failed: {solid.status()}")
     solid.num_tri()
     return solid
-
-
-def mesh_bottom(solid: mf.Manifold, c: FaceCoupling, radii: np.ndarray, slot: int = 0) -> np.ndarray:
-    """The slot bottom z [mm] on the solid: a vertical ray down slot ``slot``'s centre line at each radius, its
-    first hit."""
-    turn = 2 * math.pi * slot / c.m
-    top, bottom = 1.0, -(c.depth + 10.0)
-    out = np.full(len(radii), np.nan)
-    for i, r in enumerate(np.asarray(radii, dtype=float)):
-        x, y = r * math.cos(turn), r * math.sin(turn)
-        hits = solid.ray_cast((x, y, top), (x, y, bottom))
-        if hits:
-            out[i] = top + hits[0].distance * (bottom - top)
-    return out
-
-
-def mesh_sides(solid: mf.Manifold, c: FaceCoupling, radii: np.ndarray, height: float, slot: int = 0) -> np.ndarray:
-    """Polar angles [rad] of slot ``slot``'s sides at ``radii`` on the solid's plane section at z = ``height``,
-    (2, n): the section's edges crossing each circle r, the nearest crossing either side of the slot's centre line."""
-    turn = 2 * math.pi * slot / c.m
-    polys = solid.slice(height).to_polygons()
-    a = np.vstack(polys)
-    b = np.vstack([np.roll(p, -1, axis=0) for p in polys])
-    d = b - a
-    out = np.full((2, len(radii)), np.nan)
-    for i, r in enumerate(np.asarray(radii, dtype=float)):
-        # |a + t d|^2 = r^2, t in [0, 1]
-        qa, qb, qc = np.einsum("ij,ij->i", d, d), 2 * np.einsum("ij,ij->i", a, d), np.einsum("ij,ij->i", a, a) - r * r
-        disc = qb * qb - 4 * qa * qc
-        ok = disc >= 0
-        ts = []
-        for sgn in (-1.0, 1.0):
-            t = (-qb[ok] + sgn * np.sqrt(disc[ok])) / (2 * qa[ok])
-            good = (t >= 0) & (t <= 1)
-            ts.append(a[ok][good] + t[good, None] * d[ok][good])
-        pts = np.vstack(ts)
-        rel = np.angle(np.exp(1j * (np.arctan2(pts[:, 1], pts[:, 0]) - turn)))
-        neg, pos = rel[rel < 0], rel[rel > 0]
-        if len(neg) and len(pos):
-            out[0, i], out[1, i] = neg.max() + turn, pos.min() + turn
-    return out
-
-
-def measure_mesh(
-    cut: FaceCut, c: FaceCoupling, radii: np.ndarray | None = None, height: float | None = None
-) -> list[SlotMeasure]:
-    """The cut slots measured on the manifold solid (rays for the bottom, a plane section for the sides)."""
-    radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
-    height = -0.5 * c.depth if height is None else height
-    out = []
-    for k in cut.slots:
-        bottom = mesh_bottom(cut.solid, c, radii, k)
-        sides = mesh_sides(cut.solid, c, radii, height, k)
-        centre = mesh_sides(cut.solid, c, np.array([c.L]), height, k)[:, 0]
-        out.append(_measure(k, radii, height, bottom, sides, centre))
-    return out

@@ -39,7 +39,8 @@ The seed's figure labels the asymmetric forms "soft" (a > b) and "hard" (a < b);
 (smooth or straight strokes) and xi, either side of 1, is independent of it.
 
 :func:`cut_workpiece` cuts the same surface with manifold3d (the nose swept along the helix, subtracted from a
-cylinder) and :meth:`TurnedSolid.crest_heights` measures it in the axial section, to compare with the envelope.
+cylinder). Both are measured (crests, Rt over the spindle angles, against the prediction) by
+:mod:`metrology.turned_surface`: the envelope and the solid's axial section.
 """
 
 from __future__ import annotations
@@ -146,7 +147,8 @@ class FeedVibration:
 @dataclass(frozen=True)
 class Crests:
     """Crests of a turned profile at one spindle angle: positions ``z`` [mm], heights above the lower of their two
-    valleys (peak to valley, Rt of each) [mm] and the distance ``gap`` [mm] of the two paths that leave them."""
+    valleys (peak to valley, Rt of each) [mm] and the distance ``gap`` [mm] of the two paths that leave them
+    (predicted by :func:`predicted_crests`, measured by :mod:`metrology.turned_surface`)."""
 
     phi: float
     z: np.ndarray
@@ -162,26 +164,6 @@ class Crests:
     def rt(self) -> float:
         """The largest crest [mm]."""
         return float(self.height.max()) if len(self.height) else 0.0
-
-
-@dataclass(frozen=True)
-class Roughness:
-    """Crests over many spindle angles: the largest crest ``rt`` at each angle ``phi`` and the mean of all crests
-    (``crest_mean``, [mm])."""
-
-    phi: np.ndarray
-    rt: np.ndarray
-    crest_mean: float
-
-    @property
-    def rt_max(self) -> float:
-        """The largest crest over all angles [mm]."""
-        return float(self.rt.max())
-
-    @property
-    def rt_mean(self) -> float:
-        """The mean over the angles of the largest crest at each [mm]."""
-        return float(self.rt.mean())
 
 
 @dataclass(frozen=True)
@@ -315,17 +297,9 @@ class TurningSetup:
         """See :func:`surface_profile`."""
         return surface_profile(self, phi, n_revs, dz)
 
-    def crest_heights(self, phi: float, n_revs: int | None = None, min_height: float = MIN_CREST) -> Crests:
-        """See :func:`crest_heights`."""
-        return crest_heights(self, phi, n_revs, min_height)
-
     def predicted_crests(self, phi: float, n_revs: int | None = None, min_height: float = MIN_CREST) -> Crests:
         """See :func:`predicted_crests`."""
         return predicted_crests(self, phi, n_revs, min_height)
-
-    def roughness(self, n_phi: int = 72, n_revs: int | None = None, predicted: bool = False) -> Roughness:
-        """See :func:`roughness`."""
-        return roughness(self, n_phi, n_revs, predicted)
 
     def uncut_thickness(self, theta: np.ndarray | float, previous_only: bool = False) -> np.ndarray | float:
         """See :func:`uncut_thickness`."""
@@ -336,14 +310,16 @@ class TurningSetup:
         return chip_breaks(self, n_revs, samples_per_rev, previous_only)
 
 
-def _count(name: str, value: int, least: int) -> int:
+def checked_count(name: str, value: int, least: int) -> int:
+    """``value`` as an int, refused (naming ``name``) unless an integer >= ``least``."""
     if not isinstance(value, numbers.Integral) or isinstance(value, bool) or value < least:
         raise ValueError(f"{name} must be an integer >= {least}, got {value!r}")
     return int(value)
 
 
-def _revs(setup: TurningSetup, n_revs: int | None) -> int:
-    return _count("n_revs", setup.default_revs() if n_revs is None else n_revs, 1)
+def checked_revs(setup: TurningSetup, n_revs: int | None) -> int:
+    """The turns ``n_revs`` checked, :meth:`TurningSetup.default_revs` for None."""
+    return checked_count("n_revs", setup.default_revs() if n_revs is None else n_revs, 1)
 
 
 def surface_profile(
@@ -353,7 +329,7 @@ def surface_profile(
     r(z) = min(r0, min_k (r_c - sqrt(r_eps^2 - (z - z_k)^2))), sampled every ``dz`` [mm] over the window and
     S0 + 2A beyond it on both sides (so that each crest in the window has both its valleys)."""
     _finite("dz", dz, low=0.0, strict=True, unit="[mm]")
-    n = _revs(setup, n_revs)
+    n = checked_revs(setup, n_revs)
     lo, hi = setup.window(n)
     ext = setup.feed + 2 * setup.amplitude + 10 * dz
     z = np.arange(lo - ext, hi + ext + dz, dz)
@@ -367,63 +343,13 @@ def surface_profile(
     return SurfaceProfile(phi, z, r, (lo, hi))
 
 
-def profile_crests(
-    phi: float, z: np.ndarray, r: np.ndarray, window: tuple[float, float], min_height: float, refine: bool
-) -> Crests:
-    """Crests of a profile r(z) (z increasing): its local maxima in the window, each measured from the lower of
-    the local minima on either side; ``refine`` puts each crest where the straight lines through the two samples
-    on either side meet (a sampled envelope: the crest is a cusp of two arcs)."""
-    s = np.sign(np.diff(r))
-    last = np.maximum.accumulate(np.where(s != 0, np.arange(len(s)), 0))
-    s = s[last]  # a flat run keeps the slope it came with
-    peak = np.nonzero((s[:-1] > 0) & (s[1:] < 0))[0] + 1
-    valley = np.nonzero((s[:-1] < 0) & (s[1:] > 0))[0] + 1
-    zs, hs, gs = [], [], []
-    for i in peak:
-        left = valley[valley < i]
-        right = valley[valley > i]
-        if len(left) == 0 or len(right) == 0:
-            continue
-        vl, vr = left[-1], right[0]
-        zc, rc = z[i], r[i]
-        if refine and 2 <= i < len(z) - 2:
-            zc, rc = _cusp(z, r, i)
-        if not window[0] <= zc <= window[1]:
-            continue
-        h = rc - min(r[vl], r[vr])
-        if h >= min_height:
-            zs.append(zc)
-            hs.append(h)
-            gs.append(z[vr] - z[vl])
-    return Crests(phi, np.array(zs), np.array(hs), np.array(gs))
-
-
-def _cusp(z: np.ndarray, r: np.ndarray, i: int) -> tuple[float, float]:
-    """The crossing of the lines through samples (i-2, i-1) and (i+1, i+2), if it lies between i-1 and i+1."""
-    kl = (r[i - 1] - r[i - 2]) / (z[i - 1] - z[i - 2])
-    kr = (r[i + 2] - r[i + 1]) / (z[i + 2] - z[i + 1])
-    if not (kl > 0 > kr):
-        return z[i], r[i]
-    zc = (r[i + 1] - r[i - 1] + kl * z[i - 1] - kr * z[i + 1]) / (kl - kr)
-    if not z[i - 1] <= zc <= z[i + 1]:
-        return z[i], r[i]
-    rc = r[i - 1] + kl * (zc - z[i - 1])
-    return float(zc), float(min(max(rc, r[i]), r[i] + (z[i + 1] - z[i - 1]) * max(kl, -kr)))
-
-
-def crest_heights(setup: TurningSetup, phi: float, n_revs: int | None = None, min_height: float = MIN_CREST) -> Crests:
-    """The crests [mm] of the sampled envelope (:func:`surface_profile`) at the angle phi, in the window."""
-    p = surface_profile(setup, phi, n_revs)
-    return profile_crests(phi, p.z, p.r, p.window, min_height, refine=True)
-
-
 def predicted_crests(
     setup: TurningSetup, phi: float, n_revs: int | None = None, min_height: float = MIN_CREST
 ) -> Crests:
     """The crests from the path positions alone: the passes z_k through phi sorted along z, each neighbouring
     pair Delta apart leaves h(Delta) (:func:`crest_height`) at its midpoint (equal circles meet there); no other
     circle reaches between two neighbours, so none is shadowed."""
-    n = _revs(setup, n_revs)
+    n = checked_revs(setup, n_revs)
     lo, hi = setup.window(n)
     zk = np.sort(setup.passes(phi, n))
     gap = np.diff(zk)
@@ -431,18 +357,6 @@ def predicted_crests(
     h = np.asarray(crest_height(gap, setup.nose_radius, setup.depth))
     keep = (mid >= lo) & (mid <= hi) & (h >= min_height)
     return Crests(phi, mid[keep], h[keep], gap[keep])
-
-
-def roughness(setup: TurningSetup, n_phi: int = 72, n_revs: int | None = None, predicted: bool = False) -> Roughness:
-    """Crests at ``n_phi`` angles over a revolution (offset half a step from 0): the largest at each angle and the
-    mean of them all, from the envelope or, with ``predicted``, from the path positions."""
-    n_phi = _count("n_phi", n_phi, 1)
-    phis = (np.arange(n_phi) + 0.5) * TWO_PI / n_phi
-    find = predicted_crests if predicted else crest_heights
-    crests = [find(setup, float(phi), n_revs) for phi in phis]
-    rt = np.array([c.rt for c in crests])
-    every = np.concatenate([c.height for c in crests])
-    return Roughness(phis, rt, float(every.mean()) if len(every) else 0.0)
 
 
 def uncut_thickness(setup: TurningSetup, theta: np.ndarray | float, previous_only: bool = False) -> np.ndarray | float:
@@ -467,8 +381,8 @@ def chip_breaks(
     """The spindle angles where the uncut chip thickness (:func:`uncut_thickness`) falls to zero over ``n_revs``
     turns (sampled ``samples_per_rev`` a turn, each crossing solved to 1e-12 rad), counted per revolution from
     the third turn on (the first has no earlier surface). A dip shorter than a sample can be missed."""
-    n_revs = _count("n_revs", n_revs, 4)
-    samples_per_rev = _count("samples_per_rev", samples_per_rev, 16)
+    n_revs = checked_count("n_revs", n_revs, 4)
+    samples_per_rev = checked_count("samples_per_rev", samples_per_rev, 16)
     n = samples_per_rev
     theta = TWO_PI * (np.arange(n_revs * n) / n)
     z = np.asarray(setup.path(theta)).reshape(n_revs, n)
@@ -511,25 +425,6 @@ class TurnedSolid:
     chord_error: float
     nose_error: float
     method: str
-
-    def section(self, phi: float) -> tuple[np.ndarray, np.ndarray]:
-        """The turned profile (z, r) [mm] at the angle phi: the section polygon's vertices on the outer surface,
-        sorted along z (the solid rotated so that the half plane at phi is the x > 0 half of z = 0, then sliced)."""
-        c, s = math.cos(phi), math.sin(phi)
-        m = np.array([[c, s, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [s, -c, 0.0, 0.0]])
-        polys = self.solid.transform(m).slice(0.0).to_polygons()
-        v = np.vstack(polys)
-        st = self.setup
-        keep = (v[:, 0] > st.tip_radius - 0.01) & (v[:, 1] > 0) & (v[:, 1] < st.feed * self.n_revs)
-        v = v[keep]
-        order = np.argsort(v[:, 1], kind="stable")
-        return v[order, 1], v[order, 0]
-
-    def crest_heights(self, phi: float, min_height: float = MIN_CREST) -> Crests:
-        """The crests [mm] of the section at phi, in the same window as the envelope's (vertices taken as they
-        are: the crest is a vertex of the section, where it crosses the ridge of two passes)."""
-        z, r = self.section(phi)
-        return profile_crests(phi, z, r, self.setup.window(self.n_revs), min_height, refine=False)
 
 
 def nose_polygon(setup: TurningSetup, nose_tolerance: float, top: float) -> tuple[np.ndarray, float]:
@@ -612,7 +507,7 @@ def cut_workpiece(
     """
     if method not in ("hull", "loft"):
         raise ValueError(f"method must be 'hull' or 'loft', got {method!r}")
-    n = _revs(setup, n_revs)
+    n = checked_revs(setup, n_revs)
     _finite("tolerance", tolerance, low=0.0, strict=True, unit="[mm]")
     _finite("nose_tolerance", nose_tolerance, low=0.0, strict=True, unit="[mm]")
     top = setup.radius + 0.05
@@ -681,27 +576,3 @@ class SampledTurning(TurningSetup):
     def path(self, theta: np.ndarray | float) -> np.ndarray | float:
         z = np.interp(np.asarray(theta, dtype=float), self.theta, self.z)
         return float(z) if np.ndim(z) == 0 else z
-
-
-def turned_surface_summary(setup: TurningSetup, n_revs: int | None = None, n_phi: int = 72) -> dict:
-    """What the turned surface and the chips show, in micrometres: the spacing range of successive paths, the
-    crests from the envelope (Rt_max, mean Rt, mean crest) and from the path positions alone (the geometric
-    prediction), and the chip breaks per revolution."""
-    n = _revs(setup, n_revs)
-    measured = roughness(setup, n_phi, n)
-    predicted = roughness(setup, n_phi, n, predicted=True)
-    phis = np.linspace(0.0, TWO_PI, 721)[:-1]
-    spacing = np.asarray(setup.spacing(phis + TWO_PI * (n // 2)))
-    breaks = chip_breaks(setup, max(n, 4))
-    um = 1e3
-    return {
-        "spacing_um": {"min": float(spacing.min() * um), "max": float(spacing.max() * um), "S0": setup.feed * um},
-        "Rt_max_um": measured.rt_max * um,
-        "Rt_mean_um": measured.rt_mean * um,
-        "crest_mean_um": measured.crest_mean * um,
-        "predicted_Rt_max_um": predicted.rt_max * um,
-        "predicted_Rt_mean_um": predicted.rt_mean * um,
-        "plain_turning_crest_um": float(crest_height(setup.feed, setup.nose_radius, setup.depth)) * um,
-        "chip_breaks_per_rev": breaks.per_rev,
-        "min_uncut_chip_um": breaks.min_thickness * um,
-    }

@@ -51,14 +51,10 @@ from cutting.face_contour.slots import (
     SWEEP_TOLERANCE,
     FaceCoupling,
     FaceCut,
-    SlotMeasure,
     bisect_roots,
-    bottom_form,
     element_path,
     first_sign_change,
     hull_steps,
-    measuring_radii,
-    side_lines,
     subtract_pieces,
     workpiece_angle,
 )
@@ -71,6 +67,7 @@ from machine_models.face_contour_machine import (
     stage_omega_h,
 )
 from machine_models.parameters import ARCSEC
+from metrology.face_slots import SlotMeasure, bottom_form, measuring_radii, side_lines
 from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps

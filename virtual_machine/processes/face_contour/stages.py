@@ -7,8 +7,9 @@
 - `skive run`: the face-contour machine (MuJoCo, its electronic gearbox) cuts them; the slots are cut from the
   motion it recorded (:mod:`virtual_machine.processes.face_contour.cnc`).
 
-Either way the coupling is measured exactly (from the motion) and on the manifold solid: slot bottom form
-(+ concave), side deviations and bows, slot spacing; written to measurement.json with coupling.stl.
+Either way the coupling is measured exactly (from the motion) and on the manifold solid
+(:mod:`metrology.face_slots`): slot bottom form (+ concave), side deviations and bows, slot spacing; written to
+measurement.json with coupling.stl.
 """
 
 from __future__ import annotations
@@ -22,14 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from cutting.face_contour.slots import (
-    FaceCoupling,
-    cut_slots,
-    measure_exact,
-    measure_mesh,
-    setting_sheet,
-    slot_spacing,
-)
+from cutting.face_contour.slots import ExactSlots, FaceCoupling, cut_slots, setting_sheet
+from metrology.face_slots import measure_mesh, measure_slots, slot_spacing
 from virtual_machine.job import Job, flatten_model
 from virtual_machine.output.json_file import write_json
 
@@ -101,7 +96,7 @@ def cut_face_job(job: Job, out: Path, stage=None) -> dict[str, Any]:
     stage("cut: the elements' swept volumes (manifold3d)")
     cut = cut_slots(c, slots, tol)
     stage("measurement: exact and on the solid")
-    doc = measurement(c, measure_exact(c, slots), measure_mesh(cut, c), cut, tol)
+    doc = measurement(c, measure_slots(ExactSlots(c), c, slots), measure_mesh(cut, c), cut, tol)
     doc["setting_sheet"] = setting_sheet(c, tool_speed(job))
     doc["cut"] = {"motion": "ideal kinematics", "seconds": cut.seconds, "chord_error_um": cut.chord_error * UM}
     _write(out, doc, cut)
@@ -167,7 +162,7 @@ def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None, rrd
     cut = cut_recorded(record, tol)
     doc = measurement(c, measure_recorded(record, slots), measure_mesh(cut, c), cut, tol)
     durations["cut and measurement"] = time.perf_counter() - t0
-    ideal = measure_exact(c, slots[:1])[0]
+    ideal = measure_slots(ExactSlots(c), c, slots[:1])[0]
     doc["ideal_bottom_form_um"] = ideal.form * UM
     doc["setting_sheet"] = setting_sheet(c, tool_speed(job))
     text = Path(path).read_text()

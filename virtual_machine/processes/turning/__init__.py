@@ -25,7 +25,7 @@ class VibrationTurning(Process):
     title = "vibration turning"
 
     def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from cutting.turning.vibration import turned_surface_summary
+        from metrology.turned_surface import turned_surface_summary
         from virtual_machine.processes.turning.stages import format_prediction, ideal_setup
 
         doc = turned_surface_summary(ideal_setup(job), job.process["revolutions"])

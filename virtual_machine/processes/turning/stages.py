@@ -4,9 +4,9 @@ The lathe is set up as for a thread whose lead is the feed S0 (master-slave: the
 spindle's encoder 6 through counter 7 and block 8); the feed vibration is added to the slave's command at the
 spindle's angle (:class:`virtual_machine.structures.thread_group.ThreadMasterSlave`), so the carriage really has
 to make it: what the turned surface shows is the path the simulated carriage made (B1, P2 recorded), not the
-command. The surface, its crests and the chip breaks come from :mod:`cutting.turning.vibration` on that path
-(:class:`cutting.turning.vibration.SampledTurning`); `skive run` also cuts it with manifold3d and measures the
-solid's crests beside the exact envelope.
+command. The surface and the chip breaks come from :mod:`cutting.turning.vibration` on that path
+(:class:`cutting.turning.vibration.SampledTurning`), its crests are measured by :mod:`metrology.turned_surface`;
+`skive run` also cuts it with manifold3d and measures the solid's crests beside the exact envelope.
 """
 
 from __future__ import annotations
@@ -21,9 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from cutting.turning.vibration import SampledTurning, TurningSetup, cut_workpiece, turned_surface_summary
+from cutting.turning.vibration import SampledTurning, TurningSetup, cut_workpiece
 from machine_models.parameters import override
 from machine_models.thread_lathe import ThreadLatheParams
+from metrology.turned_surface import crest_heights, solid_crests, turned_surface_summary
 from virtual_machine.job import Job, flatten_model
 from virtual_machine.output.json_file import write_json
 
@@ -141,7 +142,7 @@ def run_turning(job: Job, path: Path, out: Path, rrd: Path | None = None, stage=
     phis = (np.arange(SOLID_ANGLES) + 0.5) * 2 * math.pi / SOLID_ANGLES
     diffs, rts = [], []
     for phi in phis:
-        a, b = solid.crest_heights(float(phi)), sampled.crest_heights(float(phi), n)
+        a, b = solid_crests(solid, float(phi)), crest_heights(sampled.surface(float(phi), n))
         rts.append(a.rt)
         if len(a.height) and len(b.height):
             big = b.height > 5e-4
