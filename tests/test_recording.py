@@ -220,3 +220,37 @@ def test_bad_input_is_a_value_error(run, tmp_path):
     with pytest.raises(ValueError, match="rate_hz"):
         write_recording(tmp_path / "f.rrd", model_xml=motion.model_xml, rate_hz=math.nan, **kw)
     assert not list(tmp_path.glob("*.rrd"))
+
+
+def test_recorder_writes_what_a_process_logs(tmp_path):
+    """The one recorder every process uses: a series on the sim_time timeline (values read back equal), a static
+    mesh from an STL, an image and a document; no wall clock; the file is closed when the block ends."""
+    from virtual_machine.output.recorder import Recorder
+
+    t = np.linspace(0.0, 0.5, 11)
+    values = np.column_stack([t**2, -t])
+    box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    box.export(tmp_path / "box.stl")
+    png = tmp_path / "chart.png"
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.figure(figsize=(1, 1))
+    plt.savefig(png)
+    plt.close("all")
+    path = tmp_path / "sub" / "p.rrd"
+    with Recorder(path, "skive_test") as rec:
+        rec.series("machine/axes", t, values, ["A [rad]", "Z [mm]"])
+        rec.mesh_file("workpiece", tmp_path / "box.stl")
+        rec.image("measurement/chart", png)
+        rec.markdown("measurement/summary", "# class 6")
+    entities = {c.entity_path for c in RrdReader(path).stream().to_chunks()}
+    assert {"/machine/axes", "/workpiece", "/measurement/chart", "/measurement/summary"} <= entities
+    assert rows(path, "/machine/axes") == len(t)
+    got = np.array(column(chunks(path, "/machine/axes", static=False), "Scalars:scalars"))
+    assert np.allclose(got, values)
+    (mesh,) = chunks(path, "/workpiece", static=True)
+    assert len(instances([mesh], "Mesh3D:vertex_positions")) == len(box.vertices)
+    assert {t for c in RrdReader(path).stream().to_chunks() for t in c.timeline_names} <= {"sim_time"}

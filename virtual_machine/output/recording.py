@@ -32,13 +32,13 @@ import rerun.blueprint as rrb
 
 from cutting.flank import SIDES, base_tangent_deviation
 from cutting.gear import Gear
+from virtual_machine.output.recorder import TIMELINE, Recorder, send_series
 from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory
 from virtual_machine.runtime.physics import AXES
 
 if TYPE_CHECKING:
     from cutting.skiving.setup import SkivingSetup
 
-TIMELINE = "sim_time"
 MACHINE, GEAR, SIGNALS, MEASUREMENT = "/machine", "/gear", "/signals", "/measurement"
 BLANK_SITE = "blank_frame"
 REQUIRED_BODIES = ("work_spindle", "tool_spindle")
@@ -89,13 +89,9 @@ def write_recording(
     series = dict(series or {})
     _check_inputs(model, motion, snapshots, gear_mesh, series, charts, rate_hz)
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream("skive", recording_id=recording_id, send_properties=False)
     blueprint = recording_blueprint(series, [Path(c).stem for c in charts])
-    rec.save(path, default_blueprint=blueprint)
-    rr.set_log_time_enabled(False, recording=rec)
-    rec.send_recording_name(recording_id)
-    try:
+    with Recorder(path, "skive", recording_id=recording_id, blueprint=blueprint) as recorder:
+        rec = recorder.stream
         first_snapshot = min((float(s[0]) for s in snapshots), default=None)
         log_machine(rec, model, motion, rate_hz, first_snapshot)
         log_snapshots(rec, model, snapshots)
@@ -104,9 +100,6 @@ def write_recording(
         log_measurement(rec, measurement, charts)
         if gear_mesh is not None and setup is not None:
             log_finished_gear(rec, setup.gear, gear_mesh)
-    finally:
-        rec.flush()
-        rec.disconnect()
     return path
 
 
@@ -379,16 +372,6 @@ def log_cutter_paths(rec: rr.RecordingStream, passes: Sequence[PassTrajectory]) 
 
 
 # ---- 4. time series --------------------------------------------------------------------------------------
-def send_series(rec: rr.RecordingStream, entity: str, t: np.ndarray, values: np.ndarray, names: list[str]) -> None:
-    """A bulk scalar series with its line names (static SeriesLines)."""
-    rec.log(entity, rr.SeriesLines(names=names), static=True)
-    rec.send_columns(
-        entity,
-        indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))],
-        columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=float)),
-    )
-
-
 def segment_events(motion: MotionRecord) -> tuple[np.ndarray, list[str]]:
     """Times [s] and texts of the program's segment changes (``feed, pass 0``...), the first tick included."""
     key = np.stack([motion.segment, motion.pass_index], -1)

@@ -182,31 +182,18 @@ def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None, rrd
 
 def _record(rrd: Path, record, stl: Path) -> None:
     """The axes, the synchronisation errors over machine time and the coupling."""
-    import rerun as rr
-    import trimesh
+    from virtual_machine.output.recorder import Recorder
 
-    from virtual_machine.output.recording import send_series
-
-    rrd.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream("skive_face_contour", send_properties=False)
-    rec.save(str(rrd))
-    rr.set_log_time_enabled(False, recording=rec)
     t = np.asarray(record.trace_t, dtype=float)
-    send_series(rec, "machine/axes", t, record.trace_q, ["A [rad]", "phi [rad]", "E [rad]", "Z [mm]"])
-    send_series(
-        rec,
-        "machine/synchronisation",
-        t,
-        record.trace_sync,
-        ["A - a(phi) [arcsec]", "E - N phi [arcsec]", "Z - z(phi) [um]"],
-    )
-    mesh = trimesh.load(stl, force="mesh")
-    rec.log(
-        "coupling",
-        rr.Mesh3D(vertex_positions=np.asarray(mesh.vertices), triangle_indices=np.asarray(mesh.faces)),
-        static=True,
-    )
-    rec.flush()
+    with Recorder(rrd, "skive_face_contour") as rec:
+        rec.series("machine/axes", t, record.trace_q, ["A [rad]", "phi [rad]", "E [rad]", "Z [mm]"])
+        rec.series(
+            "machine/synchronisation",
+            t,
+            record.trace_sync,
+            ["A - a(phi) [arcsec]", "E - N phi [arcsec]", "Z - z(phi) [um]"],
+        )
+        rec.mesh_file("coupling", stl)
 
 
 def format_result(doc: dict[str, Any]) -> str:

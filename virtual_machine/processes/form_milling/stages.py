@@ -397,24 +397,12 @@ def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], pla
 
 def _record(rrd: Path, job: Job, record, stl_path: Path, doc: dict[str, Any], charts: list[Path]) -> None:
     """A Rerun recording: the axes and the encoders' following errors over machine time, the gear, the charts."""
-    import rerun as rr
-    import trimesh
+    from virtual_machine.output.recorder import Recorder
 
-    from virtual_machine.output.recording import send_series
-
-    rrd.parent.mkdir(parents=True, exist_ok=True)
-    rec = rr.RecordingStream("skive_form_milling", send_properties=False)
-    rec.save(str(rrd))
-    rr.set_log_time_enabled(False, recording=rec)
     t = np.asarray(record.trace_t, dtype=float)
-    send_series(rec, "machine/axes", t, record.trace_q[:, :4], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]"])
-    send_series(rec, "machine/following_error", t, record.trace_error, ["A [arcsec]", "X [um]", "Y [um]", "Z [um]"])
-    mesh = trimesh.load(stl_path, force="mesh")
-    rec.log(
-        "gear",
-        rr.Mesh3D(vertex_positions=np.asarray(mesh.vertices), triangle_indices=np.asarray(mesh.faces)),
-        static=True,
-    )
-    for c in charts:
-        rec.log(f"measurement/{c.stem}", rr.EncodedImage(path=c), static=True)
-    rec.flush()
+    with Recorder(rrd, "skive_form_milling") as rec:
+        rec.series("machine/axes", t, record.trace_q[:, :4], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]"])
+        rec.series("machine/following_error", t, record.trace_error, ["A [arcsec]", "X [um]", "Y [um]", "Z [um]"])
+        rec.mesh_file("gear", stl_path)
+        for c in charts:
+            rec.image(f"measurement/{c.stem}", c)

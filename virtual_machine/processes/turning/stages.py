@@ -231,18 +231,12 @@ def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
 
 def _record(rrd: Path, rec, sampled: SampledTurning, job: Job) -> None:
     """The carriage's path against the command and the uncut chip thickness over machine time."""
-    import rerun as rr
+    from virtual_machine.output.recorder import Recorder
 
-    from virtual_machine.output.recording import send_series
-
-    rrd.parent.mkdir(parents=True, exist_ok=True)
-    stream = rr.RecordingStream("skive_turning", send_properties=False)
-    stream.save(str(rrd))
-    rr.set_log_time_enabled(False, recording=stream)
     commanded = commanded_path(job, sampled)
     k0 = len(rec.t) - len(sampled.theta)
     t = rec.t[k0:]
-    send_series(stream, "lathe/carriage_mm", t, np.column_stack([sampled.z, commanded]), ["made", "commanded"])
     thickness = np.asarray(sampled.uncut_thickness(sampled.theta))
-    send_series(stream, "lathe/uncut_chip_mm", t, np.clip(thickness, -1.0, 1.0)[:, None], ["uncut chip"])
-    stream.flush()
+    with Recorder(rrd, "skive_turning") as stream:
+        stream.series("lathe/carriage_mm", t, np.column_stack([sampled.z, commanded]), ["made", "commanded"])
+        stream.series("lathe/uncut_chip_mm", t, np.clip(thickness, -1.0, 1.0)[:, None], ["uncut chip"])

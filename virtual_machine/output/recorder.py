@@ -1,0 +1,97 @@
+"""The one way skive writes a Rerun recording (.rrd): a :class:`Recorder` opens the file, keeps the timeline of
+machine time and no wall clock, and takes what a process logs: time series, meshes, images, text.
+
+Every process records through it (skiving's full recording in :mod:`virtual_machine.output.recording`; form
+milling, face contours and turning log their axes, errors and workpiece), so a recording reads the same whatever
+made it: lengths in mm, timeline ``sim_time`` = simulated seconds, static entities for what does not move.
+
+    with Recorder(path, "skive_turning") as rec:
+        rec.series("lathe/carriage_mm", t, values, ["made", "commanded"])
+        rec.mesh_file("workpiece", stl_path)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+TIMELINE = "sim_time"
+
+
+class Recorder:
+    """One .rrd file. ``app_id``: the application the viewer shows; ``recording_id``: the recording's id and name
+    (default: Rerun's random id); ``blueprint``: the default layout. Use as a context manager (the file is flushed
+    and closed on exit, also when logging fails); ``stream`` is the underlying RecordingStream for the archetypes
+    this interface does not wrap."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        app_id: str,
+        *,
+        recording_id: str | None = None,
+        blueprint: rrb.Blueprint | None = None,
+    ) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        kw: dict[str, Any] = {"recording_id": recording_id} if recording_id is not None else {}
+        self.stream = rr.RecordingStream(app_id, send_properties=False, **kw)
+        if blueprint is None:
+            self.stream.save(str(self.path))
+        else:
+            self.stream.save(self.path, default_blueprint=blueprint)
+        rr.set_log_time_enabled(False, recording=self.stream)  # no wall clock: the same run, the same timeline
+        if recording_id is not None:
+            self.stream.send_recording_name(recording_id)
+
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self.stream.flush()
+        self.stream.disconnect()
+
+    def series(self, entity: str, t: np.ndarray, values: np.ndarray, names: Sequence[str]) -> None:
+        """A bulk scalar series over machine time ``t`` [s]: ``values`` (n,) or (n, k), one line name per column."""
+        send_series(self.stream, entity, t, values, list(names))
+
+    def mesh(self, entity: str, vertices: np.ndarray, triangles: np.ndarray, **style: Any) -> None:
+        """A static triangle mesh (vertices in mm); ``style``: further Mesh3D fields (colours, normals)."""
+        self.stream.log(
+            entity,
+            rr.Mesh3D(vertex_positions=np.asarray(vertices), triangle_indices=np.asarray(triangles), **style),
+            static=True,
+        )
+
+    def mesh_file(self, entity: str, path: str | Path) -> None:
+        """A static mesh read from an STL (or any file trimesh reads)."""
+        import trimesh
+
+        m = trimesh.load(path, force="mesh")
+        self.mesh(entity, m.vertices, m.faces)
+
+    def image(self, entity: str, path: str | Path) -> None:
+        """A static encoded image (a chart PNG)."""
+        self.stream.log(entity, rr.EncodedImage(path=path), static=True)
+
+    def markdown(self, entity: str, text: str) -> None:
+        """A static text document (e.g. a measurement's class table)."""
+        self.stream.log(entity, rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+
+
+def send_series(stream: rr.RecordingStream, entity: str, t: np.ndarray, values: np.ndarray, names: list[str]) -> None:
+    """A bulk scalar series with its line names (static SeriesLines) on the ``sim_time`` timeline."""
+    stream.log(entity, rr.SeriesLines(names=names), static=True)
+    stream.send_columns(
+        entity,
+        indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))],
+        columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=float)),
+    )
