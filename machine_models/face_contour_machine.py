@@ -45,7 +45,6 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from cutting.face_contour.slots import FaceCoupling, setting_angle
 from machine_models.drives import couple, couple_linear, stage_frequency
 from machine_models.parameters import ARCSEC, DriveStage, common_problems, override, rigid
 from machine_models.parts import (
@@ -176,7 +175,8 @@ class FaceMachineLayout:
     (``inner_radius``..``outer_radius``), the m slots, M's radius L, the tool radius R to the tips, the setting angle
     lambda, the eccentricity e and the eccentric's ratio N (``eccentric``: the machine has the eccentric), the
     elements' phases beta_j, height and tip edge width, the blank's thickness (for its mass) and the slide's home
-    ``home_z`` (Z at the home keyframe: the tip this far above the face)."""
+    ``home_z`` (Z at the home keyframe: the tip this far above the face). Numbers only:
+    ``virtual_machine.setting.machine_layout.face_layout`` builds it from a coupling."""
 
     m: int
     L: float
@@ -192,26 +192,6 @@ class FaceMachineLayout:
     edge_width: float = 2 * MM
     blank_thickness: float = 20 * MM
     home_z: float = 5 * MM
-
-    @classmethod
-    def from_coupling(cls, c: FaceCoupling, blank_thickness: float = 20 * MM, home_z: float = 5 * MM):
-        """The layout of coupling ``c`` (mm -> m): its setting angle (eq. 1, on R - N e under the eccentric)."""
-        return cls(
-            m=c.m,
-            L=c.L * MM,
-            R=c.R * MM,
-            setting_angle=setting_angle(c),
-            inner_radius=c.inner_radius * MM,
-            outer_radius=c.outer_radius * MM,
-            eccentric=c.control == "eccentric",
-            e=c.e * MM if c.control == "eccentric" else 0.0,
-            eccentric_ratio=c.eccentric_ratio,
-            element_phases=tuple(float(b) for b in c.phases),
-            element_height=c.element_height * MM,
-            edge_width=c.edge_width * MM,
-            blank_thickness=blank_thickness,
-            home_z=home_z,
-        )
 
     def problems(self) -> list[str]:
         out = []

@@ -1,5 +1,5 @@
 """Named machine sizes: the skiving machine of :mod:`machine_models.parameters` built for small, medium and large
-gears, and the rule that picks a job's size from its gear.
+gears, and the rule that picks a job's size from its workpiece's diameter and module.
 
 ``small`` is the original parameter set, unchanged (:class:`SkivingMachineParams` defaults): a 300 mm table on a
 1:2 stage from a 10 N m class servo (60 N m peak), a 40 N m tool motor on a belt; its default gears are those of the
@@ -49,7 +49,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields, replace
 
-from cutting.gear import Gear
 from machine_models.parameters import DriveStage, SkivingMachineParams
 
 SIZE_NAMES = ("small", "medium", "large")
@@ -91,9 +90,9 @@ class MachineSize:
     def scale(self) -> float:
         return self.table_diameter / SMALL_TABLE
 
-    def holds(self, gear: Gear) -> bool:
-        """Whether the gear is within this size's workpiece diameter and module."""
-        return workpiece_diameter(gear) <= self.workpiece_diameter + 1e-9 and gear.mn <= self.module + 1e-9
+    def holds(self, workpiece_diameter: float, module: float) -> bool:
+        """Whether a workpiece of ``workpiece_diameter`` [mm] and normal ``module`` [mm] is within this size."""
+        return workpiece_diameter <= self.workpiece_diameter + 1e-9 and module <= self.module + 1e-9
 
 
 def scaled(base: SkivingMachineParams, k: float, **motors: float) -> SkivingMachineParams:
@@ -187,19 +186,12 @@ SIZES: dict[str, MachineSize] = {
 }
 
 
-def workpiece_diameter(gear: Gear) -> float:
-    """The blank's diameter the machine carries [mm]: the tip diameter of an external gear, the outside of a ring
-    gear's rim (root diameter + 6 mn, as machine_models/skiving_machine.py builds the blank)."""
-    if gear.internal:
-        return gear.root_diameter_value + 6 * gear.mn
-    return gear.tip_diameter_value
-
-
-def size_for(gear: Gear) -> MachineSize:
-    """The smallest size whose workpiece diameter and module hold ``gear``; the largest if none does (the check
-    before a run then says whether its motors hold the cut)."""
+def size_for(workpiece_diameter: float, module: float) -> MachineSize:
+    """The smallest size that holds a workpiece of ``workpiece_diameter`` [mm] (the blank the machine carries:
+    ``virtual_machine.setting.machine_layout.workpiece_diameter``) and normal ``module`` [mm]; the largest if none
+    does (the check before a run then says whether its motors hold the cut)."""
     for size in SIZES.values():
-        if size.holds(gear):
+        if size.holds(workpiece_diameter, module):
             return size
     return SIZES[SIZE_NAMES[-1]]
 

@@ -1,4 +1,6 @@
-"""The skiving machine as an MJCF model, generated with MjSpec from the job and :class:`SkivingMachineParams`.
+"""The skiving machine as an MJCF model, generated with MjSpec from the job's :class:`MachineLayout` (numbers only:
+``virtual_machine.setting.machine_layout.skiving_layout`` builds it from the job's setup) and
+:class:`SkivingMachineParams`.
 
 Machine frame = the work frame at rest (cutting/skiving/setup.py): z up along the work axis, the common
 perpendicular of the axes on +x. Bodies and joints (seed 000 notation):
@@ -26,7 +28,6 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from cutting.skiving.setup import SkivingSetup
 from machine_models.drives import couple
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.parts import (
@@ -49,50 +50,42 @@ from machine_models.structure_drives import ChainRatios
 
 @dataclass(frozen=True)
 class MachineLayout:
-    """Where the job puts the machine: pass-independent quantities in metres and radians."""
+    """Where the job puts the machine and what it carries, in metres and radians (built from the job's setup by
+    ``virtual_machine.setting.machine_layout.skiving_layout``): the first pass's centre distance and carriage start,
+    the tool axis's tilt, the work and cutter phases of the cutting engine's frames, the blank (radius, face width),
+    the cutter (tip radius, face width), the holder's radius, and the job's nominal lead-screw pitch."""
 
     centre_distance: float  # first pass [m]
     carriage_start: float  # carriage position at the start of the first pass [m]
     tilt: float  # rotation of the tool axis about x [rad] (-Sigma)
-    work_phase: float
-    cutter_phase: float
-    lead_screw_pitch: float  # [m]
-
-
-def layout_of(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
-    from cutting.skiving.trajectory import ideal_passes
-
-    first = ideal_passes(setup)[0]
-    return MachineLayout(
-        first.centre_distance * MM,
-        first.s_start * MM,
-        setup.tilt,
-        setup.work_phase,
-        setup.cutter_phase,
-        lead_screw_pitch_mm * MM,
-    )
+    work_phase: float  # blank_frame about z: the centre of space 0 on +x at B2 = 0 [rad]
+    cutter_phase: float  # cutter_frame about z: tooth 0 on the mesh at B1 = 0 [rad]
+    lead_screw_pitch_mm: float  # the job's nominal pitch [mm]; the model's screw has it x (1 + pitch error)
+    blank_radius: float  # the blank as a disc: tip radius; ring gear: root radius + 3 mn [m]
+    blank_width: float  # the gear's face width [m]
+    cutter_radius: float  # the cutter's tip radius [m]
+    cutter_width: float  # the cutter's face width [m]
+    holder_radius: float  # [m]
 
 
 def build_spec(
-    setup: SkivingSetup,
+    lay: MachineLayout,
     params: SkivingMachineParams,
-    lead_screw_pitch_mm: float,
     structure: str = "mechatronic",
     chains: ChainRatios | None = None,
 ) -> mujoco.MjSpec:
-    """The MJCF model of the machine for ``setup`` with the drives of ``structure`` (see :mod:`machine_models.
-    structure_drives`); ``chains`` are the realised ratios of the structure's setting organs (ideal if None)."""
+    """The MJCF model of the machine for the job's layout ``lay`` with the drives of ``structure`` (see
+    :mod:`machine_models.structure_drives`); ``chains`` are the realised ratios of the structure's setting organs
+    (ideal if None)."""
     problems = params.problems()
     if problems:
         raise ValueError("invalid machine parameters: " + "; ".join(problems))
     # the model's screw has its real lead; the CNC counts pulses for the job's nominal one
-    lay = layout_of(setup, lead_screw_pitch_mm * (1 + params.lead_screw_pitch_error))
-    g, c = setup.gear, setup.cutter
+    lead_screw_pitch = lay.lead_screw_pitch_mm * (1 + params.lead_screw_pitch_error) * MM
     spec = machine_spec("skiving_machine", params.timestep, params.integrator, (0.0, 0.0, -9.81))
     world = spec.worldbody
     world.add_light(pos=[0, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
-    r_blank = g.tip_radius * MM if not g.internal else (g.root_radius + 3 * g.mn) * MM
-    b = g.face_width * MM
+    r_blank, b = lay.blank_radius, lay.blank_width
     visual(world, mujoco.mjtGeom.mjGEOM_BOX, (0.45, 0.35, 0.04), DARK, pos=(0.1, 0, -b / 2 - 0.16))  # bed
 
     # ---- work spindle B2 with the blank ----------------------------------------------------------------
@@ -119,8 +112,7 @@ def build_spec(
     head = radial.add_body(name="swivel_head", quat=quat_x(lay.tilt))
     visual(head, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.08), BLUE, pos=(0, 0, 0.1))  # spindle housing
     tool = head.add_body(name="tool_spindle")
-    r_cut = setup.cutter_tip_diameter / 2 * MM
-    width = c.face_width * MM
+    r_cut, width = lay.cutter_radius, lay.cutter_width
     cutter_mass = STEEL * math.pi * r_cut**2 * width  # the cutter as a disc at its tip diameter (HSS/carbide ~ steel)
     inertial(tool, 12.0 + cutter_mass, params.tool_inertia + cutter_mass * r_cut**2 / 2)
     tool.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.tool_friction)
@@ -129,7 +121,7 @@ def build_spec(
     visual(
         tool,
         mujoco.mjtGeom.mjGEOM_CYLINDER,
-        (setup.holder_diameter_value / 2 * MM, 0.02),
+        (lay.holder_radius, 0.02),
         DARK,
         pos=(0, 0, -width - 0.02),
     )  # holder
@@ -144,9 +136,7 @@ def build_spec(
     inertial(screw, 10.0, params.screw_inertia, 1.0)
     screw.add_joint(name="TV", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
     visual(screw, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.02, 0.3), STEELC)
-    nut = DriveStage(
-        lay.lead_screw_pitch / (2 * math.pi), params.nut_stiffness, params.nut_backlash, params.nut_damping
-    )
+    nut = DriveStage(lead_screw_pitch / (2 * math.pi), params.nut_stiffness, params.nut_backlash, params.nut_damping)
     couple(spec, "nut", "P3", "TV", nut)
 
     # ---- the structure's motors and chains, then the start of the first pass --------------------------------
@@ -159,22 +149,22 @@ def build_spec(
             f"structure {structure!r} needs the realised ratios of its chains "
             f"(virtual_machine.setting.chains.chain_ratios)"
         )
-    drives = DRIVES[structure](spec, {"world": world, "head": head}, setup, params, chains or ChainRatios())
-    spec.add_key(name="home", qpos=_home_qpos(spec, lay, drives))
+    drives = DRIVES[structure](spec, {"world": world, "head": head}, params, chains or ChainRatios())
+    spec.add_key(name="home", qpos=_home_qpos(spec, lay, lead_screw_pitch, drives))
     return spec
 
 
-def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, drives) -> list[float]:
-    """Joint positions at the start of the first pass: B1 = 0, the carriage at the pass start, the cutter at the
-    centre distance, B2 = 0 unless a chain sets it, and the other joints (motors, stepping motors) such that
-    every engaged chain is relaxed (least squares over the tendons; clutched chains are re-centred when they
-    engage)."""
+def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, lead_screw_pitch: float, drives) -> list[float]:
+    """Joint positions at the start of the first pass: B1 = 0, the carriage at the pass start (the screw turned by
+    its real ``lead_screw_pitch`` [m]), the cutter at the centre distance, B2 = 0 unless a chain sets it, and the
+    other joints (motors, stepping motors) such that every engaged chain is relaxed (least squares over the tendons;
+    clutched chains are re-centred when they engage)."""
     model = spec.compile()
     q = np.zeros(model.nq)
     known = {
         "X": lay.centre_distance,
         "P3": lay.carriage_start,
-        "TV": lay.carriage_start / (lay.lead_screw_pitch / (2 * math.pi)),
+        "TV": lay.carriage_start / (lead_screw_pitch / (2 * math.pi)),
         "B1": 0.0,
     }
     if "B2" not in drives.chain_driven:
@@ -205,7 +195,5 @@ def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, drives) -> list[float]:
     return q.tolist()
 
 
-def build_model(
-    setup: SkivingSetup, params: SkivingMachineParams, lead_screw_pitch_mm: float, structure: str = "mechatronic"
-) -> mujoco.MjModel:
-    return build_spec(setup, params, lead_screw_pitch_mm, structure).compile()
+def build_model(lay: MachineLayout, params: SkivingMachineParams, structure: str = "mechatronic") -> mujoco.MjModel:
+    return build_spec(lay, params, structure).compile()

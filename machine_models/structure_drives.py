@@ -26,7 +26,6 @@ from dataclasses import dataclass, field, replace
 
 import mujoco
 
-from cutting.skiving.setup import SkivingSetup
 from machine_models.drives import couple, couple_linear
 from machine_models.parameters import SkivingMachineParams
 from machine_models.parts import GREY, inertial, motor, visual
@@ -56,7 +55,7 @@ def _motor_body(spec, parent, name: str, pos, inertia: float, peak: float) -> No
     motor(spec, parent.add_body(name=f"{name}_rotor", pos=list(pos)), name, inertia, peak)
 
 
-def mechatronic(spec, bodies, setup: SkivingSetup, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
+def mechatronic(spec, bodies, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
     world, head = bodies["world"], bodies["head"]
     _motor_body(spec, head, "M1", (0.1, 0.0, 0.2), params.tool_motor_inertia, params.tool_motor_torque)
     spec.body("M1_rotor").gravcomp = params.counterbalance
@@ -68,7 +67,7 @@ def mechatronic(spec, bodies, setup: SkivingSetup, params: SkivingMachineParams,
     return Drives(("M1", "M2", "M3"))
 
 
-def mechanical(spec, bodies, setup: SkivingSetup, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
+def mechanical(spec, bodies, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
     world = bodies["world"]
     _motor_body(spec, world, "M1", (-0.3, 0.3, 0.3), params.main_motor_inertia, 2.5 * params.main_motor_torque)
     _motor_body(spec, world, "M2", (0.35, 0.25, 0.38), params.traverse_motor_inertia, params.traverse_motor_torque)
@@ -98,7 +97,7 @@ def _stepping_motor(spec, world, name: str, pos, params: SkivingMachineParams) -
     _motor_body(spec, world, name, pos, params.hydraulic_motor_inertia, 10 * params.hydraulic_torque_limit)
 
 
-def hydraulic_differential(spec, bodies, setup, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
+def hydraulic_differential(spec, bodies, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
     world = bodies["world"]
     _motor_body(spec, world, "M1", (-0.3, 0.3, 0.3), params.main_motor_inertia, 2.5 * params.main_motor_torque)
     couple(spec, "speed_chain", "B1", "M1", replace(params.speed_chain, ratio=chains.speed))
@@ -114,7 +113,7 @@ def hydraulic_differential(spec, bodies, setup, params: SkivingMachineParams, ch
     return Drives(("M1", "GShD1", "GShD2", "GShD3"))
 
 
-def hydraulic_shaft(spec, bodies, setup, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
+def hydraulic_shaft(spec, bodies, params: SkivingMachineParams, chains: ChainRatios) -> Drives:
     world = bodies["world"]
     _motor_body(spec, world, "M1", (-0.3, 0.3, 0.3), params.main_motor_inertia, 2.5 * params.main_motor_torque)
     couple(spec, "speed_chain", "B2", "M1", replace(params.speed_chain, ratio=chains.speed))

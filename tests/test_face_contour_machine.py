@@ -19,7 +19,6 @@ from checks import finite_max
 
 from cutting.face_contour.slots import SWEEP_TOLERANCE, ExactSlots, FaceCoupling, element_path
 from machine_models.face_contour_machine import (
-    FaceMachineLayout,
     FaceMachineParams,
     build_face_machine,
     build_face_machine_spec,
@@ -35,6 +34,7 @@ from virtual_machine.processes.face_contour.cnc import (
     simulate_face_contour,
 )
 from virtual_machine.runtime.physics import SimulationDivergedError
+from virtual_machine.setting.machine_layout import face_layout
 
 COUPLING = FaceCoupling()  # m = 24, L = 52.5, R = 125, S = 0.05, depth 3: the plunge ends at turn 60
 ECCENTRIC = replace(COUPLING, control="eccentric", e=COUPLING.flat_bottom_eccentricity())
@@ -78,7 +78,7 @@ def test_model_compiles_with_named_parts_a_relaxed_home_and_the_seeds_kinematics
     puts the site on cutting/face_contour.element_path to 1e-9 mm; 0.1 s free gives no MuJoCo warning."""
     c = ECCENTRIC if control == "eccentric" else COUPLING
     params = STIFF if stiff else DEFAULT
-    layout = FaceMachineLayout.from_coupling(c)
+    layout = face_layout(c)
     spec = build_face_machine_spec(layout, params)
     m = spec.compile()
     joints = {m.joint(i).name for i in range(m.njnt)}
@@ -176,7 +176,7 @@ def test_compliant_machine_deviates_by_its_backlash_torsion_and_weight(runs) -> 
     rec, _ = runs["default"]
     stiff, _ = runs["stiff"]
     p, c = DEFAULT, COUPLING
-    m = build_face_machine(FaceMachineLayout.from_coupling(c), p)
+    m = build_face_machine(face_layout(c), p)
     lead = p.screw_pitch / (2 * math.pi)
     weight = (1 - p.counterbalance) * 9.81 * m.body_subtreemass[m.body("infeed_slide").id]
     sag = (weight * (1 / p.nut_stiffness + lead**2 / p.z_drive.stiffness) + p.nut_backlash / 2) * 1e6  # um
@@ -213,7 +213,7 @@ def test_compliant_machine_deviates_by_its_backlash_torsion_and_weight(runs) -> 
     lag_a = _twist(p.work_drive, p.work_friction) + _twist(p.head_drive, p.head_friction) / ce.m
     assert np.abs(rec_e.trace_sync[-50:, 1] + lag_e / ARCSEC).max() < 0.05
     assert np.abs(rec_e.trace_sync[-50:, 0] + lag_a / ARCSEC).max() < 0.01
-    me = build_face_machine(FaceMachineLayout.from_coupling(ce), p)
+    me = build_face_machine(face_layout(ce), p)
     weight_e = (1 - p.counterbalance) * 9.81 * me.body_subtreemass[me.body("infeed_slide").id]
     sag_e = (weight_e * (1 / p.nut_stiffness + lead**2 / p.z_drive.stiffness) + p.nut_backlash / 2) * 1e6
     d = rec_e.passes[0].slot_deviation(ce)[0]
@@ -300,7 +300,7 @@ def test_eccentric_control_gives_the_flat_bottom_on_the_ideal_machine(runs) -> N
     ],
 )
 def test_bad_parameters_raise_value_error_naming_them(values: dict, name: str) -> None:
-    layout = FaceMachineLayout.from_coupling(ECCENTRIC)
+    layout = face_layout(ECCENTRIC)
     with pytest.raises(ValueError, match=name.replace(".", r"\.")):
         build_face_machine(layout, DEFAULT.with_overrides(values))
     with pytest.raises(ValueError, match=name.replace(".", r"\.")):
@@ -308,7 +308,7 @@ def test_bad_parameters_raise_value_error_naming_them(values: dict, name: str) -
 
 
 def test_bad_layout_and_run_inputs_raise_value_error() -> None:
-    layout = FaceMachineLayout.from_coupling(COUPLING)
+    layout = face_layout(COUPLING)
     with pytest.raises(ValueError, match="m = 1"):
         build_face_machine(replace(layout, m=1))
     with pytest.raises(ValueError, match="e = "):

@@ -11,16 +11,24 @@ import numpy as np
 import pytest
 from checks import JOBS
 
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import ARCSEC, DriveStage, SkivingMachineParams
-from machine_models.skiving_machine import build_spec
+from machine_models.skiving_machine import MachineLayout, build_spec
 from virtual_machine.job import load_job
+from virtual_machine.setting.machine_layout import skiving_layout
 
 JOB_NAMES = ["spur_external", "helical_internal", "default"]
 
 
+def _layout(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
+    """The machine's layout for ``setup``, homed at the start of its first ideal pass."""
+    return skiving_layout(setup, lead_screw_pitch_mm, ideal_passes(setup)[0])
+
+
 def _model(job: str = "spur_external", params: SkivingMachineParams | None = None) -> mujoco.MjModel:
     j = load_job(str(JOBS / f"{job}.toml"))
-    return build_spec(j.skiving, params or SkivingMachineParams(), j.machine["lead_screw_pitch"]).compile()
+    return build_spec(_layout(j.skiving, j.machine["lead_screw_pitch"]), params or SkivingMachineParams()).compile()
 
 
 def _badqacc(d: mujoco.MjData) -> int:
@@ -44,7 +52,7 @@ def test_every_model_compiles_and_steps_without_warnings(job: str) -> None:
 
 def test_scene_xml_round_trip_has_cutter_and_blank() -> None:
     j = load_job(str(JOBS / "spur_external.toml"))
-    xml = build_spec(j.skiving, SkivingMachineParams(), j.machine["lead_screw_pitch"]).to_xml()
+    xml = build_spec(_layout(j.skiving, j.machine["lead_screw_pitch"]), SkivingMachineParams()).to_xml()
     m = mujoco.MjModel.from_xml_string(xml)
     bodies = {m.body(i).name for i in range(m.nbody)}
     assert {"work_spindle", "tool_spindle", "carriage", "radial_slide", "lead_screw"} <= bodies
@@ -133,7 +141,7 @@ def test_invalid_parameters_are_named() -> None:
     bad = replace(SkivingMachineParams(), work_drive=DriveStage(0.5, None, 1e-4), carriage_mass=0.0)
     j = load_job(str(JOBS / "spur_external.toml"))
     with pytest.raises(ValueError, match=r"work_drive.backlash.*contact stiffness") as info:
-        build_spec(j.skiving, bad, 10.0)
+        build_spec(_layout(j.skiving, 10.0), bad)
     assert "carriage_mass" in str(info.value)
 
 
@@ -150,7 +158,7 @@ def test_every_structure_compiles_and_steps_without_warnings(job: str, structure
     j = load_job(str(JOBS / f"{job}.toml"))
     j = dataclasses.replace(j, machine=dict(j.machine, structure=structure))
     chains = chain_ratios(j) if structure != "mechatronic" else None
-    spec = build_spec(j.skiving, SkivingMachineParams(), j.machine["lead_screw_pitch"], structure, chains)
+    spec = build_spec(_layout(j.skiving, j.machine["lead_screw_pitch"]), SkivingMachineParams(), structure, chains)
     compiled = spec.compile()
     d = mujoco.MjData(compiled)
     mujoco.mj_resetDataKeyframe(compiled, d, compiled.key("home").id)
@@ -206,7 +214,7 @@ def test_lead_screw_pitch_error_is_the_screws_real_lead() -> None:
     job = load_job(str(JOBS / "spur_external.toml"))
     nominal = job.machine["lead_screw_pitch"] * 1e-3  # m
     params = replace(SkivingMachineParams(), lead_screw_pitch_error=4e-3)
-    m = build_spec(job.skiving, params, job.machine["lead_screw_pitch"]).compile()
+    m = build_spec(_layout(job.skiving, job.machine["lead_screw_pitch"]), params).compile()
     assert tendon_coefs(m, "nut")["TV"] == pytest.approx(-nominal * 1.004 / (2 * math.pi), rel=1e-12)
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, 0)

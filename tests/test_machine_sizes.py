@@ -19,8 +19,9 @@ from small_jobs import small_job
 
 from cutting.errors import InputError
 from cutting.gear import Gear
+from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import SkivingMachineParams
-from machine_models.sizes import SIZE_NAMES, SIZES, size_for, workpiece_diameter
+from machine_models.sizes import SIZE_NAMES, SIZES, size_for
 from machine_models.skiving_machine import build_spec
 from virtual_machine.job import flatten_model, load_job, parse_job
 from virtual_machine.processes.skiving.cutting_load import (
@@ -31,6 +32,7 @@ from virtual_machine.processes.skiving.cutting_load import (
     space_area,
 )
 from virtual_machine.runtime.machine_run import MachineRun, machine_params, machine_size
+from virtual_machine.setting.machine_layout import skiving_layout, workpiece_diameter
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 
@@ -82,7 +84,8 @@ def test_the_small_size_is_the_original_machine_and_every_size_is_valid() -> Non
 @pytest.mark.parametrize("name", ["default", "spur_external", "helical_internal"])
 def test_every_size_compiles_and_steps_without_warnings(size: str, name: str) -> None:
     j = load_job(JOBS / f"{name}.toml")
-    m = build_spec(j.skiving, SIZES[size].params, j.machine["lead_screw_pitch"]).compile()
+    layout = skiving_layout(j.skiving, j.machine["lead_screw_pitch"], ideal_passes(j.skiving)[0])
+    m = build_spec(layout, SIZES[size].params).compile()
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, m.key("home").id)
     d.ctrl[m.actuator("X").id] = d.qpos[m.joint("X").qposadr[0]]
@@ -110,8 +113,11 @@ def test_the_default_size_follows_the_gear(tmp_path) -> None:
     assert machine_params(spur) == SIZES["medium"].params
     assert machine_size(_text_job(tmp_path, LARGE_JOB)) == "large"
     # by the module alone: a 60 mm gear of mn 2 needs the medium machine; a gear beyond every size gets the largest
-    assert size_for(Gear(28, 2.0, math.radians(20), 0.0, 10.0)).name == "medium"
-    assert size_for(Gear(100, 6.0, math.radians(20), 0.0, 10.0)).name == "large"
+    for gear, size in (
+        (Gear(28, 2.0, math.radians(20), 0.0, 10.0), "medium"),
+        (Gear(100, 6.0, math.radians(20), 0.0, 10.0), "large"),
+    ):
+        assert size_for(workpiece_diameter(gear), gear.mn).name == size
 
 
 def test_overrides_act_on_top_of_the_size(tmp_path) -> None:

@@ -11,11 +11,19 @@ import numpy as np
 import pytest
 from checks import JOBS
 
+from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import DriveStage, SkivingMachineParams
-from machine_models.skiving_machine import build_spec
+from machine_models.skiving_machine import MachineLayout, build_spec
 from virtual_machine.job import Job, load_job
 from virtual_machine.runtime.machine_run import relative_pose, simulate
 from virtual_machine.runtime.physics import MachinePhysics, SimulationDivergedError
+from virtual_machine.setting.machine_layout import skiving_layout
+
+
+def _layout(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
+    """The machine's layout for ``setup``, homed at the start of its first ideal pass."""
+    return skiving_layout(setup, lead_screw_pitch_mm, ideal_passes(setup)[0])
 
 
 def _job(name: str, **machine) -> Job:
@@ -78,7 +86,7 @@ def test_pass_trajectories_cover_every_pass() -> None:
 def test_relative_pose_is_mujocos_kinematics() -> None:
     job = load_job(str(JOBS / "helical_internal.toml"))
     params = SkivingMachineParams()
-    phys = MachinePhysics(build_spec(job.skiving, params, 10.0).compile(), params)
+    phys = MachinePhysics(build_spec(_layout(job.skiving, 10.0), params).compile(), params)
     rng = np.random.default_rng(3)
     for _ in range(5):
         for axis, span in (("B1", 10.0), ("B2", 10.0), ("P3", 0.02), ("X", 0.001)):
@@ -94,7 +102,7 @@ def test_a_diverging_simulation_names_its_stage() -> None:
     params = dataclasses.replace(SkivingMachineParams(), work_drive=DriveStage(0.5, 1e10, 0.0, 0.0))
     with pytest.raises(SimulationDivergedError, match=r"work_drive.*stiffness"):
         simulate(load_job(str(JOBS / "spur_external.toml")), params, duration=0.5)
-    m = build_spec(load_job(str(JOBS / "spur_external.toml")).skiving, params, 10.0).compile()
+    m = build_spec(_layout(load_job(str(JOBS / "spur_external.toml")).skiving, 10.0), params).compile()
     assert m.opt.integrator == mujoco.mjtIntegrator.mjINT_IMPLICITFAST
 
 
@@ -228,7 +236,7 @@ def test_job_overrides_machine_parameters(tmp_path) -> None:
     params = machine_params(load_job(text))
     size = machine_params(load_job(str(JOBS / "spur_external.toml")))  # the job's machine size, unchanged
     assert params.work_drive.backlash == 1e-4 and params.work_drive.stiffness == size.work_drive.stiffness
-    m = build_spec(load_job(text).skiving, params, 10.0).compile()
+    m = build_spec(_layout(load_job(text).skiving, 10.0), params).compile()
     assert np.diff(m.tendon_lengthspring[m.tendon("work_drive").id])[0] == pytest.approx(1e-4)
     text.write_text(base + "\n[machine.model]\ncarriage_mas = 300.0\n[machine.model.work_drive]\nbacklash = -1.0\n")
     with pytest.raises(InputError) as info:

@@ -27,6 +27,7 @@ from virtual_machine.job import Job, flatten_model
 from virtual_machine.runtime.physics import AXES, MachinePhysics
 from virtual_machine.runtime.program import ProgramSettings, program
 from virtual_machine.setting.chains import chain_ratios
+from virtual_machine.setting.machine_layout import skiving_layout, workpiece_diameter
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.setting.sheet import setup_sheet
 from virtual_machine.structures.hydraulic import HydraulicS2, HydraulicS3
@@ -108,7 +109,7 @@ class MotionRecord:
 def machine_size(job: Job) -> str:
     """The name of the job's machine size: ``machine.size``, else the smallest size whose workpiece diameter and
     module hold the gear (machine_models/sizes.py)."""
-    return job.machine.get("size") or size_for(job.gear).name
+    return job.machine.get("size") or size_for(workpiece_diameter(job.gear), job.gear.mn).name
 
 
 def machine_params(job: Job) -> SkivingMachineParams:
@@ -276,7 +277,8 @@ class MachineRun:
         self.setup = setup = plan.setup
         structure = job.machine["structure"]
         chains = chain_ratios(job) if structure != "mechatronic" else None
-        self.spec = build_spec(setup, self.params, job.machine["lead_screw_pitch"], structure, chains)
+        layout = skiving_layout(setup, job.machine["lead_screw_pitch"], plan.passes[0])
+        self.spec = build_spec(layout, self.params, structure, chains)
         self.phys = phys = MachinePhysics(self.spec.compile(), self.params)
         self.machine = machine = build_structure(job, self.params, phys, plan=plan)
         self.servo_substeps = servo_substeps

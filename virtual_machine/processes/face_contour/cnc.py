@@ -71,6 +71,7 @@ from metrology.face_slots import SlotMeasure, bottom_form, measuring_radii, side
 from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
+from virtual_machine.setting.machine_layout import face_layout
 
 __all__ = [
     "AXES",
@@ -381,7 +382,7 @@ def simulate_face_contour(
         raise ValueError(f"slots = {slots}: must be slot numbers in [0, {coupling.m})")
     if len(set(slots)) != len(slots):
         raise ValueError(f"slots = {slots}: each slot once")
-    layout = FaceMachineLayout.from_coupling(coupling)
+    layout = face_layout(coupling)
     model = build_face_machine_spec(layout, params).compile()  # raises ValueError naming bad parameters
     h = model.opt.timestep
     substeps = servo_substeps(h, tuning.servo_rate)
