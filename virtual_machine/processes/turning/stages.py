@@ -73,14 +73,17 @@ def _summary_lines(s: dict[str, Any]) -> list[str]:
     ]
 
 
-def simulate_turning(job: Job, progress: Callable[[float], None] | None = None):
+def simulate_turning(
+    job: Job, progress: Callable[[float], None] | None = None, params: ThreadLatheParams | None = None
+):
     """The lathe turns ``process.revolutions`` revolutions after its run-up; returns the record and the path it
     made as a :class:`SampledTurning` (theta from the first measured revolution, which the vibration met at the
-    spindle angle ``path.theta0`` after the feed engaged: :func:`commanded_path`)."""
+    spindle angle ``path.theta0`` after the feed engaged: :func:`commanded_path`). ``params``: the lathe (default:
+    the job's, its [machine.model] over the defaults)."""
     from virtual_machine.runtime.thread_run import simulate_thread
 
     n = job.process["revolutions"]
-    params = override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
+    params = params or override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
     duration = params.runup_time + SETTLE + (n + 1) / spindle_speed(job)
     rec = simulate_thread(job, params, duration=duration, vibration=job.vibration)
     if progress is not None:
