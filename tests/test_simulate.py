@@ -268,8 +268,12 @@ def test_hydraulic_steps_show_as_a_sawtooth_of_one_step() -> None:
 def test_divider_quantisation_bounds_the_error_by_one_command_pulse() -> None:
     """S4 with coarse command pulses (500 and 2000 per turn: 503 and 126 um on the reference circle of
     spur_external) and fine encoders: the discriminators compare whole pulses, so the work sits within one pulse
-    of its reference, and the sign discriminator with its keys acts as a relay: a limit cycle inside that quantum
-    whose size follows the pulse (measured 9 % and 6 % of it peak-to-peak)."""
+    of its reference, and the sign discriminator with its keys acts as a relay: a limit cycle inside that quantum.
+    Its size does not scale with the pulse as a relay on a linear plant would (4x the pulse, 4x the cycle): the
+    pulse train beats with the 4 kHz servo tick, so the cycle's frequency and share of the pulse change with it
+    (measured at 500 / 1000 / 2000 / 4000 pulses: 44.7 / 32.4 / 7.3 / 3.3 um p-p, 9 / 13 / 6 / 5 % of the pulse,
+    dominant at 10 / 8 / 31 / 61 Hz). What the quantisation does bound is asserted: the mean within one pulse, the
+    cycle within a fifth of it, the finer pulse the smaller error."""
     pp = {}
     for p in (500, 2000):
         job = _job("spur_external", command_pulses_per_rev=p, encoder_lines=2_500_000)
@@ -279,7 +283,7 @@ def test_divider_quantisation_bounds_the_error_by_one_command_pulse() -> None:
         assert abs(stats["mean_um"]) <= 1.02 * pulse_um
         assert stats["peak_to_peak_um"] < 0.2 * pulse_um, stats
         pp[p] = stats["peak_to_peak_um"]
-    assert 2.0 < pp[500] / pp[2000] < 8.0, pp  # the pulse is 4x larger
+    assert pp[2000] < pp[500], pp
 
 
 def test_simulate_cli_overrides_the_structure(tmp_path) -> None:
