@@ -41,7 +41,7 @@ from virtual_machine.processes.face_contour.cnc import (
     measure_recorded,
     simulate_face_contour,
 )
-from virtual_machine.runtime.physics import SimulationDivergedError
+from virtual_machine.runtime.integrator import SimulationDivergedError
 
 COUPLING = FaceCoupling()  # m = 24, L = 52.5, R = 125, S = 0.05, depth 3: the plunge ends at turn 60
 ECCENTRIC = replace(COUPLING, control="eccentric", e=COUPLING.flat_bottom_eccentricity())

@@ -14,8 +14,9 @@ from checks import JOBS
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import build_spec
 from virtual_machine.job import Job, load_job
+from virtual_machine.runtime.integrator import SimulationDivergedError
 from virtual_machine.runtime.machine_run import relative_pose, simulate
-from virtual_machine.runtime.physics import MachinePhysics, SimulationDivergedError
+from virtual_machine.runtime.physics import MachinePhysics
 
 
 def _job(name: str, **machine) -> Job:

@@ -73,7 +73,12 @@ from machine_models.face_contour_machine import (
 from machine_models.parameters import ARCSEC
 from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
-from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
+from virtual_machine.runtime.integrator import (
+    BAD_ACCELERATION_OR_SPEED,
+    Integrator,
+    divergence_message,
+    servo_substeps,
+)
 
 __all__ = [
     "AXES",
@@ -373,8 +378,8 @@ def simulate_face_contour(
     """Cut ``coupling``'s slots on the simulated machine (MuJoCo) with the electronic gearbox of this module, the
     head at ``tool_rpm``, and record the final pass over each of ``slots``. The run starts at rest ``run_in`` tool
     turns before the first of these passes (or at ``start_turn``) and ends after the last. Raises ValueError for bad
-    inputs and :class:`SimulationDivergedError` when the integration blows up or a servo runs away (the message
-    names what to change)."""
+    inputs and :class:`virtual_machine.runtime.integrator.SimulationDivergedError` when the integration blows up or
+    a servo runs away (the message names what to change)."""
     params = params or FaceMachineParams()
     tuning = tuning or FaceTuning()
     if not (math.isfinite(tool_rpm) and tool_rpm > 0):
@@ -417,8 +422,17 @@ def simulate_face_contour(
     site_b = int(model.site("blank_frame").id)
     sites = [int(model.site("element_frame" if j == 0 else f"element_frame_{j}").id) for j in range(coupling.elements)]
     xpos, xmat = data.site_xpos, data.site_xmat
-    bad = [data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL)]
-    runaway = np.asarray(tuning.runaway)
+    integrator = Integrator(
+        model,
+        data,
+        substeps,
+        qa["Z"],
+        lambda t: _diagnose(layout, params, t),
+        BAD_ACCELERATION_OR_SPEED,
+        servo.error,
+        tuning.runaway,
+        lambda t: _runaway(servo, tuning, tool_rpm, h, t),
+    )
     order = sorted(slots, key=turns.__getitem__)
     windows = [(k, 2 * math.pi * turns[k] + window[0], 2 * math.pi * turns[k] + window[1]) for k in order]
     phi_end = windows[-1][2] + 0.02
@@ -483,12 +497,8 @@ def simulate_face_contour(
                 (q[3] - ideal_z) * 1e6,
             ]
             traces.append(np.concatenate([[t, phi_cmd], q, sync, servo.torque, servo.error * to_arcsec]))
-        mujoco.mj_step(model, data, nstep=substeps)
+        integrator.step()
         tick += 1
-        if bad[0].number or bad[1].number or not math.isfinite(data.qpos[qa["Z"]]):
-            raise SimulationDivergedError(_diagnose(layout, params, t))  # data.time: reset by MuJoCo
-        if np.any(np.abs(servo.error) > runaway):
-            raise SimulationDivergedError(_runaway(servo, tuning, tool_rpm, h, data.time))
         egb.update(dt, t)
         if progress is not None and tick % 500 == 0:
             progress(min((phi_cmd - egb.phi0) / total, 0.999))
