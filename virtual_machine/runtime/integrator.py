@@ -18,6 +18,8 @@ import numpy as np
 BAD_ACCELERATION = (mujoco.mjtWarning.mjWARN_BADQACC,)
 BAD_ACCELERATION_OR_SPEED = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL)
 
+_mj_step, _isfinite = mujoco.mj_step, math.isfinite  # bound once: a step is the skiving machine's hot path
+
 
 class SimulationDivergedError(RuntimeError):
     """The integration blew up; the message names the stage most likely responsible and how to fix it."""
@@ -87,11 +89,11 @@ class Integrator:
         """Run one servo tick's physics sub-steps and check the result."""
         data = self.data
         t = data.time
-        mujoco.mj_step(self.model, data, nstep=self.nstep)
+        _mj_step(self.model, data, self.nstep)  # nstep positional: cheaper than a keyword through the binding
         for warning in self._warnings:
             if warning.number:
                 raise SimulationDivergedError(self._diagnose(t))
-        if not math.isfinite(self._qpos[self._watch]):
+        if not _isfinite(self._qpos[self._watch]):
             raise SimulationDivergedError(self._diagnose(t))
         if self._error is not None and np.any(np.abs(self._error) > self._limits):
             raise SimulationDivergedError(self._runaway(data.time))
