@@ -33,7 +33,7 @@ from virtual_machine.processes.face_contour.cnc import (
     measure_recorded,
     simulate_face_contour,
 )
-from virtual_machine.runtime.physics import SimulationDivergedError
+from virtual_machine.runtime.integrator import SimulationDivergedError
 from virtual_machine.setting.machine_layout import face_layout
 
 COUPLING = FaceCoupling()  # m = 24, L = 52.5, R = 125, S = 0.05, depth 3: the plunge ends at turn 60

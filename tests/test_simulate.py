@@ -16,8 +16,9 @@ from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import MachineLayout, build_spec
 from virtual_machine.job import Job, load_job
+from virtual_machine.runtime.integrator import SimulationDivergedError
 from virtual_machine.runtime.machine_run import relative_pose, simulate
-from virtual_machine.runtime.physics import MachinePhysics, SimulationDivergedError
+from virtual_machine.runtime.physics import MachinePhysics
 from virtual_machine.setting.machine_layout import skiving_layout
 
 

@@ -120,8 +120,8 @@ def run(
     job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh_tolerance: float | None, removal: str
 ) -> None:
     from virtual_machine.processes.skiving.run import UnmeasurableGearError, with_mesh_tolerance
+    from virtual_machine.runtime.integrator import SimulationDivergedError
     from virtual_machine.runtime.machine_run import LostSynchronismError
-    from virtual_machine.runtime.physics import SimulationDivergedError
 
     path = job or default_job_path()
     try:
@@ -226,8 +226,8 @@ def format_study(outcome, out: Path) -> str:
 def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
     from virtual_machine.output.check import class_verdict, format_verdict
     from virtual_machine.processes.skiving.run import UnmeasurableGearError
+    from virtual_machine.runtime.integrator import SimulationDivergedError
     from virtual_machine.runtime.machine_run import LostSynchronismError
-    from virtual_machine.runtime.physics import SimulationDivergedError
 
     try:
         j = load_job(job)
@@ -273,8 +273,8 @@ def simulate(
     correction: bool | None,
     rrd: Path | None,
 ) -> None:
+    from virtual_machine.runtime.integrator import SimulationDivergedError
     from virtual_machine.runtime.machine_run import LostSynchronismError
-    from virtual_machine.runtime.physics import SimulationDivergedError
 
     path = job or default_job_path()
     overrides = {"structure": structure, "synchronization": synchronization, "adaptive_correction": correction}

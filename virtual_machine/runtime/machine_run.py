@@ -24,6 +24,7 @@ from machine_models.skiving_machine import MM, build_spec
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
 from virtual_machine.controllers import InductionMotor
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.runtime.integrator import Integrator
 from virtual_machine.runtime.physics import AXES, MachinePhysics
 from virtual_machine.runtime.program import ProgramSettings, program
 from virtual_machine.setting.chains import chain_ratios
@@ -283,6 +284,8 @@ class MachineRun:
         self.machine = machine = build_structure(job, self.params, phys, plan=plan)
         self.servo_substeps = servo_substeps
         self.dt = phys.model.opt.timestep * servo_substeps
+        # the tick's physics; a divergence names the stage to soften (at the time MuJoCo leaves after the step)
+        self.integrator = Integrator(phys.model, phys.data, servo_substeps, phys.qadr["B2"], phys.diagnose)
         p = job.machine["command_pulses_per_rev"]
         ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
         settings = settings or ProgramSettings(runup_acceleration=self.params.work_acceleration)
@@ -314,7 +317,7 @@ class MachineRun:
 
     def advance(self, until: float = math.inf, progress: Callable[[float], None] | None = None) -> bool:
         """Run servo ticks while the machine time is below ``until`` [s]; False once the program has ended."""
-        phys, machine, dt, subs = self.phys, self.machine, self.dt, self.servo_substeps
+        phys, machine, dt, step = self.phys, self.machine, self.dt, self.integrator.step
         data = phys.data
         qpos, qvel, ctrl, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
         qa = [phys.qadr[a] for a in AXES]
@@ -357,7 +360,7 @@ class MachineRun:
                         fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
                         tz += (point[0] * force[1] - point[1] * force[0]) * 1e-3 + moment[2]
                     self.load_rows.append((data.time, fx, fy, fz, tz))
-            phys.step(subs)
+            step()
             if load is not None:
                 self.load_work += float(qfrc @ qvel) * dt
                 self.actuator_work += float(data.actuator_force @ data.actuator_velocity) * dt

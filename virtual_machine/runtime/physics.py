@@ -1,5 +1,6 @@
 """The physics side of the simulation loop: a compiled machine model, its state and the signals the
-controllers read (axis angles and speeds) and write (motor torques), with divergence detection."""
+controllers read (axis angles and speeds) and write (motor torques), and the diagnosis of a divergence (the stage to
+soften); :class:`virtual_machine.runtime.integrator.Integrator` steps it."""
 
 from __future__ import annotations
 
@@ -11,34 +12,6 @@ import numpy as np
 from machine_models.parameters import SkivingMachineParams
 
 AXES = ("B1", "B2", "P3", "X", "TV")  # the machine's axes, in every structure
-
-
-class SimulationDivergedError(RuntimeError):
-    """The integration blew up; the message names the stage most likely responsible and how to fix it."""
-
-
-def servo_substeps(timestep: float, servo_rate: float) -> int:
-    """Physics steps per servo tick; ValueError unless the servo period is a whole multiple of the time step."""
-    substeps = round(1 / (servo_rate * timestep))
-    if substeps < 1 or abs(substeps * timestep * servo_rate - 1) > 1e-9:
-        raise ValueError(
-            f"the servo period 1/{servo_rate:g} s must be a whole multiple of machine.timestep ({timestep:g} s)"
-        )
-    return substeps
-
-
-def divergence_message(machine: str, omega_h: dict[str, float], timestep: float, t: float) -> str:
-    """Why ``machine`` diverged at ``t``: the compliant stage whose local mode is fastest for the time step
-    (``omega_h``: omega * h per stage, as the machines' ``stage_omega_h`` give it) and what to change."""
-    head = f"the {machine} diverged at t = {t:.4f} s (MuJoCo reported bad accelerations). "
-    if not omega_h:
-        return head + f"Every stage is rigid: reduce machine.timestep (now {timestep:g} s)"
-    worst = max(omega_h, key=omega_h.__getitem__)
-    what = f"machine.{worst}" if worst == "nut_stiffness" else f"machine.{worst}.stiffness"
-    return head + (
-        f"Stiffest stage: {worst} with omega*h = {omega_h[worst]:.2f} (explicit springs need < 2, better < 0.5); "
-        f"lower {what}, raise its damping, or reduce machine.timestep (now {timestep:g} s)"
-    )
 
 
 class MachinePhysics:
@@ -64,8 +37,6 @@ class MachinePhysics:
         self.site_cutter = int(model.site("cutter_frame").id)
         self.data.ctrl[self.act["X"]] = self.data.qpos[self.qadr["X"]]
         mujoco.mj_forward(model, self.data)
-        self._badqacc = self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC]  # a live view: cheap to poll
-        self._b2 = self.qadr["B2"]
         self.blank_body = int(model.site_bodyid[self.site_blank])
         self.cutter_body = int(model.site_bodyid[self.site_cutter])
 
@@ -115,11 +86,6 @@ class MachinePhysics:
         mujoco.mj_applyFT(self.model, d, f_world, m_world, p_world, self.blank_body, d.qfrc_applied)
         mujoco.mj_applyFT(self.model, d, -f_world, -m_world, p_world, self.cutter_body, d.qfrc_applied)
 
-    def step(self, n: int) -> None:
-        mujoco.mj_step(self.model, self.data, nstep=n)
-        if self._badqacc.number or not math.isfinite(self.data.qpos[self._b2]):
-            raise SimulationDivergedError(self.diagnose())
-
     def cutter_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """The cutter frame in the blank frame: rotation (3, 3) and translation [mm] (current state)."""
         mujoco.mj_kinematics(self.model, self.data)
@@ -128,8 +94,10 @@ class MachinePhysics:
         pb, pc = self.data.site_xpos[self.site_blank], self.data.site_xpos[self.site_cutter]
         return rb.T @ rc, rb.T @ (pc - pb) * 1e3
 
-    def diagnose(self) -> str:
-        """Which stage's natural frequency is too high for the time step (explicit springs need w h < ~1)."""
+    def diagnose(self, t: float | None = None) -> str:
+        """Which stage's natural frequency is too high for the time step (explicit springs need w h < ~1); ``t``:
+        when it diverged (default: now; after a blow-up MuJoCo has reset the state, so the caller passes the tick's
+        start)."""
         p, h = self.params, self.model.opt.timestep
         stages = {
             "work_drive": (p.work_drive, p.work_inertia, p.work_motor_inertia),
@@ -144,8 +112,9 @@ class MachinePhysics:
             wh = math.sqrt(stage.stiffness / j) * h
             if wh > worst_wh:
                 worst, worst_wh = name, wh
+        t = self.time if t is None else t
         return (
-            f"the simulation diverged at t = {self.time:.4f} s (MuJoCo reported bad accelerations). "
+            f"the simulation diverged at t = {t:.4f} s (MuJoCo reported bad accelerations). "
             f"Stiffest stage: {worst} with omega*h = {worst_wh:.2f}; lower machine.{worst}.stiffness, raise its "
             f"damping, or reduce machine.timestep (now {h:g} s)"
         )

@@ -26,8 +26,8 @@ from machine_models.parameters import override
 from machine_models.skiving_machine import MM
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.runtime.integrator import Integrator
 from virtual_machine.runtime.machine_run import error_stats
-from virtual_machine.runtime.physics import SimulationDivergedError
 from virtual_machine.setting.sheet import thread_sheet
 from virtual_machine.setting.thread_layout import thread_layout
 from virtual_machine.structures.thread_group import (
@@ -154,7 +154,8 @@ def simulate_thread(
     """Run-up and the first threading stroke of ``job``, until the tool leaves the thread (``duration`` [s]
     overrides that). ``disturbance(t)`` is an extra torque on the spindle [N m] (a load on the master);
     ``vibration`` a feed vibration (vibration turning, seed 004) on the slave's command.
-    Raises :class:`SimulationDivergedError` when MuJoCo reports bad accelerations."""
+    Raises :class:`virtual_machine.runtime.integrator.SimulationDivergedError` when MuJoCo reports bad
+    accelerations."""
     params = params or override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
     lay = thread_layout(job, params)
     model = build_thread_lathe_spec(lay, params).compile()
@@ -181,7 +182,14 @@ def simulate_thread(
     n = round(t_end / dt)
     rows = np.empty((n, 8))
     cnc = ThreadCnc()
-    bad = mujoco.mjtWarning.mjWARN_BADQACC
+
+    def diverged(t: float) -> str:  # t: the tick's start (MuJoCo resets the state it blew up in)
+        return (
+            f"the thread lathe diverged at t = {t:.4f} s (MuJoCo reported bad accelerations): "
+            f"lower a stage's stiffness, raise its damping or reduce the timestep (now {model.opt.timestep:g} s)"
+        )
+
+    step = Integrator(model, data, servo_substeps, i_p2, diverged).step
     for k in range(n):
         t = k * dt
         cnc.scale = _ramp(t, runup)
@@ -191,12 +199,7 @@ def simulate_thread(
             ctrl[a_m2] = t2
         if disturbance is not None:
             qfrc[dof_b1] = disturbance(t)
-        mujoco.mj_step(model, data, nstep=servo_substeps)
-        if data.warning[bad].number or not math.isfinite(qpos[i_p2]):
-            raise SimulationDivergedError(
-                f"the thread lathe diverged at t = {data.time:.4f} s (MuJoCo reported bad accelerations): "
-                f"lower a stage's stiffness, raise its damping or reduce the timestep (now {model.opt.timestep:g} s)"
-            )
+        step()
         rows[k] = (data.time, qpos[i_b1], qpos[i_p2], qpos[i_tv], qpos[i_m1], qpos[i_m2] if electronic else 0.0, t1, t2)
     b1, p2 = rows[:, 1], rows[:, 2]
     error = (p2 - p2_0) - lay.lead / (2 * math.pi) * (b1 - b1_0) * lay.hand_sign

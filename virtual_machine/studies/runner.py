@@ -89,8 +89,8 @@ def expected_failures() -> tuple[type[Exception], ...]:
     measuring machine cannot measure."""
     from cutting.errors import InputError
     from virtual_machine.processes.skiving.run import UnmeasurableGearError
+    from virtual_machine.runtime.integrator import SimulationDivergedError
     from virtual_machine.runtime.machine_run import LostSynchronismError
-    from virtual_machine.runtime.physics import SimulationDivergedError
 
     return (InputError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError)
 

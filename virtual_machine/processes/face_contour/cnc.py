@@ -1,38 +1,26 @@
 """The CNC of the face-contour machine (seed 004, continuous indexing), its simulation loop, and the cut and the
 measurement of the motion the machine really makes, with the geometry of :mod:`cutting.face_contour.slots`.
 
-**Electronic gearbox** (seed 000 fig. 4, equal-coordinates scheme, as seed 004 asks for continuous indexing): every
-axis counts the pulses of **reference generator 14** (p pulses per head revolution):
-
-- tool head H: the generator's pulses themselves (divider 6 with kv = 1: the generator's frequency sets the head's
-  speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p;
-- work spindle A: **frequency divider** 7 with k = m (the indexing ratio 1/m, eq. 11) -> **summator** 9, whose
-  second input carries the cyclic-ratio modulation - A (1 - cos q phi) of :func:`cutting.face_contour.slots.
-  workpiece_angle` (control "cyclic_ratio"; the CNC's function generator of the head's command angle) -> A;
-- eccentric E (control "eccentric"): a rate multiplier N (N pulses per generator pulse): the eccentric e geared N
-  times to the head, E = N phi;
-- infeed Z: rate multiplier ks (S / resolution pulses per p generator pulses: the seed's feed S per tool
-  revolution), gated by the CNC at the programmed depth (then the spark-out: one more workpiece revolution),
-  Z = - min(S phi / 2 pi, depth).
-
-The pulse-to-analog converters turn each axis's fine count (its divider's content included, no +-1 pulse jitter)
-into the position command and the generator's frequency into the speed feed-forward. Per axis the servo is the
-cascade of :mod:`virtual_machine.processes.form_milling.cnc` on the **motor encoder** (semi-closed loop): position
-loop (Kv) with
-speed feed-forward -> PI speed loop -> torque, plus inertia feed-forward, limited to the motor's peak torque with
-anti-windup. The stages' compliance, backlash and friction therefore show between tip and workpiece, not at the
-encoders.
+**Electronic gearbox** (:class:`virtual_machine.controllers.face_gearbox.ElectronicGearbox`: reference generator 14
+-> head; divider 7 (1/m) -> summator 9 with the cyclic-ratio modulation -> work; x N -> eccentric; the infeed's S per
+turn, gated at the depth): every axis counts the generator's pulses; its converters give the position commands and
+the speed feed-forward. Per axis the servo is the cascade of :mod:`virtual_machine.controllers.cascade` on the
+**motor encoder** (semi-closed loop): position loop (Kv) with speed feed-forward -> PI speed loop -> torque, plus
+inertia feed-forward, limited to the motor's peak torque with anti-windup. The stages' compliance, backlash and
+friction therefore show between tip and workpiece, not at the encoders.
 
 **Run.** The machine starts at rest at head turn ``start_turn`` (default: ``run_in`` turns before the first
 recorded pass) with every axis where the programme has it then and every stage relaxed: the plunge passes before
 it lie above the final ones (the xy motion does not depend on the feed), so they cut nothing the final passes
 leave. It runs up, and records, at the servo rate, the element tips' poses in the workpiece frame (sites
-``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest.
+``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest; each
+tick's physics with the divergence and runaway checks of :class:`virtual_machine.runtime.integrator.Integrator`.
 
 **Cut and measure** the recorded motion: :func:`cut_recorded` sweeps the elements' plates (the plate corners of
 :func:`cutting.face_contour.slots.plate_corners`, here from the recorded frames) as hulls through the face blank;
 :func:`measure_recorded` measures the slot bottom and sides exactly on the recorded path (cubic splines of the
-poses in time, roots bisected), as :func:`cutting.face_contour.slots.measure_exact` does on the ideal path.
+poses in time, roots bisected), as :func:`metrology.face_slots.measure_slots` does on the ideal path
+(:class:`cutting.face_contour.slots.ExactSlots`).
 """
 
 from __future__ import annotations
@@ -68,14 +56,18 @@ from machine_models.face_contour_machine import (
 )
 from machine_models.parameters import ARCSEC
 from metrology.face_slots import SlotMeasure, bottom_form, measuring_radii, side_lines
-from virtual_machine.controllers import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
-from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
+from virtual_machine.controllers.face_gearbox import ElectronicGearbox
+from virtual_machine.runtime.integrator import (
+    BAD_ACCELERATION_OR_SPEED,
+    Integrator,
+    divergence_message,
+    servo_substeps,
+)
 from virtual_machine.setting.machine_layout import face_layout
 
 __all__ = [
     "AXES",
-    "ElectronicGearbox",
     "FaceContourRecord",
     "FacePassRecord",
     "FaceServo",
@@ -221,89 +213,6 @@ def final_turn(c: FaceCoupling, slot: int, window: tuple[float, float]) -> int:
     return first + (slot - first) % c.m
 
 
-class ElectronicGearbox:
-    """Reference generator 14 -> head H; -> frequency divider 7 (1/m) -> summator 9 (+ cyclic-ratio modulation) ->
-    work A; -> rate multiplier N -> eccentric E; -> rate multiplier ks (S per turn), gated at the depth -> infeed Z.
-
-    ``command(t, dt)`` gives the axes' positions, speeds and accelerations (A, H, E [rad], Z [m]) for the tick that
-    starts at t; ``update(dt, t)`` issues that tick's pulses."""
-
-    def __init__(self, c: FaceCoupling, start_turn: int, tool_speed: float, tuning: FaceTuning):
-        self.c, self.tuning = c, tuning
-        p = tuning.pulses_per_rev
-        self.rad = 2 * math.pi / p  # rad per command pulse
-        self.f_full = tool_speed / self.rad  # Hz: generator frequency at the head's full speed
-        self.gen14 = ReferenceGenerator(0.0)
-        self.d7 = FrequencyDivider(c.m)
-        self.s9 = Summator(1)
-        self.mult_e = RateMultiplier(c.eccentric_ratio, 1)
-        n_s = round(c.S * 1e-3 / tuning.infeed_resolution)
-        if n_s < 1:
-            raise ValueError(f"S = {c.S} mm: below the infeed resolution {tuning.infeed_resolution * 1e3:g} mm")
-        self.ks = RateMultiplier(n_s, p)
-        self.feed_per_turn = n_s * tuning.infeed_resolution  # m: S as the gearbox realises it
-        self.depth_pulses = round(c.depth * 1e-3 / tuning.infeed_resolution)
-        self.phi0 = 2 * math.pi * start_turn
-        self.a0 = float(workpiece_angle(c, self.phi0))
-        self.e0 = c.eccentric_ratio * self.phi0 if c.control == "eccentric" else 0.0
-        self.feed0 = round(start_turn * n_s)  # infeed pulses issued before the start (the plunge so far)
-        self.eccentric = c.control == "eccentric"
-
-    def scale(self, t: float) -> tuple[float, float]:
-        """The generator's frequency as a fraction of its full value and its rate [1/s]: half-cosine run-up."""
-        ramp = self.tuning.ramp
-        if t >= ramp:
-            return 1.0, 0.0
-        return 0.5 * (1 - math.cos(math.pi * t / ramp)), 0.5 * math.pi / ramp * math.sin(math.pi * t / ramp)
-
-    def command(self, t: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Positions and speeds at the tick's start t, accelerations at its middle (the torque is held for the tick:
-        a zero-order hold; the acceleration at the start would leave a phase lag of half a tick)."""
-        c, rad = self.c, self.rad
-        s, _ = self.scale(t)
-        w = self.f_full * rad * s  # head speed [rad/s]
-        s_mid, ds_mid = self.scale(t + dt / 2)
-        w_mid, dw = self.f_full * rad * s_mid, self.f_full * rad * ds_mid  # [rad/s, rad/s^2]
-        pos, vel, acc = np.zeros(4), np.zeros(4), np.zeros(4)
-        phi = self.phi0 + self.gen14.position * rad
-        phi_mid = phi + 0.5 * (w + w_mid) * dt / 2
-        pos[_H], vel[_H], acc[_H] = phi, w, dw
-        # work: divider 7 -> summator 9 (main: the divided train, second input: the cyclic-ratio modulation)
-        self.s9.a = self.d7.fine_position
-        self.s9.b = 0.0
-        vel[_A], acc[_A] = w / c.m, dw / c.m
-        if c.control == "cyclic_ratio":
-            amp, q = c.ratio_amplitude, c.ratio_cycles
-            self.s9.b = (float(workpiece_angle(c, phi)) - phi / c.m) / rad
-            vel[_A] -= amp * q * math.sin(q * phi) * w
-            acc[_A] -= amp * q * (q * math.cos(q * phi_mid) * w_mid**2 + math.sin(q * phi_mid) * dw)
-        self.s9.update(0.0)
-        pos[_A] = self.a0 + self.s9.out * rad
-        if self.eccentric:
-            n = c.eccentric_ratio
-            pos[_E], vel[_E], acc[_E] = self.e0 + self.mult_e.fine_position * rad, n * w, n * dw
-        fed = self.feed0 + self.ks.fine_position
-        res = self.tuning.infeed_resolution
-        pos[_Z] = -min(fed, self.depth_pulses) * res
-        if fed < self.depth_pulses:
-            vel[_Z], acc[_Z] = -self.feed_per_turn * w / (2 * math.pi), -self.feed_per_turn * dw / (2 * math.pi)
-        return pos, vel, acc
-
-    def update(self, dt: float, t: float) -> None:
-        """Issue the pulses of the tick that starts at t, at the generator frequency of its middle (the pulses then
-        advance each command by what its speed and held acceleration move the axis: the trapezoid rule)."""
-        gen = self.gen14
-        gen.frequency = self.f_full * self.scale(t + dt / 2)[0]
-        gen.update(dt)
-        self.d7.inp = gen.out
-        self.d7.update(dt)
-        self.mult_e.inp = gen.out
-        self.mult_e.update(dt)
-        # the CNC's gate: the feed stops at the programmed depth (the spark-out turns on)
-        self.ks.inp = gen.out if self.feed0 + self.ks.position < self.depth_pulses else 0
-        self.ks.update(dt)
-
-
 class FaceServo(CascadeServo):
     """The drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops and PI
     speed loops on the motor encoders (A, H, [E,] Z); commands and ``torque``, ``error`` as (A, H, E, Z), E zero
@@ -371,8 +280,8 @@ def simulate_face_contour(
     """Cut ``coupling``'s slots on the simulated machine (MuJoCo) with the electronic gearbox of this module, the
     head at ``tool_rpm``, and record the final pass over each of ``slots``. The run starts at rest ``run_in`` tool
     turns before the first of these passes (or at ``start_turn``) and ends after the last. Raises ValueError for bad
-    inputs and :class:`SimulationDivergedError` when the integration blows up or a servo runs away (the message
-    names what to change)."""
+    inputs and :class:`virtual_machine.runtime.integrator.SimulationDivergedError` when the integration blows up or
+    a servo runs away (the message names what to change)."""
     params = params or FaceMachineParams()
     tuning = tuning or FaceTuning()
     if not (math.isfinite(tool_rpm) and tool_rpm > 0):
@@ -402,7 +311,7 @@ def simulate_face_contour(
             f"settled ({(run_up + 0.1 * omega) / (2 * math.pi):.2f} turns); raise run_in or shorten FaceTuning.ramp"
         )
 
-    egb = ElectronicGearbox(coupling, start_turn, omega, tuning)
+    egb = ElectronicGearbox(coupling, start_turn, omega, tuning.pulses_per_rev, tuning.infeed_resolution, tuning.ramp)
     pos, _, _ = egb.command(0.0, dt)
     eccentric = layout.eccentric
     axes = {"A": pos[_A], "H": pos[_H] - pos[_E], "Z": pos[_Z]} | ({"E": pos[_E]} if eccentric else {})
@@ -415,8 +324,17 @@ def simulate_face_contour(
     site_b = int(model.site("blank_frame").id)
     sites = [int(model.site("element_frame" if j == 0 else f"element_frame_{j}").id) for j in range(coupling.elements)]
     xpos, xmat = data.site_xpos, data.site_xmat
-    bad = [data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL)]
-    runaway = np.asarray(tuning.runaway)
+    integrator = Integrator(
+        model,
+        data,
+        substeps,
+        qa["Z"],
+        lambda t: _diagnose(layout, params, t),
+        BAD_ACCELERATION_OR_SPEED,
+        servo.error,
+        tuning.runaway,
+        lambda t: _runaway(servo, tuning, tool_rpm, h, t),
+    )
     order = sorted(slots, key=turns.__getitem__)
     windows = [(k, 2 * math.pi * turns[k] + window[0], 2 * math.pi * turns[k] + window[1]) for k in order]
     phi_end = windows[-1][2] + 0.02
@@ -481,12 +399,8 @@ def simulate_face_contour(
                 (q[3] - ideal_z) * 1e6,
             ]
             traces.append(np.concatenate([[t, phi_cmd], q, sync, servo.torque, servo.error * to_arcsec]))
-        mujoco.mj_step(model, data, nstep=substeps)
+        integrator.step()
         tick += 1
-        if bad[0].number or bad[1].number or not math.isfinite(data.qpos[qa["Z"]]):
-            raise SimulationDivergedError(_diagnose(layout, params, t))  # data.time: reset by MuJoCo
-        if np.any(np.abs(servo.error) > runaway):
-            raise SimulationDivergedError(_runaway(servo, tuning, tool_rpm, h, data.time))
         egb.update(dt, t)
         if progress is not None and tick % 500 == 0:
             progress(min((phi_cmd - egb.phi0) / total, 0.999))
@@ -648,9 +562,8 @@ def measure_recorded(
     height: float | None = None,
 ) -> list[SlotMeasure]:
     """The recorded slots measured exactly on the recorded motion (bottom, sides at ``height``, default half the
-    depth, and the centre at radius L), as :func:`cutting.face_contour.slots.measure_exact` measures the ideal
-    slots; the
-    spacing follows with :func:`cutting.face_contour.slots.slot_spacing`."""
+    depth, and the centre at radius L), as :func:`metrology.face_slots.measure_slots` measures the ideal
+    slots; the spacing follows with :func:`metrology.face_slots.slot_spacing`."""
     c = record.coupling
     radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
     height = -0.5 * c.depth if height is None else height

@@ -15,8 +15,8 @@ plus inertia (acceleration) feed-forward, limited to the motor's peak torque wit
 (g: axis motion per motor radian, J: inertia at the motor). Screw and nut compliance, backlash, friction and
 the Z weight therefore show in the relative motion of mill and gear but not at the encoders. Moves are
 minimum-jerk (quintic) point-to-point profiles; the feed ramps up and down with a cycloidal (jerk-limited)
-velocity ramp. The loop is the fixed one of :mod:`virtual_machine.runtime.machine_run`: servo tick, physics sub-steps,
-divergence check, record.
+velocity ramp. The loop is the fixed one of :mod:`virtual_machine.runtime.machine_run`: servo tick, physics sub-steps
+with the divergence and runaway checks (:class:`virtual_machine.runtime.integrator.Integrator`), record.
 """
 
 from __future__ import annotations
@@ -32,7 +32,12 @@ import numpy as np
 from machine_models.form_mill import FormMillLayout, FormMillParams, build_form_mill_spec, stage_omega_h
 from machine_models.parameters import ARCSEC
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
-from virtual_machine.runtime.physics import SimulationDivergedError, divergence_message, servo_substeps
+from virtual_machine.runtime.integrator import (
+    BAD_ACCELERATION_OR_SPEED,
+    Integrator,
+    divergence_message,
+    servo_substeps,
+)
 
 AXES = ("A", "X", "Y", "Z", "S")  # the CNC's axes; A rad, X Y Z m, S rad
 MOTORS = ("MA", "MX", "MY", "MZ", "MS")
@@ -275,6 +280,16 @@ def _diagnose(layout: FormMillLayout, params: FormMillParams, t: float) -> str:
     return divergence_message("form-milling machine", stage_omega_h(layout, params), params.timestep, t)
 
 
+def _runaway(servo: FormMillServo, tuning: CncTuning, h: float, t: float) -> str:
+    """Which servo ran away and what to change."""
+    axis = AXES[int(np.argmax(np.abs(servo.error[:4]) / np.asarray(tuning.runaway)))]
+    return (
+        f"the {axis} servo ran away at t = {t:.4f} s (following error beyond {tuning.runaway}): "
+        f"lower CncTuning.velocity_bandwidth / position_gain of {axis}, check the motor's peak torque, or "
+        f"reduce machine.timestep (now {h:g} s) if the stages' omega*h is near 2 (form_mill.stage_omega_h)"
+    )
+
+
 def simulate_form_milling(
     layout: FormMillLayout,
     passes: Sequence[MillPass],
@@ -287,11 +302,11 @@ def simulate_form_milling(
 ) -> FormMillRecord:
     """Run the passes on the simulated machine (MuJoCo) with the CNC of this module; the spindle at
     ``spindle_rpm`` throughout, the feed at ``feed_mm_min`` [mm/min]. ``progress(fraction)`` is called now and
-    then. Raises ValueError for bad inputs and :class:`SimulationDivergedError` when the integration blows up or
-    a servo runs away (the message names what to change). ``load(pass index, z)`` gives the cutting force on the
-    mill [N] (n, 3) in the space's frame (tangential, radial out, axial) at the commanded mill-centre face
-    positions z [mm] of the pass's feed; it acts at the mill's lowest point on the mill and, reversed, on the
-    table (none: the passes cut air)."""
+    then. Raises ValueError for bad inputs and :class:`virtual_machine.runtime.integrator.SimulationDivergedError`
+    when the integration blows up or a servo runs away (the message names what to change). ``load(pass index, z)``
+    gives the cutting force on the mill [N] (n, 3) in the space's frame (tangential, radial out, axial) at the
+    commanded mill-centre face positions z [mm] of the pass's feed; it acts at the mill's lowest point on the mill
+    and, reversed, on the table (none: the passes cut air)."""
     params = params or FormMillParams()
     tuning = tuning or CncTuning()
     if not passes:
@@ -319,8 +334,17 @@ def simulate_form_milling(
     t_ramp = tuning.spindle_ramp
     site_b, site_m = int(model.site("blank_frame").id), int(model.site("mill_frame").id)
     qa = servo.qa
-    bad = [data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL)]
-    runaway = np.asarray(tuning.runaway)
+    integrator = Integrator(
+        model,
+        data,
+        substeps,
+        qa[_Z],
+        lambda t: _diagnose(layout, params, t),
+        BAD_ACCELERATION_OR_SPEED,
+        servo.error[:4],  # A X Y Z: the spindle has no position loop
+        tuning.runaway,
+        lambda t: _runaway(servo, tuning, h, t),
+    )
     tol = np.asarray(tuning.settle_tolerance)
     pos, vel, acc = np.zeros(5), np.zeros(5), np.zeros(5)
     traces: list[np.ndarray] = []
@@ -349,17 +373,8 @@ def simulate_form_milling(
             row[11:16] = servo.torque
             row[16:20] = servo.error[:4]
             traces.append(row)
-        mujoco.mj_step(model, data, nstep=substeps)
+        integrator.step()
         tick += 1
-        if bad[0].number or bad[1].number or not math.isfinite(data.qpos[qa[_Z]]):
-            raise SimulationDivergedError(_diagnose(layout, params, t))  # data.time: reset by MuJoCo
-        if np.any(np.abs(servo.error[:4]) > runaway):
-            axis = AXES[int(np.argmax(np.abs(servo.error[:4]) / runaway))]
-            raise SimulationDivergedError(
-                f"the {axis} servo ran away at t = {data.time:.4f} s (following error beyond {tuning.runaway}): "
-                f"lower CncTuning.velocity_bandwidth / position_gain of {axis}, check the motor's peak torque, or "
-                f"reduce machine.timestep (now {h:g} s) if the stages' omega*h is near 2 (form_mill.stage_omega_h)"
-            )
         if progress is not None and tick % 500 == 0:
             progress(min(tick / planned, 0.999))
 

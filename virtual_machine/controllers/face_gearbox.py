@@ -1,0 +1,132 @@
+"""The face-contour machine's electronic gearbox (seed 004: continuous indexing; the equal-coordinates scheme of
+seed 000 fig. 4 as its means): one pulse train couples the work, the eccentric and the infeed to the tool head.
+
+Seed 004 cuts the m radial slots of a face coupling by continuous indexing: the tool head (radius R, at the setting
+angle lambda = arcsin(L / (R m)), eq. 1) and the workpiece turn in the fixed ratio omega_t = m omega_w (eq. 11), the
+element's path is eq. 5 with S the feed per tool revolution, and the slots are corrected by one of the seed's two
+kinematic controls: an **eccentric** carrying the head (fig. 3, radius e, eq. 14; geared N times to the head, the N of
+eq. 15) or a **cyclic change of the speed ratio**. Every axis counts the pulses of **reference generator 14** (p
+pulses per head revolution):
+
+- tool head H: the generator's pulses themselves (divider 6 with kv = 1: the generator's frequency sets the head's
+  speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p;
+- work spindle A: **frequency divider** 7 with k = m (the indexing ratio 1/m, eq. 11) -> **summator** 9, whose
+  second input carries the cyclic-ratio modulation - A (1 - cos q phi) of :func:`cutting.face_contour.slots.
+  workpiece_angle` (control "cyclic_ratio"; the CNC's function generator of the head's command angle) -> A;
+- eccentric E (control "eccentric"): a rate multiplier N (N pulses per generator pulse): the eccentric e geared N
+  times to the head, E = N phi;
+- infeed Z: rate multiplier ks (S / resolution pulses per p generator pulses: the seed's feed S per tool
+  revolution), gated by the CNC at the programmed depth (then the spark-out: one more workpiece revolution),
+  Z = - min(S phi / 2 pi, depth).
+
+The pulse-to-analog converters turn each axis's fine count (its divider's content included, no +-1 pulse jitter)
+into the position command and the generator's frequency into the speed feed-forward; the axes' servos
+(:mod:`virtual_machine.controllers.cascade`) follow these commands.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cutting.face_contour.slots import FaceCoupling, workpiece_angle
+
+from .pulses import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
+
+_A, _H, _E, _Z = range(4)  # the command layout: work angle a, head angle phi, eccentric [rad], infeed [m]
+
+
+class ElectronicGearbox:
+    """Reference generator 14 -> head H; -> frequency divider 7 (1/m, eq. 11) -> summator 9 (+ cyclic-ratio
+    modulation) -> work A; -> rate multiplier N -> eccentric E (fig. 3); -> rate multiplier ks (S per turn, eq. 5),
+    gated at the depth -> infeed Z.
+
+    Parameters: the coupling ``c``, the head turn ``start_turn`` the run starts at (the axes where the programme has
+    them then), the head's full speed ``tool_speed`` [rad/s], ``pulses_per_rev`` (command pulses per revolution of
+    A, H and E), ``infeed_resolution`` [m per infeed pulse] and the generator's half-cosine run-up ``ramp`` [s].
+    ``command(t, dt)`` gives the axes' positions, speeds and accelerations (A, H, E [rad], Z [m]) for the tick that
+    starts at t; ``update(dt, t)`` issues that tick's pulses."""
+
+    def __init__(
+        self,
+        c: FaceCoupling,
+        start_turn: int,
+        tool_speed: float,
+        pulses_per_rev: int,
+        infeed_resolution: float,
+        ramp: float,
+    ):
+        self.c, self.infeed_resolution, self.ramp = c, infeed_resolution, ramp
+        p = pulses_per_rev
+        self.rad = 2 * math.pi / p  # rad per command pulse
+        self.f_full = tool_speed / self.rad  # Hz: generator frequency at the head's full speed
+        self.gen14 = ReferenceGenerator(0.0)
+        self.d7 = FrequencyDivider(c.m)
+        self.s9 = Summator(1)
+        self.mult_e = RateMultiplier(c.eccentric_ratio, 1)
+        n_s = round(c.S * 1e-3 / infeed_resolution)
+        if n_s < 1:
+            raise ValueError(f"S = {c.S} mm: below the infeed resolution {infeed_resolution * 1e3:g} mm")
+        self.ks = RateMultiplier(n_s, p)
+        self.feed_per_turn = n_s * infeed_resolution  # m: S as the gearbox realises it
+        self.depth_pulses = round(c.depth * 1e-3 / infeed_resolution)
+        self.phi0 = 2 * math.pi * start_turn
+        self.a0 = float(workpiece_angle(c, self.phi0))
+        self.e0 = c.eccentric_ratio * self.phi0 if c.control == "eccentric" else 0.0
+        self.feed0 = round(start_turn * n_s)  # infeed pulses issued before the start (the plunge so far)
+        self.eccentric = c.control == "eccentric"
+
+    def scale(self, t: float) -> tuple[float, float]:
+        """The generator's frequency as a fraction of its full value and its rate [1/s]: half-cosine run-up."""
+        ramp = self.ramp
+        if t >= ramp:
+            return 1.0, 0.0
+        return 0.5 * (1 - math.cos(math.pi * t / ramp)), 0.5 * math.pi / ramp * math.sin(math.pi * t / ramp)
+
+    def command(self, t: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions and speeds at the tick's start t, accelerations at its middle (the torque is held for the tick:
+        a zero-order hold; the acceleration at the start would leave a phase lag of half a tick)."""
+        c, rad = self.c, self.rad
+        s, _ = self.scale(t)
+        w = self.f_full * rad * s  # head speed [rad/s]
+        s_mid, ds_mid = self.scale(t + dt / 2)
+        w_mid, dw = self.f_full * rad * s_mid, self.f_full * rad * ds_mid  # [rad/s, rad/s^2]
+        pos, vel, acc = np.zeros(4), np.zeros(4), np.zeros(4)
+        phi = self.phi0 + self.gen14.position * rad
+        phi_mid = phi + 0.5 * (w + w_mid) * dt / 2
+        pos[_H], vel[_H], acc[_H] = phi, w, dw
+        # work: divider 7 -> summator 9 (main: the divided train, second input: the cyclic-ratio modulation)
+        self.s9.a = self.d7.fine_position
+        self.s9.b = 0.0
+        vel[_A], acc[_A] = w / c.m, dw / c.m
+        if c.control == "cyclic_ratio":
+            amp, q = c.ratio_amplitude, c.ratio_cycles
+            self.s9.b = (float(workpiece_angle(c, phi)) - phi / c.m) / rad
+            vel[_A] -= amp * q * math.sin(q * phi) * w
+            acc[_A] -= amp * q * (q * math.cos(q * phi_mid) * w_mid**2 + math.sin(q * phi_mid) * dw)
+        self.s9.update(0.0)
+        pos[_A] = self.a0 + self.s9.out * rad
+        if self.eccentric:
+            n = c.eccentric_ratio
+            pos[_E], vel[_E], acc[_E] = self.e0 + self.mult_e.fine_position * rad, n * w, n * dw
+        fed = self.feed0 + self.ks.fine_position
+        res = self.infeed_resolution
+        pos[_Z] = -min(fed, self.depth_pulses) * res
+        if fed < self.depth_pulses:
+            vel[_Z], acc[_Z] = -self.feed_per_turn * w / (2 * math.pi), -self.feed_per_turn * dw / (2 * math.pi)
+        return pos, vel, acc
+
+    def update(self, dt: float, t: float) -> None:
+        """Issue the pulses of the tick that starts at t, at the generator frequency of its middle (the pulses then
+        advance each command by what its speed and held acceleration move the axis: the trapezoid rule)."""
+        gen = self.gen14
+        gen.frequency = self.f_full * self.scale(t + dt / 2)[0]
+        gen.update(dt)
+        self.d7.inp = gen.out
+        self.d7.update(dt)
+        self.mult_e.inp = gen.out
+        self.mult_e.update(dt)
+        # the CNC's gate: the feed stops at the programmed depth (the spark-out turns on)
+        self.ks.inp = gen.out if self.feed0 + self.ks.position < self.depth_pulses else 0
+        self.ks.update(dt)
