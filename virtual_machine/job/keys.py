@@ -135,7 +135,9 @@ def parse_section(name: str, table: Any, keys: dict[str, Key], problems: list[Pr
     return out
 
 
-def parse_sections(data: dict[str, Any], sections: dict[str, dict[str, Key]], problems: list[Problem]) -> dict:
+def parse_sections(
+    data: dict[str, Any], sections: dict[str, dict[str, Key]], problems: list[Problem]
+) -> dict[str, dict[str, Any]]:
     """:func:`parse_section` of each of ``sections`` in its order (a missing section: an empty table)."""
     return {name: parse_section(name, data.get(name, {}), keys, problems) for name, keys in sections.items()}
 

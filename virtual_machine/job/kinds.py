@@ -32,12 +32,14 @@ KINDS: dict[str, JobKind] = {
     "thread": JobKind("thread", thread.parse_thread_job),
     "gear": JobKind(None, skiving.parse_skiving_job),
 }
+#: the kind of a job that none of the sections of KINDS marks
+UNMARKED_KIND = "gear"
 
 
 def job_kind(data: dict[str, Any]) -> str:
-    """The kind of a job (as read from TOML): the first whose section it has, else the one marked by none."""
-    marked = [k for k, kind in KINDS.items() if kind.section is not None and kind.section in data]
-    return marked[0] if marked else next(k for k, kind in KINDS.items() if kind.section is None)
+    """The kind of a job (as read from TOML): the first of :data:`KINDS` whose section it has."""
+    marked = (k for k, kind in KINDS.items() if kind.section is not None and kind.section in data)
+    return next(marked, UNMARKED_KIND)
 
 
 def parse_job(data: dict[str, Any], source: str = "<job>") -> Job:
