@@ -8,6 +8,7 @@ and words of the reason / hint appear too.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import tomllib
 from pathlib import Path
@@ -20,10 +21,16 @@ from cutting.gear import Gear, check_gear
 from virtual_machine.job import (
     CUTTER_KEYS,
     GEAR_KEYS,
+    KINDS,
     MACHINE_KEYS,
     PROCESS_KEYS,
     THREAD_KEYS,
+    FaceContourPayload,
+    FormMillingPayload,
     Job,
+    SkivingPayload,
+    ThreadPayload,
+    TurningPayload,
     default_job_path,
     load_job,
     parse_job,
@@ -664,3 +671,52 @@ def test_cutter_body_and_holder_reach_the_setup():
     assert default.cutter.face_width == 20.0  # 10 mn
     assert default.holder_diameter_value == pytest.approx(default.cutter.reference_diameter / 2)
     refused(spur(cutter__holder_diameter=-5.0), "cutter.holder_diameter", -5.0)
+
+
+# ----------------------------------------------------------------------------------------------------
+# the package: a head every job has plus its kind's payload, one parser per kind
+# ----------------------------------------------------------------------------------------------------
+
+PAYLOADS = {
+    "gear": SkivingPayload,
+    "thread": ThreadPayload,
+    "form_milling": FormMillingPayload,
+    "face_contour": FaceContourPayload,
+    "turning": TurningPayload,
+}
+#: what the rest of the code reads off a job (job.gear, job.thread, ...)
+SECTION_NAMES = (
+    "gear",
+    "cutter",
+    "cutter_options",
+    "thread",
+    "measurement",
+    "modification",
+    "mill",
+    "turning",
+    "vibration",
+    "coupling",
+)
+
+
+def test_every_kind_has_a_parser_and_a_process():
+    from virtual_machine.processes import PROCESSES
+
+    assert set(KINDS) == set(PAYLOADS) == set(PROCESSES)
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_the_payload_is_the_kinds_and_the_job_reads_its_sections(name):
+    """job.gear, job.thread, ... read the payload's field; None for a section the kind has not."""
+    job = load_job(JOBS / name)
+    assert type(job.payload) is PAYLOADS[job.kind]
+    own = {f.name for f in dataclasses.fields(job.payload)}
+    for section in SECTION_NAMES:
+        expected = getattr(job.payload, section) if section in own else None
+        assert getattr(job, section) is expected, section
+
+
+def test_a_payload_section_is_replaced_through_the_payload():
+    job = parse_job(thread(), SOURCE)
+    longer = dataclasses.replace(job, payload=dataclasses.replace(job.payload, thread={**job.thread, "length": 40.0}))
+    assert longer.thread["length"] == 40.0 and job.thread["length"] != 40.0 and longer.machine is job.machine

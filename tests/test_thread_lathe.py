@@ -30,7 +30,8 @@ def _job(form: str, fine: bool = False, thread: dict | None = None, **machine) -
     job = load_job(str(JOBS / "thread_m12.toml"))
     structure, sync = FORMS[form]
     machine = {**job.machine, "structure": structure, "synchronization": sync, **(FINE if fine else {}), **machine}
-    return dataclasses.replace(job, machine=machine, thread=dict(job.thread, **(thread or {})))
+    payload = dataclasses.replace(job.payload, thread=dict(job.thread, **(thread or {})))
+    return dataclasses.replace(job, machine=machine, payload=payload)
 
 
 def _sheet_eps(job: Job, form: str) -> float:

@@ -14,7 +14,7 @@ A study file names a base job and a list of ``[[vary]]`` entries::
     tolerance = 2e-4                         # the part's stated tolerance about its base value (error budget)
     # monte-carlo: distribution = "normal" (mean, std) or "uniform" (lo, hi); values = [...] draws among them
 
-Every key is checked against the job schema (virtual_machine/job.py) before anything runs: a misspelt key
+Every key is checked against the job schema (virtual_machine/job/) before anything runs: a misspelt key
 names the valid ones, an empty range or a value the job refuses is reported with the key and why.
 """
 

@@ -1,0 +1,157 @@
+"""A skiving job (kind "gear"): [gear], [cutter], [process], [machine], and optionally [measurement] and
+[modification] (virtual_machine.job.gear_sections).
+
+[cutter] is the skiving cutter (tooth count z0, helix angle beta0 in degrees, right hand positive; its profile
+shift, tip diameter, body width and holder diameter in mm; the edge made by the envelope method or an involute).
+[process] the cutter spindle speed n0 (rpm), the axial feed s (mm per workpiece revolution), the radial infeed
+passes (mm), the feed direction, the material, the approach and overrun (mm), and the tolerances of the swept solid,
+the dexel workpiece and gear.stl (mm). Its [machine] is the skiving machine of seeds 000 and 001 (head.MACHINE_KEYS).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from cutting.errors import InputError, Problem
+from cutting.gear import Gear, check_gear
+from cutting.modification import Modification, design_problems
+from cutting.skiving.setup import check_setup
+from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, helix, parse_optional_sections
+from virtual_machine.job.head import MACHINE_KEYS, Job, model_problems
+from virtual_machine.job.keys import (
+    MATERIAL,
+    PASSES,
+    REQUIRED,
+    STL_TOLERANCE,
+    Key,
+    at_least,
+    one_of,
+    parse_sections,
+    positive,
+    unknown_sections,
+)
+
+CUTTER_KEYS: dict[str, Key] = {
+    "teeth": Key(int, REQUIRED, "", "number of cutter teeth z0", at_least(8)),
+    "helix_angle": Key(float, REQUIRED, "deg", "cutter helix angle beta0, right hand positive", helix),
+    "profile_shift": Key(float, 0.0, "", "cutter profile shift x0"),
+    "tip_diameter": Key(float, None, "mm", "cutter tip diameter da0 (default: cuts the gear's root exactly)", positive),
+    "width": Key(float, None, "mm", "cutter body width behind the rake face (default 10 mn)", positive),
+    "holder_diameter": Key(
+        float, None, "mm", "diameter of the holder behind the cutter body (default half the cutter's d0)", positive
+    ),
+    "edge": Key(
+        str,
+        "conjugate",
+        "",
+        "cutting edge: 'conjugate' (envelope method) or 'involute'",
+        one_of("conjugate", "involute"),
+    ),
+}
+
+PROCESS_KEYS: dict[str, Key] = {
+    "tool_speed": Key(float, REQUIRED, "rpm", "cutter spindle speed n0", positive),
+    "axial_feed": Key(float, REQUIRED, "mm/rev", "axial feed s per workpiece revolution", positive),
+    "passes": PASSES,
+    "feed_direction": Key(str, "down", "", "'down' (towards -z) or 'up'", one_of("down", "up")),
+    "material": MATERIAL,
+    "clearance": Key(float, 1.0, "mm", "axial approach and overrun added to the engagement zone", at_least(0.0)),
+    # defaults from benchmarks/bench_mesh_tolerance.py (docs/cutting.md, "The manifold solid's tolerance")
+    "sweep_error": Key(
+        float,
+        0.010,
+        "mm",
+        "the solid's tolerance against the exact surface (manifold: the finishing pass's chord error)",
+        positive,
+    ),
+    "roughing_sweep_error": Key(float, 0.020, "mm", "chord error allowed in the roughing passes (manifold)", positive),
+    # defaults from benchmarks/bench_dexel.py (docs/cutting.md, "The dexel workpiece", "Spacing")
+    "dexel_profile_spacing": Key(float, None, "mm", "dexel rays along the space's profile (default 0.1 mn)", positive),
+    "dexel_face_spacing": Key(float, None, "mm", "dexel slices along the face (default 0.2 mn)", positive),
+    "stl_tolerance": STL_TOLERANCE,
+}
+
+SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
+
+
+@dataclass(frozen=True)
+class SkivingPayload:
+    """The gear to skive, the cutter (a Gear: z0, beta0, x0, da0, its body width as face width), the cutter's
+    ``edge`` and ``holder_diameter`` (cutter_options), the measurement options and the designed topography."""
+
+    gear: Gear
+    cutter: Gear
+    cutter_options: dict[str, Any]
+    measurement: dict[str, Any]
+    modification: Modification | None = None
+
+
+def _skiving_machine():
+    from machine_models.parameters import SkivingMachineParams
+
+    return SkivingMachineParams()
+
+
+def parse_skiving_job(data: dict[str, Any], source: str) -> Job:
+    """Validate a skiving job. Raises :class:`InputError` with every problem."""
+    problems = unknown_sections(data, (*SECTIONS_GEAR, *OPTIONAL_SECTIONS), SECTIONS_GEAR)
+    parsed = parse_sections(data, SECTIONS_GEAR, problems)
+    measurement, modification = parse_optional_sections(data, problems)
+    machine = parsed["machine"]
+    problems += model_problems(machine.get("model"), _skiving_machine)
+
+    # Geometry checks run as soon as their own keys are sound, so they are reported beside key errors.
+    g, c = parsed["gear"], parsed["cutter"]
+    gear_ok = set(GEAR_KEYS) <= set(g)
+    cutter_ok = gear_ok and set(CUTTER_KEYS) <= set(c)
+    gear = cutter = None
+    if gear_ok:
+        gear = gear_from(g)
+        problems += check_gear(gear, "gear")
+    if cutter_ok:
+        cutter = Gear(
+            teeth=c["teeth"],
+            normal_module=gear.mn,
+            pressure_angle=gear.alpha_n,
+            helix_angle=math.radians(c["helix_angle"]),
+            face_width=c["width"] or gear.mn * 10,  # the body behind the rake face (holder-side collision check)
+            profile_shift=c["profile_shift"],
+            tip_diameter=c["tip_diameter"],
+        )
+        if cutter.x < cutter.min_profile_shift - 1e-9:
+            problems.append(
+                Problem(
+                    "cutter.profile_shift",
+                    cutter.x,
+                    f"the cutter's own teeth would be undercut (z0 = {cutter.z} needs "
+                    f"x0 >= {cutter.min_profile_shift:+.4f})",
+                    "use more cutter teeth or a larger x0",
+                )
+            )
+    if gear is not None and modification is not None:
+        problems += design_problems(modification, gear)
+    if problems:
+        raise InputError(problems, source)
+    cutter_options = {"edge": c["edge"], "holder_diameter": c["holder_diameter"]}
+    job = Job(
+        source,
+        "gear",
+        machine,
+        parsed["process"],
+        SkivingPayload(gear, cutter, cutter_options, measurement, modification),
+    )
+    problems += check_setup(job.skiving)
+    if problems:
+        raise InputError(problems, source)
+    return job
+
+
+def dexel_spacing(job: Job):
+    """The dexel lines of a skiving job: the process's spacings, else the gear's defaults
+    (cutting.skiving.dexel_lines)."""
+    from cutting.skiving.dexel_lines import DexelSpacing
+
+    p = job.process
+    return DexelSpacing.for_gear(job.gear, p["axial_feed"], p.get("dexel_profile_spacing"), p.get("dexel_face_spacing"))
