@@ -56,10 +56,12 @@ CaseHook = Callable[[str, dict[str, Any], int, int, int], None]
 
 
 def run_case(case_id: str, job_text: str) -> dict[str, Any]:
-    """One case on a worker: the job run as `skive run` runs it (one removal process), in a scratch directory.
-    Returns status, error, wall time and the measurement document (or, for a gear that could not be measured,
-    the run's facts), never raises for a failing case."""
-    from virtual_machine.processes.skiving.run import run_job
+    """One case on a worker: the job run as `skive run` runs it (its process's run, one removal process, nothing
+    printed), in a scratch directory. Returns status, error, wall time and the measurement document (or, for a gear
+    that could not be measured, the run's facts), never raises for a failing case."""
+    from virtual_machine.job import load_job
+    from virtual_machine.output.progress import Reporter
+    from virtual_machine.processes import process_for
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix=f"skive-{case_id}-") as tmp:
@@ -67,7 +69,8 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
         job.write_text(job_text)
         out = Path(tmp) / "out"
         try:
-            doc = run_job(job, out, workers=1)
+            parsed = load_job(job)
+            doc = process_for(parsed).run(parsed, out, workers=1, reporter=Reporter(quiet=True)).data
             status, error = "ok", ""
         except Exception as exc:  # a failing case is a result of the study, not the end of it
             status, error = "failed", f"{type(exc).__name__}: {exc}"
