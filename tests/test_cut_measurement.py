@@ -47,9 +47,9 @@ def exact_cut() -> SweptVolumes:
 
 @functools.cache
 def small_cut():
-    """SMALL cut at a 1.5 um mesh, measured on its exact swept surface with the mesh beside it."""
+    """SMALL cut at a 3 um mesh, measured on its exact swept surface with the mesh beside it."""
     st = SMALL
-    report = manifold_cut(1.5e-3)
+    report = manifold_cut(3e-3)
     mesh = check_mesh(to_trimesh(report.result.gear))
     doc, mesh_doc = measure_cut(
         st.gear, SweptVolumes(st.gear, report.edge, ideal_passes(st)), mesh, MeasureOptions(), report.result.sweep_error
@@ -93,10 +93,10 @@ def test_the_exact_measurement_is_the_direct_probe_of_the_feed_marks_benchmark()
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("tol", [6e-3, 1.5e-3])
+@pytest.mark.parametrize("tol", [6e-3, 3e-3])
 def test_the_meshed_cut_matches_the_exact_sweep_within_its_sweep_error(tol):
     """Along flank normals, the mesh that the booleans leave and the exact surface differ by no more than the
-    reported sweep error. Measured: 3.8 um at 6 um, 0.94 um at 1.5 um (the cut small_cut measures)."""
+    reported sweep error. Measured: 3.8 um at 6 um, 2.2 um at 3 um (the cut small_cut measures)."""
     report = manifold_cut(tol)
     assert report.result.sweep_error <= tol
     mesh = to_trimesh(report.result.gear)

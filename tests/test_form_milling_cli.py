@@ -89,8 +89,10 @@ def test_the_simulated_machine_makes_the_design_within_2um(small_run):
 
 @pytest.mark.slow
 def test_cut_of_the_small_job_on_the_ideal_machine(tmp_path):
+    """The topography is measured on the exact swept surface, so the solid's tolerance (30 um here, a third of the
+    manifold's work of 10 um) changes none of it."""
     job = tmp_path / "job.toml"
-    job.write_text(SMALL.format(iterations=1))
+    job.write_text(SMALL.format(iterations=1).replace("sweep_error = 0.01", "sweep_error = 0.03"))
     res = CliRunner().invoke(main, ["cut", str(job), "--out", str(tmp_path / "out")])
     assert res.exit_code == 0, res.output
     doc = json.loads((tmp_path / "out" / "measurement.json").read_text())
