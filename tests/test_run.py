@@ -22,7 +22,7 @@ from virtual_machine.processes.skiving.cutting_load import pass_loads
 from virtual_machine.runtime.machine_run import LostSynchronismError, MachineRun, simulate
 from virtual_machine.runtime.program import ProgramSettings, program_duration
 
-SMALL_JOB = small_job(sweep_error=0.02)
+SMALL_JOB = small_job(sweep_error=0.02, axial_feed=0.4)
 
 
 @pytest.fixture(scope="module")

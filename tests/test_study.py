@@ -362,8 +362,7 @@ def small_study(tmp_path_factory):
     tool motor too weak to hold the cut (that case fails: refused before its run), once on one worker straight
     through, once on two workers interrupted after its first case and resumed."""
     tmp = tmp_path_factory.mktemp("study")
-    # 0.4 mm per work turn: half the strokes of the small job (what the study's proofs read does not depend on it)
-    (tmp / "small.toml").write_text(small_job(sweep_error=0.02).replace("axial_feed = 0.2", "axial_feed = 0.4"))
+    (tmp / "small.toml").write_text(small_job(sweep_error=0.02, axial_feed=0.4))
     path = study_file(
         tmp,
         (
