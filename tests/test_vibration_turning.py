@@ -27,7 +27,7 @@ from metrology.turned_surface import crest_heights, roughness, solid_crests
 UM = 1e-3  # mm
 S0, R_EPS, DEPTH = 0.2, 0.8, 0.3
 PLAIN = TurningSetup(20.0, S0, R_EPS, DEPTH)
-H_S0 = R_EPS - math.sqrt(R_EPS**2 - S0**2 / 4)  # 6.2746 um, the seed's S0^2 / 8 r_eps = 6.25 um to second order
+H_S0 = R_EPS - math.sqrt(R_EPS**2 - S0**2 / 4)  # 6.2746 um; the textbook S0^2 / 8 r_eps = 6.25 um to second order
 H_2S0 = R_EPS - math.sqrt(R_EPS**2 - S0**2)  # 25.40 um
 #: a quarter cycle's phase shift a turn, A = S0: symmetric Delta_max = S0 + 2A sin(pi/4) = 2.41 S0
 F, A = 2.25, 0.2
@@ -141,10 +141,15 @@ def test_asymmetric_vibration_lowers_the_crests_when_it_leads_the_phase_shift(ro
 
 
 def test_where_asymmetry_does_not_lower_the_crests():
-    """Against the phase shift (xi = 1/3 at f = 2.25) it raises them; at f = n + 1/2 the paths two turns apart
-    are 2 S0 apart, so where the chip breaks (Delta = 0) the crest is h(2 S0) whatever the form."""
+    """Against the phase shift (xi = 1/3 at f = 2.25) it raises them; leading it is necessary, not sufficient: at
+    f = 2.45 the hard xi = 3 form leaves Rt_max 19.0 um against 16.2 um of the symmetric hard form; at f = n + 1/2
+    the paths two turns apart are 2 S0 apart, so where the chip breaks (Delta = 0) the crest is h(2 S0) whatever
+    the form."""
     against = roughness(vib(xi=1 / 3), 36, predicted=True)
     assert against.rt_max > roughness(SYMMETRIC, 36, predicted=True).rt_max + 10 * UM
+    leading = roughness(vib(f=2.45, xi=3.0, form="hard"), 72).rt_max
+    assert leading == pytest.approx(19.0 * UM, abs=0.1 * UM)
+    assert leading > roughness(vib(f=2.45, form="hard"), 72).rt_max + 2 * UM  # 16.2 um
     for setup in (vib(f=1.5), vib(f=1.5, xi=3.0, form="hard")):
         breaks = setup.chip_breaks(8)
         assert len(breaks.angles) > 0

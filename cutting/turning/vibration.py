@@ -30,10 +30,11 @@ What the geometry gives (S0 = 0.2 mm, r_eps = 0.8 mm, a_p = 0.3 mm, A = 0.2 mm; 
   break the chip 2.25 times a revolution. The slow in-feed keeps successive paths nearly parallel (hard:
   Delta = S0 + 2A s / p, s = 1/4 the shift, p = 3/4), the quick retraction crosses the previous path and
   breaks the chip;
-- it does not hold for every choice: the asymmetry must lead the shift (xi > 1 with frac(f) < 1/2, xi < 1 with
-  frac(f) > 1/2); at f = 2.25 xi = 1/3 raises Rt_max to 57.5 um. At f = n + 1/2 the paths two turns apart
-  are 2 S0 apart, so once the chip breaks the largest crest is h(2 S0) = 25.4 um whatever xi, and at f = 1.5
-  the hard xi = 3 form raises the mean crest (9.4 against 8.0 um).
+- it does not hold for every choice. That the asymmetry leads the shift (xi > 1 with frac(f) < 1/2, xi < 1 with
+  frac(f) > 1/2) is necessary: at f = 2.25 xi = 1/3 raises Rt_max to 57.5 um. It is not sufficient: at f = 2.45
+  the hard xi = 3 form leaves Rt_max 19.0 um against 16.2 um of the symmetric hard (triangle) form. At
+  f = n + 1/2 the paths two turns apart are 2 S0 apart, so once the chip breaks the largest crest is
+  h(2 S0) = 25.4 um whatever xi, and at f = 1.5 the hard xi = 3 form raises the mean crest (9.4 against 8.0 um).
 
 The seed's figure labels the asymmetric forms "soft" (a > b) and "hard" (a < b); here ``form`` is the waveform
 (smooth or straight strokes) and xi, either side of 1, is independent of it.
@@ -194,8 +195,9 @@ class ChipBreaks:
 
 
 def crest_height(delta: np.ndarray | float, nose_radius: float, depth: float) -> np.ndarray | float:
-    """h = r_eps - sqrt(r_eps^2 - Delta^2 / 4) [mm], the crest between two nose circles Delta [mm] apart (the
-    seed's S0^2 / 8 r_eps for Delta = S0, to second order); no more than the depth a_p (the uncut surface)."""
+    """h = r_eps - sqrt(r_eps^2 - Delta^2 / 4) [mm], the crest between two nose circles Delta [mm] apart: the
+    standard turning formula of the kinematic roughness (S0^2 / 8 r_eps for Delta = S0, to second order), not the
+    seed's (seed 004 states only that the crests rise and fall with Delta); no more than the depth a_p."""
     d = np.asarray(delta, dtype=float)
     half = np.minimum(np.abs(d) / 2, nose_radius)
     h = np.minimum(nose_radius - np.sqrt(nose_radius**2 - half**2), depth)
