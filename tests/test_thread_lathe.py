@@ -144,3 +144,31 @@ def test_invalid_parameters_and_forms_are_named() -> None:
     job = _job("mechanical", structure="hydraulic-shaft")
     with pytest.raises(ValueError, match="thread group of seed 001"):
         thread_layout(job, ThreadLatheParams())
+
+
+def test_run_records_the_stroke_on_the_jobs_own_lathe(tmp_path) -> None:
+    """`skive run --rrd` of a thread job: the recording holds the stroke's lead error as thread_motion.npz has it
+    (not silently nothing), and scene.xml is the lathe the stroke ran on, the job's [machine.model] included
+    (here a carriage of 90 kg instead of the default 60)."""
+    import json
+
+    from click.testing import CliRunner
+    from rerun.chunk import RrdReader
+
+    from virtual_machine.cli import main
+
+    job = tmp_path / "thread.toml"
+    job.write_text((JOBS / "thread_m12.toml").read_text() + "\n[machine.model]\ncarriage_mass = 90.0\n")
+    rrd = tmp_path / "thread.rrd"
+    res = CliRunner().invoke(main, ["run", str(job), "--out", str(tmp_path / "out"), "--rrd", str(rrd)])
+    assert res.exit_code == 0, res.output
+    assert str(rrd) in res.output
+    motion = np.load(tmp_path / "out" / "thread_motion.npz")
+    chunks = RrdReader(rrd).stream().filter(content="/lathe/lead_error", is_static=False).to_chunks()
+    recorded = [v for c in chunks for v in c.to_record_batch().column("Scalars:scalars").to_pylist()]
+    assert np.allclose(np.ravel(recorded), motion["lead_error_um"])
+    assert len(recorded) == len(motion["t"]) > 100
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "scene.xml"))
+    assert model.body("carriage").mass[0] == pytest.approx(90.0)
+    doc = json.loads((tmp_path / "out" / "measurement.json").read_text())
+    assert doc["thread"]["lead_mm"] == pytest.approx(load_job(job).thread["lead"])  # 1.75 mm

@@ -41,10 +41,7 @@ class Recorder:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         kw: dict[str, Any] = {"recording_id": recording_id} if recording_id is not None else {}
         self.stream = rr.RecordingStream(app_id, send_properties=False, **kw)
-        if blueprint is None:
-            self.stream.save(str(self.path))
-        else:
-            self.stream.save(self.path, default_blueprint=blueprint)
+        self.stream.save(self.path, default_blueprint=blueprint)
         rr.set_log_time_enabled(False, recording=self.stream)  # no wall clock: the same run, the same timeline
         if recording_id is not None:
             self.stream.send_recording_name(recording_id)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
@@ -36,10 +35,7 @@ class ThreadCutting(Process):
         rrd: Path | None = None,
         reporter: Reporter | None = None,
     ) -> Product:
-        return _stroke(job, out, duration, measurement=False)
-
-    def cut(self, job: Job, out: Path, **_options) -> Product:
-        raise InputError(Problem("job", job.kind, "skive cut makes gears and couplings", "use `skive run`"))
+        return _stroke(job, out, duration, measurement=False, rrd=rrd)
 
     def run(
         self,
@@ -51,24 +47,27 @@ class ThreadCutting(Process):
         removal: str = "dexel",
         reporter: Reporter | None = None,
     ) -> Product:
-        return _stroke(job, out, None, measurement=True)
+        return _stroke(job, out, None, measurement=True, rrd=rrd)
 
 
-def _stroke(job: Job, out: Path, duration: float | None, measurement: bool) -> Product:
+def _stroke(job: Job, out: Path, duration: float | None, measurement: bool, rrd: Path | None = None) -> Product:
     """One threading stroke on the lathe, its lead error (simulation.json, thread_motion.npz, scene.xml); with
-    ``measurement`` also measurement.json: the lead of the thread the carriage's path cuts."""
+    ``measurement`` also measurement.json: the lead of the thread the carriage's path cuts; with ``rrd`` the
+    stroke's signals as a Rerun recording."""
     import numpy as np
 
+    from machine_models.parameters import override
     from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
+    from virtual_machine.job import flatten_model
     from virtual_machine.output import motion_io
     from virtual_machine.runtime.thread_run import simulate_thread
     from virtual_machine.setting.thread_layout import thread_layout
 
+    params = override(ThreadLatheParams(), flatten_model(job.machine.get("model")))  # the job's own lathe
     t0 = time.perf_counter()
-    rec = simulate_thread(job, duration=duration)
+    rec = simulate_thread(job, params, duration=duration)
     wall = time.perf_counter() - t0
     out.mkdir(parents=True, exist_ok=True)
-    params = ThreadLatheParams()
     motion_io.write_model(build_thread_lathe_spec(thread_layout(job, params), params).to_xml(), out)
     np.savez_compressed(
         out / "thread_motion.npz",
@@ -92,6 +91,14 @@ def _stroke(job: Job, out: Path, duration: float | None, measurement: bool) -> P
         "travel_mm": travel,
     }
     write_json(out / "simulation.json", doc)
+    if rrd is not None:
+        from virtual_machine.output.recorder import Recorder
+
+        with Recorder(rrd, "skive_thread") as r:
+            r.series("lathe/spindle", rec.t, rec.b1, ["B1 [rad]"])
+            r.series("lathe/carriage", rec.t, rec.p2, ["P2 [mm]"])
+            r.series("lathe/lead_error", rec.t, rec.lead_error_um, ["lead error [um]"])
+            r.series("lathe/torque", rec.t, rec.torque, ["M1 [N m]", "M2 [N m]"])
     data = doc
     if measurement:
         lead = {"lead_mm": rec.lead, "form": rec.form, **(doc["lead_error_on_thread"] or {}), "drift_um": drift}
@@ -108,7 +115,7 @@ def _stroke(job: Job, out: Path, duration: float | None, measurement: bool) -> P
             f"drift {drift:+.3f} um over {abs(travel):.1f} mm"
         )
     names = ["thread_motion.npz", "simulation.json", *(["measurement.json"] if measurement else []), "scene.xml"]
-    lines.append("written: " + ", ".join(str(out / f) for f in names))
-    files = written(out, "thread_motion.npz", "simulation.json", "measurement.json", "*.xml")
+    lines.append("written: " + ", ".join([*(str(out / f) for f in names), *([str(rrd)] if rrd else [])]))
+    files = written(out, "thread_motion.npz", "simulation.json", "measurement.json", "*.xml") + ([rrd] if rrd else [])
     # the CLI's --json of `skive simulate` prints the stroke's summary, as before
     return Product("run" if measurement else "simulate", data if measurement else doc, "\n".join(lines), files, out)

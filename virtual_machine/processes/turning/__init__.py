@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from cutting.errors import InputError, Problem
 from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
@@ -46,9 +45,6 @@ class VibrationTurning(Process):
         out.mkdir(parents=True, exist_ok=True)
         write_json(out / "simulation.json", doc)
         return Product("simulate", doc, format_run(doc), written(out, "simulation.json"), out)
-
-    def cut(self, job: Job, out: Path, **_options) -> Product:
-        raise InputError(Problem("job", job.kind, "skive cut makes gears and couplings", "use `skive run`"))
 
     def run(
         self,
