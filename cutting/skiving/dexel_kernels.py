@@ -31,6 +31,7 @@ import math
 import numpy as np
 from numba import njit
 
+from cutting.borrowed import borrowed
 from cutting.skiving.exact_kernels import in_plane
 from cutting.skiving.exact_solve import margin_at, outline_margin
 
@@ -56,14 +57,14 @@ OVERFLOW = 1
 STATS = 10
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _bilinear(sdf, fx, fy):
     i, j = int(fx), int(fy)
     a, b = fx - i, fy - j
     return (1 - a) * ((1 - b) * sdf[i, j] + b * sdf[i, j + 1]) + a * ((1 - b) * sdf[i + 1, j] + b * sdf[i + 1, j + 1])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _distance(fine, coarse, w, x, y):
     """(e, delta): the outline's signed distance at (x, y) and how far it may be off. Two rasters: a fine one
     (exact node distances within its band of the outline) where the point is that near, else a coarse one over a
@@ -447,6 +448,11 @@ def cut_cells(
     solve's (:class:`cutting.skiving.exact_solve.ItemSolver`). ``out[pair]`` (STATS) per (cell, passage) pair;
     ``flags[line]`` |= OVERFLOW when a line would hold more than MAX_PIECES intervals; ``work[k]`` = estimates,
     table margins, exact margins, crossings, (line, passage) pairs of cell k."""
+    # the kernel's arrays without reference counts (cutting.borrowed): the caller holds them for the whole call
+    p, u, weight, ray_cos, ray_arc, slice_dz = borrowed((p, u, weight, ray_cos, ray_arc, slice_dz))
+    plane_n, plane_d, ray_alpha, mat_lo, mat_hi, mat_n = borrowed((plane_n, plane_d, ray_alpha, mat_lo, mat_hi, mat_n))
+    boxes, tab, motion, tables, outline = borrowed((boxes, tab, motion, tables, outline))
+    out, flags, work, cells, cell_ptr, cell_g = borrowed((out, flags, work, cells, cell_ptr, cell_g))
     ball_c, ball_r, box_c, box_a, box_h, per = boxes
     nsub = box_c.shape[1]
     fans = ray_alpha.shape[0] == rays  # the lines of a cell are a fan from one centre (its plane's normal is z)

@@ -20,6 +20,7 @@ import math
 import numpy as np
 from numba import njit
 
+from cutting.borrowed import borrowed
 from cutting.threads import run_chunks
 
 NOT, UNSURE, REMOVED = 0, 1, 2
@@ -270,6 +271,9 @@ def settle_lines(
     ``grid`` = (lo, cell, dims, cell pointer, ball index) of the balls; ``balls`` = (centre, radius, passage g,
     subwindow, samples per subwindow, and each one's box: centre, axes, half extents);
     ``tab`` as :func:`_estimate` takes it."""
+    # without reference counts below here (cutting.borrowed): the caller holds the arrays for the whole call
+    p, u, ds, clusters, grid, balls, tab = borrowed((p, u, ds, clusters, grid, balls, tab))
+    air_cov, items, counts, covered, flag, work = borrowed((air_cov, items, counts, covered, flag, work))
     cl_ptr, cl_line = clusters
     ball_centre, ball_radius, ball_g, ball_sub, per, box_centre, box_axes, box_half = balls
     nseg = ds.shape[0] - 1

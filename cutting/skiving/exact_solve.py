@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
+from cutting.borrowed import borrowed
 from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.setup import SkivingSetup
 from cutting.skiving.trajectory import PassMotion
@@ -405,6 +406,8 @@ def margin_at(motion, tables, outline, g, lo, hi, q0, q1, q2):
 def exact_margins(lo_k, hi_k, p, u, ds, line, g, sample, lo_j, hi_j, motion, tables, outline, out):
     """``out[k]``: the margin of passage g[k] (table samples [lo_j, hi_j]) at p[line] + ds[sample] u[line], for k in
     [lo_k, hi_k)."""
+    p, u, ds, line, g, sample, lo_j, hi_j = borrowed((p, u, ds, line, g, sample, lo_j, hi_j))
+    motion, tables, outline, out = borrowed((motion, tables, outline, out))  # (cutting.borrowed)
     for k in range(lo_k, hi_k):
         i, d = line[k], ds[sample[k]]
         q0, q1, q2 = p[i, 0] + d * u[i, 0], p[i, 1] + d * u[i, 1], p[i, 2] + d * u[i, 2]
@@ -438,6 +441,8 @@ def line_root(motion, tables, outline, g, lo, hi, p, u, i, d_lo, d_hi, m_lo, m_h
 def exact_roots(lo_k, hi_k, p, u, ds, line, g, lo_j, hi_j, f, m0, m1, tol, motion, tables, outline, out):
     """``out[k]``: the d in [ds[f], ds[f + 1]] where passage g[k]'s margin along the line changes sign, from the
     margins m0, m1 at the ends (:func:`line_root`), for k in [lo_k, hi_k)."""
+    p, u, ds, line, g, lo_j, hi_j, f, m0, m1 = borrowed((p, u, ds, line, g, lo_j, hi_j, f, m0, m1))
+    motion, tables, outline, out = borrowed((motion, tables, outline, out))  # (cutting.borrowed)
     for k in range(lo_k, hi_k):
         d_lo, d_hi = ds[f[k]], ds[f[k] + 1]
         out[k] = line_root(
