@@ -2,8 +2,12 @@
 
 The kernels (the exact measurement's, the dexel workpiece's) are loops over independent items (probe lines,
 dexel cells, poses). Written as ``kernel(lo, hi, *args)`` with ``nogil=True`` they run on every core from plain
-threads. numba's own ``parallel=True`` would do the same, but its parfor compilation costs several times the
-kernel's own (and compiles each callee twice), which a user pays on the first run after an install.
+threads (:func:`run_chunks`). numba's own ``parallel=True`` would do the same, but its parfor compilation costs
+several times the kernel's own (and compiles each callee twice), which a user pays on the first run after an install.
+
+A kernel called many times on little work (the co-simulation cuts one tooth passage, ~100 dexel cells, per call)
+takes its items one by one from a shared counter instead (:func:`run_shared`, :func:`claim`): each thread enters the
+kernel once, and the items balance without a chunk's worth of imbalance or a call per chunk.
 """
 
 from __future__ import annotations
@@ -13,6 +17,8 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from numba import types
+from numba.extending import intrinsic
 
 _pool: ThreadPoolExecutor | None = None
 
@@ -51,5 +57,39 @@ def run_chunks(kernel, n: int, *args, smallest: int = 1) -> None:
 
     futures = [_pool.submit(work) for _ in range(k - 1)]
     work()
+    for f in futures:
+        f.result()  # re-raises a kernel's error here
+
+
+@intrinsic
+def claim(typingctx, counter):
+    """The next item of a shared counter (``counter[0]``, an int64 array): its value, incremented atomically, so
+    that every item goes to exactly one thread of :func:`run_shared`."""
+    if not (isinstance(counter, types.Array) and counter.dtype == types.int64):
+        return None
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, value=args[0])
+        one = context.get_constant(types.int64, 1)
+        return builder.atomic_rmw("add", ary.data, one, "monotonic")
+
+    return types.int64(counter), codegen
+
+
+def run_shared(kernel, n: int, *args) -> None:
+    """``kernel(counter, n, *args)`` once on every thread (this one too), the threads taking the items [0, n) one
+    by one with :func:`claim` on ``counter`` (inline when there is one thread or one item)."""
+    if n <= 0:
+        return
+    counter = np.zeros(1, np.int64)
+    k = min(threads(), n)
+    if k == 1:
+        kernel(counter, n, *args)
+        return
+    global _pool
+    if _pool is None:
+        _pool = ThreadPoolExecutor(max_workers=threads() - 1, thread_name_prefix="skive-kernel")
+    futures = [_pool.submit(kernel, counter, n, *args) for _ in range(k - 1)]
+    kernel(counter, n, *args)
     for f in futures:
         f.result()  # re-raises a kernel's error here

@@ -30,7 +30,7 @@ from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_kernels import pack_table
 from cutting.skiving.exact_solve import ItemSolver
 from cutting.skiving.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, Outline, PassTable
-from cutting.threads import run_chunks
+from cutting.threads import run_shared
 
 #: the rasters of the outline's signed distance for the march [mm]: a fine one (cell, band of exact distances) near
 #: the edge, a coarse one (cell, pad: exact over all of it) beyond, so that steps far from the edge are long. An
@@ -168,7 +168,7 @@ class DexelWorkpiece:
         work = np.zeros((len(cells), 5), np.int64)
         tab = (packed, *self._rasters)
         ln = self.lines
-        run_chunks(
+        run_shared(
             cut_cells,
             len(cells),
             cells,

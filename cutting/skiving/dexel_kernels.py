@@ -34,6 +34,7 @@ from numba import njit
 from cutting.borrowed import borrowed
 from cutting.skiving.exact_kernels import in_plane
 from cutting.skiving.exact_solve import margin_at, outline_margin
+from cutting.threads import claim
 
 #: the in-plane track between two estimates may bow: its chord is lengthened by this factor (as the measurement's)
 TRACK_BOW = 1.05
@@ -401,8 +402,8 @@ def _fan_rays(ray_alpha, alpha_sign, u0x, u0y, wx, wy, rs):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def cut_cells(
-    lo_k,
-    hi_k,
+    counter,
+    n_cells,
     cells,
     cell_ptr,
     cell_g,
@@ -432,8 +433,8 @@ def cut_cells(
     work,
 ):
     """Cut the lines of fan ``cells[k]`` (lines cells[k] * rays ... + rays - 1) by the passages
-    ``cell_g[cell_ptr[k]:cell_ptr[k + 1]]`` (in time order), for k in [lo_k, hi_k) (cutting.threads runs the
-    cells in parallel).
+    ``cell_g[cell_ptr[k]:cell_ptr[k + 1]]`` (in time order), for every k < ``n_cells`` that this thread takes from
+    ``counter`` (cutting.threads.run_shared: the threads share the cells one by one).
 
     ``p``, ``u``, ``weight``: every line's origin, direction and weights (n, 2): an interval [d1, d2] holds
     w0 (d2 - d1) + w1 (d2^2 - d1^2) / 2 of volume (parallel lines: w0, a fan's rays: w1); ``ray_cos``,
@@ -457,7 +458,10 @@ def cut_cells(
     nsub = box_c.shape[1]
     fans = ray_alpha.shape[0] == rays  # the lines of a cell are a fan from one centre (its plane's normal is z)
     table = tab[0]
-    for k in range(lo_k, hi_k):
+    while True:
+        k = claim(counter)  # the next cell not yet taken by a thread
+        if k >= n_cells:
+            break
         rem_lo = np.empty(MAX_PIECES)
         rem_hi = np.empty(MAX_PIECES)
         breaks = np.empty(4)
