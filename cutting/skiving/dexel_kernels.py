@@ -97,7 +97,7 @@ def _distance(fine, coarse, w, x, y):
     return _bilinear(coarse, fx, fy), c_delta
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _estimate(tab, g, lo, hi, p, u, i, d):
     """(crossed, e, delta, x, y) at p_i + d u_i for passage g (table samples [lo, hi]): the rasters' signed distance e
     (within delta) at the table's in-plane point (x, y); e very negative where the rake plane does not cross the
