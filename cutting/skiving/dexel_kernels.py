@@ -47,6 +47,13 @@ TABLE_TOL = 1e-6
 NEWTON_SETTLED = 1e-7
 #: a first Newton step no longer than this [mm] (the table's own error) is the crossing (see _crossing)
 NEWTON_ONE_STEP = 2e-5
+#: a march's end that the rake plane misses by rounding (a break of _crossing_breaks, where the plane meets the point at
+#: the window's end sample) is estimated this far inside [mm], the estimate's error grown by the track over it (its
+#: in-plane speed is far below 100); without it the march crept to the end in steps of a quarter of what was left
+BREAK_NUDGE = 1e-9
+#: a track whose distance to the outline changes slower than this fraction of its in-plane speed grazes it
+SHALLOW = 0.5
+BREAK_SLACK = 100 * BREAK_NUDGE
 #: within this distance [mm] of the outline a march aims its step past it, to solve a clean crossing at once
 NEAR = 0.05
 #: material intervals a line can hold (a passage splitting one more time than this is reported)
@@ -213,6 +220,10 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
     decides at the ends."""
     ok0, e0, dl0, x0, y0 = _estimate(tab, g, lo, hi, p, u, i, a)
     work[0] += 1
+    if not ok0:  # a break (cut_cells): the rake plane meets a by the window's end sample, rounding put it outside
+        ok0, e0, dl0, x0, y0 = _estimate(tab, g, lo, hi, p, u, i, a + BREAK_NUDGE)
+        dl0 += BREAK_SLACK
+        work[0] += 1
     m0 = 0.0
     have_m0 = False
     if not ok0 or abs(e0) <= dl0:
@@ -224,10 +235,13 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
     start = a
     d = a
     speed = 1.0
+    rate = math.nan  # de/dd over the last step that settled
     have_b, ok_b, e_b, dl_b, x_b, y_b = False, False, 0.0, 0.0, 0.0, 0.0
     while d < b:
         safe = max(fine, (abs(e0) - dl0) / speed)  # cannot reach the outline
         jump = 2.0 * abs(e0) / speed + fine if ok0 and abs(e0) < NEAR else 0.0  # aims past it: a clean crossing
+        if math.isfinite(rate) and abs(rate) < SHALLOW * speed:
+            jump = 0.0  # a track grazing the outline: no step across it can prove a single crossing
         # outside the outline, the rest of the range at once first: a track that leaves the outline settles it
         step = b - d if ok0 and not inside and abs(e0) > dl0 else max(safe, jump)
         unsure = False
@@ -241,6 +255,10 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
             else:
                 ok1, e1, dl1, x1, y1 = _estimate(tab, g, lo, hi, p, u, i, d1)
                 work[0] += 1
+                if d1 == b and not ok1:  # b is a break, as a can be (above)
+                    ok1, e1, dl1, x1, y1 = _estimate(tab, g, lo, hi, p, u, i, b - BREAK_NUDGE)
+                    dl1 += BREAK_SLACK
+                    work[0] += 1
                 if d1 == b:
                     have_b, ok_b, e_b, dl_b, x_b, y_b = True, ok1, e1, dl1, x1, y1
             if ok0 and ok1:
@@ -280,6 +298,7 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
                 inside = not inside
                 have_m0 = False
                 speed = max(0.5, TRACK_BOW * math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2) / step)
+                rate = math.nan
                 d, ok0, e0, dl0, x0, y0 = d1, ok1, e1, dl1, x1, y1
                 continue
             unsure = True  # the margins disagree with the estimates: take it as an unsure segment
@@ -300,10 +319,13 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
                     n_out += 1
                 inside = now_in
             m0, have_m0 = m1, True
+            rate = math.nan
         else:
             have_m0 = False
+            rate = math.nan
             if ok0 and ok1 and step > 0:
                 speed = max(0.5, TRACK_BOW * math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2) / step)
+                rate = (e1 - e0) / step
         d, ok0, e0, dl0, x0, y0 = d1, ok1, e1, dl1, x1, y1
     if inside and n_out < out_lo.shape[0]:
         out_lo[n_out], out_hi[n_out] = start, b
