@@ -51,9 +51,9 @@ NEWTON_ONE_STEP = 2e-5
 #: the window's end sample) is estimated this far inside [mm], the estimate's error grown by the track over it (its
 #: in-plane speed is far below 100); without it the march crept to the end in steps of a quarter of what was left
 BREAK_NUDGE = 1e-9
+BREAK_SLACK = 100 * BREAK_NUDGE
 #: a track whose distance to the outline changes slower than this fraction of its in-plane speed grazes it
 SHALLOW = 0.5
-BREAK_SLACK = 100 * BREAK_NUDGE
 #: within this distance [mm] of the outline a march aims its step past it, to solve a clean crossing at once
 NEAR = 0.05
 #: material intervals a line can hold (a passage splitting one more time than this is reported)
