@@ -44,9 +44,6 @@ def run_chunks(kernel, n: int, *args, smallest: int = 1) -> None:
     if k == 1 or chunks < 2:
         kernel(0, n, *args)
         return
-    global _pool
-    if _pool is None:
-        _pool = ThreadPoolExecutor(max_workers=k - 1, thread_name_prefix="skive-kernel")
     edges = np.linspace(0, n, chunks + 1).astype(np.int64).tolist()
     taken = itertools.count()  # next() on it is atomic under the GIL: each chunk goes to one thread
 
@@ -55,10 +52,18 @@ def run_chunks(kernel, n: int, *args, smallest: int = 1) -> None:
             if edges[c + 1] > edges[c]:
                 kernel(edges[c], edges[c + 1], *args)
 
+    _on_threads(k, work)
+
+
+def _on_threads(k: int, work) -> None:
+    """``work()`` on this thread and on k - 1 threads of the pool at once; a thread's error is raised here."""
+    global _pool
+    if _pool is None:
+        _pool = ThreadPoolExecutor(max_workers=threads() - 1, thread_name_prefix="skive-kernel")
     futures = [_pool.submit(work) for _ in range(k - 1)]
     work()
     for f in futures:
-        f.result()  # re-raises a kernel's error here
+        f.result()
 
 
 @intrinsic
@@ -86,10 +91,4 @@ def run_shared(kernel, n: int, *args) -> None:
     if k == 1:
         kernel(counter, n, *args)
         return
-    global _pool
-    if _pool is None:
-        _pool = ThreadPoolExecutor(max_workers=threads() - 1, thread_name_prefix="skive-kernel")
-    futures = [_pool.submit(kernel, counter, n, *args) for _ in range(k - 1)]
-    kernel(counter, n, *args)
-    for f in futures:
-        f.result()  # re-raises a kernel's error here
+    _on_threads(k, lambda: kernel(counter, n, *args))

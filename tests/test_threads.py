@@ -14,7 +14,7 @@ def _count_chunk(lo, hi, hits):
 
 
 @njit(cache=True, nogil=True)
-def _count_shared(counter, n, hits, spin):
+def _count_shared(counter, n, hits, spin, spent):
     while True:
         k = claim(counter)
         if k >= n:
@@ -22,7 +22,8 @@ def _count_shared(counter, n, hits, spin):
         s = 0.0
         for j in range(spin[k]):  # uneven items, as a passage's cells are
             s += j * 1e-9
-        hits[k] += 1 + int(s * 0)
+        spent[k] = s
+        hits[k] += 1
 
 
 def test_every_item_is_taken_once(monkeypatch):
@@ -30,10 +31,11 @@ def test_every_item_is_taken_once(monkeypatch):
     spin = (np.arange(n) % 97 * 50).astype(np.int64)
     for k in (1, 2, 4):
         monkeypatch.setattr(threads, "threads", lambda k=k: k)
-        hits = np.zeros(n, np.int64)
-        run_shared(_count_shared, n, hits, spin)
+        hits, spent = np.zeros(n, np.int64), np.zeros(n)
+        run_shared(_count_shared, n, hits, spin, spent)
         assert (hits == 1).all(), f"{k} threads: items taken {np.unique(hits)} times"
+        assert np.allclose(spent, spin * (spin - 1) / 2 * 1e-9)  # every item's work done, by whichever thread"
         hits[:] = 0
         run_chunks(_count_chunk, n, hits)
         assert (hits == 1).all()
-    run_shared(_count_shared, 0, np.zeros(0, np.int64), spin)  # nothing to do: no call, no error
+    run_shared(_count_shared, 0, np.zeros(0, np.int64), spin, np.zeros(0))  # nothing to do: no call, no error
