@@ -37,6 +37,8 @@ from cutting.threads import run_shared
 #: estimate is within 0.71 cell + 0.25 um of the truth (bilinear lookup, the pose quadratic between table samples)
 FINE_CELL, FINE_BAND = 0.002, 0.03
 COARSE_CELL, COARSE_PAD = 0.016, 2.0
+#: the coarse raster is exact this near the outline [mm], a lower bound within 1.42 cells farther off
+COARSE_EXACT = 1.0
 #: steps along a line that the estimate leaves unsure are solved exactly at this length [mm] (the measurement's)
 FINE_STEP = 0.0025
 
@@ -82,7 +84,7 @@ class DexelWorkpiece:
         self.flags = np.zeros(n, np.int64)
         self.outline = Outline(edge.outline)
         fine, f_lo = self.outline.exact_raster(FINE_CELL, FINE_BAND, FINE_BAND)
-        coarse, c_lo = self.outline.exact_raster(COARSE_CELL, COARSE_PAD, 2 * COARSE_PAD)
+        coarse, c_lo = self.outline.exact_raster(COARSE_CELL, COARSE_PAD, 2 * COARSE_PAD, COARSE_EXACT)
         w = [*f_lo, FINE_CELL, FINE_BAND, 0.71 * FINE_CELL + 0.00025]
         w += [*c_lo, COARSE_CELL, COARSE_PAD, 0.71 * COARSE_CELL + 0.00025]
         self._rasters = (fine, coarse, np.array(w, dtype=float))

@@ -16,29 +16,33 @@ import numpy as np
 
 from cutting.errors import InputError, Problem
 from cutting.skiving.edge import CuttingEdge
-from cutting.skiving.sweep import place
 from cutting.skiving.trajectory import PassMotion
 
 #: Length of the holder checked behind the cutter body [mm]: a spindle nose is rarely longer.
 HOLDER_LENGTH = 150.0
 
 
-def holder_side_points(r_hub: float, width: float, r_holder: float, length: float = HOLDER_LENGTH) -> np.ndarray:
-    """Surface points (n, 3) in the cutter frame of the hub (z = -width .. 0) and holder (behind it)."""
-    ang = np.linspace(0.0, 2 * math.pi, 121)[:-1]  # 3 deg
-    ring = np.column_stack([np.cos(ang), np.sin(ang)])
+#: points per ring of the sampled surfaces (every 3 deg)
+RING_POINTS = 120
 
-    def rings(radius: float, z: np.ndarray) -> np.ndarray:
-        return np.column_stack([np.tile(ring * radius, (len(z), 1)), np.repeat(z, len(ang))])
 
-    pts = [
-        rings(r_hub, np.linspace(-width, 0.0, max(2, int(width / 0.5) + 1))),
-        rings(r_holder, np.linspace(-width - length, -width, max(2, int(length / 2.0) + 1))),
-    ]
+def holder_side_rings(r_hub: float, width: float, r_holder: float, length: float = HOLDER_LENGTH) -> np.ndarray:
+    """The sampled surfaces of the hub (z = -width .. 0) and holder (behind it) as rings about the cutter axis:
+    rows (radius, z) in the cutter frame, the hub's rings first, then the holder's, then the end faces'."""
+    rings = [(r_hub, z) for z in np.linspace(-width, 0.0, max(2, int(width / 0.5) + 1))]
+    rings += [(r_holder, z) for z in np.linspace(-width - length, -width, max(2, int(length / 2.0) + 1))]
     for radius, z in ((r_hub, 0.0), (max(r_hub, r_holder), -width), (r_holder, -width - length)):
-        for r in np.linspace(0.0, radius, 12)[1:]:
-            pts.append(rings(r, np.array([z])))
-    return np.vstack(pts)
+        rings += [(r, z) for r in np.linspace(0.0, radius, 12)[1:]]
+    return np.array(rings)
+
+
+def holder_side_points(r_hub: float, width: float, r_holder: float, length: float = HOLDER_LENGTH) -> np.ndarray:
+    """Surface points (n, 3) in the cutter frame of the hub and holder, ring by ring (:func:`holder_side_rings`)."""
+    rings = holder_side_rings(r_hub, width, r_holder, length)
+    ang = np.linspace(0.0, 2 * math.pi, RING_POINTS + 1)[:-1]
+    x = rings[:, :1] * np.cos(ang)[None, :]
+    y = rings[:, :1] * np.sin(ang)[None, :]
+    return np.stack([x, y, np.broadcast_to(rings[:, 1:], x.shape)], axis=-1).reshape(-1, 3)
 
 
 def check_holder_side(
@@ -48,25 +52,39 @@ def check_holder_side(
 
     ``width``: the cutter body behind the rake face [mm]; ``holder_diameter`` [mm]. Margin 1 um. The surfaces
     are sampled every 3 deg, 0.5 mm (hub) and 2 mm (holder), the carriage at ``samples`` positions per pass:
-    an intrusion shallower than the sagitta of that grid (about 0.1 % of the holder radius) can pass.
+    an intrusion shallower than the sagitta of that grid (about 0.1 % of the holder radius) can pass. Only the
+    rings whose circle can reach the blank in a pose (by its centre's position and its radius) are placed.
     """
     if not motions:
         return
     g = motions[0].setup.gear
     r_tip, b2, eps = g.tip_radius, g.face_width / 2, 1e-3
     r_outer = g.root_radius + 3 * g.mn  # the ring's outside (cutting.skiving.solids.blank)
-    pts = holder_side_points(edge.r_low, width, holder_diameter / 2)
-    hub = (pts[:, 2] > -width - 1e-9) & (np.hypot(pts[:, 0], pts[:, 1]) <= edge.r_low + 1e-9)  # for the message
+    rings = holder_side_rings(edge.r_low, width, holder_diameter / 2)
+    pts = holder_side_points(edge.r_low, width, holder_diameter / 2).reshape(len(rings), RING_POINTS, 3)
+    hub = (rings[:, 1] > -width - 1e-9) & (rings[:, 0] <= edge.r_low + 1e-9)  # for the message
     for motion in motions:
         t = np.linspace(0.0, motion.duration, samples)
         rot, trans = motion.pose(t)
-        w = place(pts, rot, trans)
+        # each ring's centre in every pose: a circle of radius R about it stays within R of it
+        centre = rot[:, :, 2][:, None, :] * rings[None, :, 1:] + trans[:, None, :]
+        rc, radius = np.hypot(centre[..., 0], centre[..., 1]), rings[None, :, 0]
+        near = np.abs(centre[..., 2]) < b2 + radius
+        if g.internal:
+            near &= (rc + radius > r_tip) & (rc - radius < r_outer)
+        else:
+            near &= rc - radius < r_tip
+        i_near, k_near = np.nonzero(near)  # row-major: by pose, then ring (the points' order)
+        if not len(i_near):
+            continue
+        w = np.einsum("nab,npb->npa", rot[i_near], pts[k_near]) + trans[i_near][:, None, :]
         r = np.hypot(w[..., 0], w[..., 1])
         in_face = np.abs(w[..., 2]) < b2 - eps
         inside = in_face & ((r > r_tip + eps) & (r < r_outer - eps) if g.internal else (r < r_tip - eps))
         if not inside.any():
             continue
-        i, k = np.unravel_index(int(np.argmax(inside)), inside.shape)
+        first = int(np.argmax(inside.any(axis=1)))
+        i, k = int(i_near[first]), int(k_near[first])
         depth = float(np.where(inside, (r - r_tip) if g.internal else (r_tip - r), 0.0).max())
         where = f"pass {motion.index + 1} at carriage s = {motion.carriage(t[i]):+.2f} mm"
         if hub[k]:
