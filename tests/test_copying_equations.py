@@ -1,11 +1,36 @@
-"""Seed 003's equations 4-6 and 17 (the copying method's transfer angles, the change to tool coordinates and the
-Bezier path) against cases worked by hand (issue 28's proofs; eq. 1's Delta-y term is issue 28's item 3)."""
+"""Seed 003's equations 1, 4-6 and 17 (the copying method's initial path, transfer angles, the change to tool
+coordinates and the Bezier path) against cases worked by hand (issue 28's proofs)."""
 
 import math
 
 import numpy as np
+import pytest
 
-from cutting.form_milling.copying_path import FlankPath, _rotation, transfer_angles
+from cutting.form_milling.copying_path import FlankPath, SingleBezier, _rotation, initial_path, transfer_angles
+from cutting.gear import Gear
+from cutting.modification import FlankDesign, Modification
+
+
+def test_eq_1_initial_path_worked_by_hand():
+    """z = 20, m = 2 mm, alpha = 20 deg, b = 10 mm: r = 20 mm, r_b = 20 cos 20 = 18.7938524 mm; at the pitch circle
+    the space is half a pitch wide, so the left flank's pitch point lies theta0 = pi / 40 = 0.0785398 rad left of
+    the space's symmetry line: (-20 sin theta0, 20 cos theta0) = (-1.5691819, 19.9383467). A lead crowning of
+    20 um takes e = -0.020 (2 z / b)^2 along the base tangent: the section's involute turned by e / r_b, i.e. by
+    delta = 0.00106418 rad away from the symmetry line at the end faces (z = +-5) and 0.000266045 rad at z = +-2.5.
+    Eq. 1: Delta x = -20 (sin(theta0 + delta) - sin theta0) = -20 (cos theta0 delta - sin theta0 delta^2 / 2)
+    = -20 (0.99691733 * 0.00106418 - 0.0784591 * 5.6624e-7) = -0.0212171 mm, Delta y = 20 (cos(theta0 + delta) -
+    cos theta0) = -20 (sin theta0 delta + cos theta0 delta^2 / 2) = -0.00168118 mm: the path point at the faces is
+    (-0.1 - 0.0212171, 17.5 - 0.00168118) from the left pass's (-c / 2, r_f); at z = +-2.5, Delta x = -0.00530444
+    and Delta y = -20 (0.0784591 * 0.000266045 + 0.99691733 * 3.5390e-8) = -0.000418187 mm. The right flank, not
+    modified, keeps (c / 2, r_f) = (0.1, 17.5)."""
+    gear = Gear(teeth=20, normal_module=2.0, face_width=10.0)
+    design = Modification(FlankDesign(lead_crowning=0.020), FlankDesign())
+    z = np.array([-5.0, -2.5, 0.0, 2.5, 5.0])
+    left = initial_path(gear, design, "left", z, 0.2)
+    assert np.allclose(left.x, -0.1 + np.array([-0.0212171, -0.00530444, 0.0, -0.00530444, -0.0212171]), atol=2e-7)
+    assert np.allclose(left.y, 17.5 + np.array([-0.00168118, -0.000418187, 0.0, -0.000418187, -0.00168118]), atol=2e-8)
+    right = initial_path(gear, design, "right", z, 0.2)
+    assert np.allclose(right.x, 0.1, atol=1e-12) and np.allclose(right.y, 17.5, atol=1e-12)
 
 
 def test_eqs_4_5_transfer_angles_worked_by_hand():
@@ -50,3 +75,27 @@ def test_eq_17_bezier_path_worked_by_hand():
     c = seg["x"]
     assert abs((c[0] + 3 * c[1] + 3 * c[2] + c[3]) / 8 - 0.01) < 1e-12
     assert np.allclose(path.at(np.array([1.0, 3.0]))[:, 0], [0.01, 0.09], atol=1e-12)
+
+
+def test_eq_17_single_bezier_worked_by_hand():
+    """The seed's one cubic Bezier over the path: x = 0.001 z^3 and y = 5 + 0.03 z through z = 0, 0.5 .. 3 mm. With
+    tau = z / 3, x = 0.027 tau^3, whose Bernstein coefficients are (0, 0, 0, 0.027); y = 5 + 0.09 tau has
+    (5, 5.03, 5.06, 5.09). The fit is exact on a cubic, so these are its control values, the path's one segment
+    carries them, and at z = 1.5 the path is at x = 0.003375, with slope 0.003 z^2 = 0.00675."""
+    z = np.linspace(0.0, 3.0, 7)
+    path = FlankPath("left", z, 0.001 * z**3, 5 + 0.03 * z, form="bezier")
+    (seg,) = path.bezier()
+    assert seg["z"] == [0.0, 3.0]
+    assert np.allclose(seg["x"], [0.0, 0.0, 0.0, 0.027], atol=1e-12)
+    assert np.allclose(seg["y"], [5.0, 5.03, 5.06, 5.09], atol=1e-12)
+    assert abs(path.at(np.array([1.5]))[0, 0] - 0.003375) < 1e-12
+    t = path.tangent(np.array([1.5]))[0]
+    assert abs(t[0] / t[2] - 0.00675) < 1e-12 and abs(t[1] / t[2] - 0.03) < 1e-12
+    # not a cubic: the least-squares curve, whose residual is orthogonal to the four Bernstein polynomials
+    wavy = 0.01 * np.sin(2 * z)
+    fit = SingleBezier(z, wavy)
+    tau = z / 3
+    basis = np.stack([(1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau**2 * (1 - tau), tau**3], axis=-1)
+    assert np.allclose(basis.T @ (wavy - fit(z)), 0.0, atol=1e-15)
+    with pytest.raises(ValueError, match="path form"):
+        FlankPath("left", z, z, z, form="nurbs")

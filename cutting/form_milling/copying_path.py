@@ -10,8 +10,9 @@ the radial k_r (y, along the height), i.e. a level and a slope of that flank's p
 The steps (seed fig. 1), as :func:`plan_copying` runs them:
 
 1. initial data: the designed flank sections (:func:`cutting.form_milling.mill.designed_section`);
-2. initial path points (eq. 1) from the design's thickness deviation at the pitch cylinder at z_i (the seed
-   takes them between the symmetry plane and the end face; a design need not be symmetric, so both halves);
+2. initial path points (eq. 1): moved by how far the design moves the flank's point on the pitch cylinder at z_i,
+   along the thickness and the height (the seed takes them between the symmetry plane and the end face; a
+   design need not be symmetric, so both halves);
 3. the profiling plane through each path point, normal to the path (the seed puts it through each segment's
    middle; through the points with the adjacent segments' mean direction the corrections land on the points);
 4. its intersection with the designed flank (eq. 2, Newton on z per profile point);
@@ -23,7 +24,8 @@ The steps (seed fig. 1), as :func:`plan_copying` runs them:
    tangential correction k_t (eqs. 11-15: that offset, the thickness deviation of the bottom and top points);
 9. the refined path points x = x_pr + k_t, y = y_pr + k_r, z = z_pr (eq. 16);
 10. the path fitted with cubic Bezier segments (eq. 17; a C2 spline through the points, exact on a parabola,
-    continued along its end tangents beyond the face so the mill runs in and out without a kink);
+    continued along its end tangents beyond the face so the mill runs in and out without a kink), or with the
+    seed's single cubic Bezier over the face (``path_form="bezier"``);
 11.-14. the profiling planes of the Bezier path, their sections and corrections again, until the path stands;
 15. the accuracy check: the flank the mill really cuts on the path (its exact swept surface, no deflections)
     against the design at every path point; where it misses, the residual's level and slope over the profile
@@ -40,6 +42,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from cutting.flank import SIDES, Side, flank_normals, flank_points
+from cutting.form_milling import PATH_FORMS
 from cutting.form_milling.mill import (
     BezierChain,
     DiscMill,
@@ -61,19 +64,62 @@ CHECK_TOLERANCE = 1e-4
 POSE_STEP = 0.05
 
 
+class SingleBezier:
+    """Seed 003's eq. 17 for one coordinate: one cubic Bezier curve over the whole path,
+    c(tau) = c0 (1 - tau)^3 + 3 c1 tau (1 - tau)^2 + 3 c2 tau^2 (1 - tau) + c3 tau^3, with z's control points a third
+    of the way apart, so that tau = (z - z0) / (z_n - z0). The four control values are the least-squares fit to the
+    path points (through all of them when they lie on a cubic). Not pinned to the end points: the path's
+    corrections (eq. 16) then move the curve until they are orthogonal to it, which a pinned fit would not
+    reach. Called like a CubicSpline: ``curve(z, nu)`` is the value (nu = 0) or the first derivative (nu = 1)."""
+
+    def __init__(self, z: np.ndarray, values: np.ndarray):
+        self.z0, self.span = float(z[0]), float(z[-1] - z[0])
+        tau = (np.asarray(z, dtype=float) - self.z0) / self.span
+        if len(tau) < 4:
+            raise ValueError(f"a single cubic Bezier is fitted to at least 4 path points, got {len(tau)}")
+        basis = np.stack([(1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau**2 * (1 - tau), tau**3], axis=-1)
+        self.control = np.linalg.lstsq(basis, np.asarray(values, dtype=float), rcond=None)[0]
+
+    def __call__(self, z, nu: int = 0) -> np.ndarray:
+        t = (np.asarray(z, dtype=float) - self.z0) / self.span
+        c0, c1, c2, c3 = self.control
+        if nu == 0:
+            return c0 * (1 - t) ** 3 + 3 * c1 * t * (1 - t) ** 2 + 3 * c2 * t**2 * (1 - t) + c3 * t**3
+        if nu == 1:
+            d = 3 * ((c1 - c0) * (1 - t) ** 2 + 2 * (c2 - c1) * t * (1 - t) + (c3 - c2) * t**2)
+            return d / self.span
+        raise ValueError("SingleBezier gives the value and the first derivative")
+
+
 @dataclass(frozen=True, eq=False)
 class FlankPath:
     """One pass's path: the path point (x_tr, y_tr) [mm] in the space frame at the path points ``z`` (increasing),
-    as a C2 cubic spline of Bezier segments, continued along the end tangents beyond them."""
+    as a C2 cubic spline of Bezier segments (``form`` "spline") or as the seed's single cubic Bezier fitted to the
+    points ("bezier", eq. 17), continued along the end tangents beyond them."""
 
     side: Side
     z: np.ndarray
     x: np.ndarray
     y: np.ndarray
+    form: str = "spline"
+
+    def __post_init__(self) -> None:
+        if self.form not in PATH_FORMS:
+            raise ValueError(f"path form {self.form!r}: use one of {PATH_FORMS}")
 
     @cached_property
-    def _splines(self) -> tuple[CubicSpline, CubicSpline]:
+    def _splines(self) -> tuple:
+        if self.form == "bezier":
+            return SingleBezier(self.z, self.x), SingleBezier(self.z, self.y)
         return CubicSpline(self.z, self.x, bc_type="not-a-knot"), CubicSpline(self.z, self.y, bc_type="not-a-knot")
+
+    def moved(self, dx: np.ndarray, dy: np.ndarray) -> tuple[FlankPath, float]:
+        """The path whose points are this path's curve at the path points moved by (dx, dy) (eq. 16), and how far
+        its curve moved at them [mm] (a fitted single Bezier does not pass through its points: the moves apply
+        to the curve, else the points would drift from it without end)."""
+        now = self.at(self.z)
+        new = FlankPath(self.side, self.z, now[:, 0] + dx, now[:, 1] + dy, self.form)
+        return new, float(np.max(np.abs(new.at(self.z) - now)))
 
     def at(self, z: np.ndarray) -> np.ndarray:
         """(n, 2) path point [x_tr, y_tr] at face positions ``z``; linear beyond the end points."""
@@ -92,11 +138,13 @@ class FlankPath:
         return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
     def bezier(self) -> list[dict[str, list[float]]]:
-        """The path as cubic Bezier segments between the path points (what a CNC's spline interpolation takes):
-        per segment its z span and the four control values of x and y [mm]."""
+        """The path as cubic Bezier segments (what a CNC's spline interpolation takes): per segment its z span and
+        the four control values of x and y [mm]; the spline's segments run between the path points, the single
+        Bezier is one segment over the whole path."""
+        knots = self.z[[0, -1]] if self.form == "bezier" else self.z
         out = []
-        for i in range(len(self.z) - 1):
-            z0, z1 = float(self.z[i]), float(self.z[i + 1])
+        for i in range(len(knots) - 1):
+            z0, z1 = float(knots[i]), float(knots[i + 1])
             h = z1 - z0
             seg: dict[str, list[float]] = {"z": [z0, z1]}
             for name, sp in zip(("x", "y"), self._splines, strict=True):
@@ -139,6 +187,7 @@ class CopyingPlan:
             "clearance_mm": self.clearance,
             "approach_mm": round(self.approach, 3),
             "path_points_z_mm": np.round(self.paths["left"].z, 4).tolist(),
+            "path_form": self.paths["left"].form,
             "k_r_um": {s: np.round(v * 1e3, 3).tolist() for s, v in self.k_r.items()},
             "k_t_um": {s: np.round(v * 1e3, 3).tolist() for s, v in self.k_t.items()},
             "psi_mrad": {s: np.round(v * 1e3, 4).tolist() for s, v in self.psi.items()},
@@ -167,14 +216,35 @@ def nominal_path_point(gear: Gear, side: Side, clearance: float) -> tuple[float,
     return (-clearance / 2 if side == "left" else clearance / 2), gear.root_radius
 
 
-def initial_path(gear: Gear, design: Modification | None, side: Side, z: np.ndarray, clearance: float) -> FlankPath:
-    """Step 2, eq. 1: the path points moved by the design's thickness deviation at the pitch cylinder,
-    dx_i = e(L_p, z_i) / n_x, and no height change."""
+def pitch_point(gear: Gear, design: Modification | None, side: Side, z: np.ndarray) -> np.ndarray:
+    """(n, 2) the designed ``side`` flank's point on the pitch (reference) cylinder in the sections ``z``, space
+    frame [mm]: Newton on the roll length L until the section point's radius is the reference radius."""
+    z = np.asarray(z, dtype=float)
+    L = np.full(z.shape, roll(gear, gear.reference_diameter))
+    r, h = gear.reference_radius, 1e-6
+    for _ in range(20):
+        rad = np.hypot(*np.moveaxis(designed_section(gear, design, side, L, z)[..., :2], -1, 0))
+        slope = (np.hypot(*np.moveaxis(designed_section(gear, design, side, L + h, z)[..., :2], -1, 0)) - rad) / h
+        step = (rad - r) / slope
+        L = L - step
+        if np.max(np.abs(step)) < 1e-13:
+            break
+    return designed_section(gear, design, side, L, z)[..., :2]
+
+
+def initial_path(
+    gear: Gear, design: Modification | None, side: Side, z: np.ndarray, clearance: float, form: str = "spline"
+) -> FlankPath:
+    """Step 2, eq. 1: x_i = x^n + Delta x_i, y_i = y^n + Delta y_i at z_i, where (Delta x_i, Delta y_i) is how far
+    the design moves the flank's point on the pitch cylinder in section z_i, along the thickness and along the
+    height (the seed takes the largest, at the end face, and spreads it over the points; here each point has its
+    own, which is the same on the seed's linear case and closer on any other)."""
     xn, yn = nominal_path_point(gear, side, clearance)
-    lp = roll(gear, gear.reference_diameter)
-    e = np.zeros_like(z) if design is None else design.deviation(gear, side, lp, z)
-    nx = section_normals(gear, side, np.array(lp))[0]
-    return FlankPath(side, z, xn + e / nx, np.full_like(z, yn))
+    z = np.asarray(z, dtype=float)
+    shift = np.zeros((len(z), 2))
+    if design is not None:
+        shift = pitch_point(gear, design, side, z) - pitch_point(gear, None, side, z)
+    return FlankPath(side, z, xn + shift[:, 0], yn + shift[:, 1], form)
 
 
 def transfer_angles(tangent: np.ndarray) -> np.ndarray:
@@ -256,15 +326,17 @@ def plan_copying(
     max_iterations: int = 8,
     checks: int = 3,
     check_points: int = 11,
+    path_form: str = "spline",
 ) -> CopyingPlan:
     """The seed's 15 steps for ``gear`` carrying ``design``: the mill, both passes' paths and the accuracy check
-    (``checks`` rounds at most; 0: none)."""
+    (``checks`` rounds at most; 0: none). ``path_form``: "spline" (a C2 spline through the path points) or
+    "bezier" (the seed's single cubic Bezier, eq. 17)."""
     radius = mill_diameter / 2
     z = path_points(gear, n)
     L = section_rolls(gear)
     lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)
     bottom, top = 0, tip_index(gear, L)  # the profile's bottom and top points (eqs. 11-15)
-    paths = {s: initial_path(gear, design, s, z, clearance) for s in SIDES}
+    paths = {s: initial_path(gear, design, s, z, clearance, path_form) for s in SIDES}
     log: list[dict] = []
     k_r: dict[str, np.ndarray] = {}
     k_t: dict[str, np.ndarray] = {}
@@ -285,9 +357,8 @@ def plan_copying(
             # the edge is the mean section relative to the path: a shift common to every path point moves path
             # and edge alike and changes no flank, so it is left out (else path and edge drift together)
             dr, dt = k_r[s] - k_r[s].mean(), k_t[s] - k_t[s].mean()
-            p = paths[s]
-            paths[s] = FlankPath(s, z, p.x + dt, p.y + dr)  # eq. 16
-            moved = max(moved, float(np.max(np.abs(dt))), float(np.max(np.abs(dr))))
+            paths[s], change = paths[s].moved(dt, dr)  # eq. 16
+            moved = max(moved, change)
         log.append({"step": "path", "iteration": it + 1, "path_change_um": round(moved * 1e3, 5)})
         if moved < PATH_TOLERANCE:
             break
@@ -301,8 +372,7 @@ def plan_copying(
             break
         for s in SIDES:
             dx, dy = correction_from_residual(gear, s, lc, res[s])
-            p = plan.paths[s]
-            plan.paths[s] = FlankPath(s, z, p.x + dx, p.y + dy)
+            plan.paths[s] = plan.paths[s].moved(dx, dy)[0]
     return plan
 
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cutting.errors import InputError, Problem
+from cutting.form_milling import PATH_FORMS
 from cutting.gear import Gear, check_gear
 from cutting.modification import Modification, design_problems
 from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, parse_optional_sections
@@ -25,6 +26,7 @@ from virtual_machine.job.keys import (
     STL_TOLERANCE,
     Key,
     at_least,
+    one_of,
     parse_sections,
     positive,
     unknown_sections,
@@ -44,6 +46,14 @@ FORM_PROCESS_KEYS: dict[str, Key] = {
     "feed": Key(float, 300.0, "mm/min", "table feed of the mill along the face", positive),
     "mill_speed": Key(float, 250.0, "rpm", "mill spindle speed", positive),
     "path_points": Key(int, 10, "", "path points n per half face width (seed 003: z_i = i b / (2 n))", at_least(2)),
+    "path_form": Key(
+        str,
+        "spline",
+        "",
+        "the path through its points: 'spline' (C2, one cubic Bezier per interval) or 'bezier' (the seed's single "
+        "cubic Bezier over the face, eq. 17)",
+        one_of(*PATH_FORMS),
+    ),
     "machine_iterations": Key(
         int, 2, "", "runs of the accuracy check on the simulated machine (1: the planned path only)", at_least(1)
     ),

@@ -65,6 +65,7 @@ def plan_job(job: Job, checks: int = 3) -> CopyingPlan:
             m["teeth"],
             checks=checks,
             check_points=CHECK_POINTS,
+            path_form=p["path_form"],
         )
     except ValueError as exc:  # the mill the design asks for cannot be made (no periphery, an undercut edge)
         raise InputError(
@@ -304,8 +305,7 @@ def run_form_job(
             break
         for side in SIDES:  # step 15 on the machine: correct the path by what it cut
             dx, dy = correction_from_residual(job.gear, side, lc, res[side])
-            fp = plan.paths[side]
-            plan.paths[side] = FlankPath(side, fp.z, fp.x + dx, fp.y + dy)
+            plan.paths[side] = plan.paths[side].moved(dx, dy)[0]
     doc, facts = _cut_and_measure(job, plan, poses, out, stage, "form-milled gear (simulated machine)")
     durations.update(facts["seconds"])
     doc["copying"] = {**plan.summary(), "machine_checks": runs}
