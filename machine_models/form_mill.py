@@ -10,14 +10,18 @@ and joints:
 - ``z_slide``      slide ``Z`` (vertical, on the column; carries gravity, mostly taken by a counterbalance);
 - ``x_slide``      slide ``X`` on it (radial, along machine x);
 - ``y_slide``      slide ``Y`` on that (tangential, machine y);
-- ``mill_spindle`` hinge ``S`` about machine y on the Y slide: arbor and disc mill; site ``mill_frame`` at the
-  mill centre, its local z the mill axis (machine +y).
+- ``mill_head``    hinge ``B`` about machine x through the mill centre on the Y slide: the swivel head that
+  turns the mill's axis out of the transverse plane (seed 003's psi_y: the mill turned with the path);
+- ``mill_spindle`` hinge ``S`` about the head's y axis (machine y at B = 0): arbor and disc mill; site
+  ``mill_frame`` at the mill centre, its local z the mill axis (machine +y at B = 0).
 
 The slides sit at the origin, so the slide coordinates (X, Y, Z) are the mill centre in the machine frame
 and, at A = 0, in the gear frame. Each slide is driven by a ball screw: motor ``MX``/``MY``/``MZ`` -> screw
 hinge ``TX``/``TY``/``TZ`` (stage ``x_drive`` ...) -> nut (stage ``x_nut`` ..., ratio pitch / 2 pi) -> slide;
-the table by ``MA`` through the worm stage ``work_drive``; the spindle by ``MS`` through the belt
-``spindle_drive``. Every stage is a :func:`machine_models.drives.couple` tendon; the motors are torque
+the table by ``MA`` through the worm stage ``work_drive``; the head by ``MB`` through the worm stage
+``head_drive``; the spindle by ``MS`` through the belt ``spindle_drive``. Head B and table A together give the
+mill's axis any direction: B its tilt towards the gear axis, A (turned by a small angle during the feed) its
+component along the radius. Every stage is a :func:`machine_models.drives.couple` tendon; the motors are torque
 actuators of the same names (ctrl in N m, ctrlrange = peak torque). Lengths are metres here; the CNC and the
 records use mm.
 """
@@ -101,6 +105,15 @@ class FormMillParams:
     nut_backlash: float = 2.0e-6  # m
     nut_damping: float = 2.0e4  # N s/m
 
+    # ---- swivel head B: spindle housing turning about the radial axis through the mill centre -------------
+    head_mass: float = 80.0  # kg: spindle housing, spindle motor bracket (rides on the Y slide)
+    head_inertia: float = 1.0  # kg m^2: about the swivel axis (housing, spindle, motor at ~0.1 m)
+    head_friction: float = 5.0  # N m: swivel bearing and its clamping seal
+    b_motor_inertia: float = 6.0e-4  # kg m^2: 4 N m class AC servo motor rotor
+    b_motor_torque: float = 12.0  # N m: MB peak (1440 N m at the head through the worm)
+    #: MB -> head: 1:120 worm gear, 3e5 N m/rad referred to the head, 6 arcsec backlash, 60 N m s/rad
+    head_drive: DriveStage = field(default_factory=lambda: DriveStage(1 / 120, 3.0e5, 6 * ARCSEC, 60.0))
+
     # ---- milling spindle S: arbor and disc mill, belt from servo motor MS --------------------------------
     spindle_inertia: float = 0.03  # kg m^2: spindle shaft, pulley and arbor; the mill is added from the layout
     spindle_mass: float = 40.0  # kg: rotating parts riding on the Y slide
@@ -132,6 +145,10 @@ class FormMillParams:
                 "x_motor_torque",
                 "y_motor_torque",
                 "z_motor_torque",
+                "head_mass",
+                "head_inertia",
+                "b_motor_inertia",
+                "b_motor_torque",
                 "spindle_inertia",
                 "spindle_mass",
                 "s_motor_inertia",
@@ -149,6 +166,7 @@ class FormMillParams:
             y_ways_friction=0.0,
             z_ways_friction=0.0,
             spindle_friction=0.0,
+            head_friction=0.0,
         )
 
     def with_overrides(self, values: dict[str, Any]) -> FormMillParams:
@@ -255,8 +273,16 @@ def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None =
     inertial(ys, params.y_mass, 5.0, 5.0)
     ys.gravcomp = gc
     ys.add_joint(name="Y", type=slide, axis=[0, 1, 0], frictionloss=params.y_ways_friction)
-    visual(ys, box, (0.04, 0.1, 0.06), BLUE, pos=(r_mill + 0.05, 0, 0.06))  # spindle housing
-    spindle = ys.add_body(name="mill_spindle", quat=quat_x(-math.pi / 2))  # local z = machine +y
+    head = ys.add_body(name="mill_head")  # the swivel head: B about machine x through the mill centre
+    inertial(head, params.head_mass, params.head_inertia, params.head_inertia)
+    head.gravcomp = gc
+    head.add_joint(name="B", type=hinge, axis=[1, 0, 0], frictionloss=params.head_friction)
+    visual(head, box, (0.04, 0.1, 0.06), BLUE, pos=(r_mill + 0.05, 0, 0.06))  # spindle housing
+    b_motor = ys.add_body(name="b_motor", pos=[r_mill + 0.12, -0.12, 0.0], quat=[0.5, 0.5, 0.5, 0.5])
+    motor(spec, b_motor, "MB", params.b_motor_inertia, params.b_motor_torque)
+    b_motor.gravcomp = gc
+    couple(spec, "head_drive", "B", "MB", params.head_drive)
+    spindle = head.add_body(name="mill_spindle", quat=quat_x(-math.pi / 2))  # local z = machine +y at B = 0
     mill_mass = STEEL * math.pi * r_mill**2 * layout.mill_width
     inertial(spindle, params.spindle_mass + mill_mass, params.spindle_inertia + mill_mass * r_mill**2 / 2)
     spindle.gravcomp = gc
@@ -265,7 +291,7 @@ def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None =
     visual(spindle, box, (r_mill * 0.9, 0.002, layout.mill_width / 2 + 0.001), DARK)  # angle mark
     visual(spindle, cyl, (0.012, 0.06), STEELC, pos=(0, 0, -layout.mill_width / 2 - 0.06))  # arbor
     spindle.add_site(name="mill_frame", size=[0.002, 0.002, 0.002])
-    s_motor = ys.add_body(name="s_motor", pos=[r_mill + 0.05, 0.0, 0.18])
+    s_motor = head.add_body(name="s_motor", pos=[r_mill + 0.05, 0.0, 0.18])
     motor(spec, s_motor, "MS", params.s_motor_inertia, params.s_motor_torque)
     s_motor.gravcomp = gc
     couple(spec, "spindle_drive", "S", "MS", params.spindle_drive)
@@ -309,6 +335,7 @@ def _home_qpos(spec: mujoco.MjSpec, layout: FormMillLayout) -> list[float]:
         q[adr[driver]] = -coef[driven] * q[adr[driven]] / coef[driver]
 
     relax("work_drive", "A", "MA")
+    relax("head_drive", "B", "MB")
     relax("spindle_drive", "S", "MS")
     for axis in SLIDES:
         relax(f"{axis.lower()}_nut", axis, f"T{axis}")
@@ -335,7 +362,8 @@ def stage_omega_h(layout: FormMillLayout, params: FormMillParams) -> dict[str, f
 
     put("work_drive", p.work_drive, p.table_inertia + blank, p.a_motor_inertia)
     put("spindle_drive", p.spindle_drive, p.spindle_inertia, p.s_motor_inertia)
-    on_y = p.y_mass + p.spindle_mass
+    put("head_drive", p.head_drive, p.head_inertia, p.b_motor_inertia)
+    on_y = p.y_mass + p.head_mass + p.spindle_mass
     masses = {"X": p.x_mass + on_y, "Y": on_y, "Z": p.z_mass + p.x_mass + on_y}
     k_nut = (p.nut_stiffness or 0.0) * lead**2  # referred to the screw
     for axis in SLIDES:

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from cutting.form_milling.copying_path import FlankPath, SingleBezier, _rotation, initial_path, transfer_angles
+from cutting.form_milling.copying_path import FlankPath, SingleBezier, initial_path, tool_rotation, transfer_angles
 from cutting.gear import Gear
 from cutting.modification import FlankDesign, Modification
 
@@ -52,11 +52,11 @@ def test_eq_6_tool_coordinates_worked_by_hand():
     the path tangent that eqs. 4-5 turn back into (20 deg, 10 deg). A flank point one millimetre from the path
     point along the turned x axis, (cos 10, 0, -sin 10) in the gear frame when psi_x = 0, is (1, 0, 0) in tool
     coordinates: on the profiling plane (z_tool = 0), at x_tool = 1 mm."""
-    r = _rotation(math.radians(20), math.radians(10))
+    r = tool_rotation(math.radians(20), math.radians(10))
     assert np.allclose(r @ [0, 0, 1], [0.173648178, -0.336824089, 0.925416578], atol=1e-9)
     assert np.allclose(np.degrees(transfer_angles((r @ [0, 0, 1])[None])[0]), [20.0, 10.0], atol=1e-9)
     assert np.allclose(r.T @ r, np.eye(3), atol=1e-15)
-    flat = _rotation(0.0, math.radians(10))
+    flat = tool_rotation(0.0, math.radians(10))
     point = np.array([math.cos(math.radians(10)), 0.0, -math.sin(math.radians(10))])
     assert np.allclose(point @ flat, [1.0, 0.0, 0.0], atol=1e-12)  # eq. 6 as profiling_sections applies it
 

@@ -169,12 +169,18 @@ class CopyingPlan:
     psi: dict[str, np.ndarray] = field(default_factory=dict)  # (n, 2) transfer angles psi_x, psi_y [rad]
     section_rms: dict[str, float] = field(default_factory=dict)  # eq. 8: sections' RMS from the mean [mm]
     iterations: list[dict] = field(default_factory=list)  # the geometric iterations and the accuracy checks
+    turned: bool = True  # the mill's axis turned by the path's transfer angles (eq. 6), else fixed along x
 
-    def pass_poses(self, space: int, side: Side, step: float = POSE_STEP) -> MillPassPoses:
-        """The ideal machine's poses of the ``side`` pass of ``space`` (the planned path, exactly)."""
+    def pass_poses(self, space: int, side: Side, step: float = POSE_STEP, turned: bool | None = None) -> MillPassPoses:
+        """The ideal machine's poses of the ``side`` pass of ``space`` (the planned path, exactly); ``turned``: the
+        mill's axis turned by the path's transfer angles (:func:`poses_on_path`), else fixed along x (default: the
+        plan's)."""
+        turned = self.turned if turned is None else turned
         half = self.gear.face_width / 2 + self.approach
         z = np.arange(-half, half + step / 2, step)
-        return poses_on_path(self.gear, self.mill, space, side, z, self.paths[side].at(z))
+        path = self.paths[side]
+        psi = transfer_angles(path.tangent(z)) if turned else None
+        return poses_on_path(self.gear, self.mill, space, side, z, path.at(z), psi)
 
     def all_passes(self, step: float = POSE_STEP) -> list[MillPassPoses]:
         return [self.pass_poses(k, s, step) for k in range(self.gear.teeth) for s in SIDES]
@@ -197,12 +203,36 @@ class CopyingPlan:
         }
 
 
-def poses_on_path(gear: Gear, mill: DiscMill, space: int, side: Side, z: np.ndarray, xy: np.ndarray) -> MillPassPoses:
-    """Poses (gear frame) of the mill whose path point is ``xy`` (n, 2) in the space frame at ``z``: the centre R
-    above the path point along the space's symmetry line, the axis along the space's x (tangential)."""
-    centre = from_space(gear, space, np.stack([xy[:, 0], xy[:, 1] + mill.radius, z], axis=-1))
-    axis = from_space(gear, space, np.broadcast_to([1.0, 0.0, 0.0], (len(z), 3)))
-    return MillPassPoses(space, side, np.asarray(z, dtype=float).copy(), centre, axis)
+def mill_in_space(radius: float, z: np.ndarray, xy: np.ndarray, psi: np.ndarray | None = None):
+    """The mill's centre and unit axis, (N, 3) each, in the space frame for path points ``xy`` (N, 2) at ``z``:
+    the centre ``radius`` above the path point along the space's symmetry line, the axis along the space's x
+    (tangential); with the transfer angles ``psi`` (N, 2) the mill turned with the path's tool frame instead
+    (eq. 6, R = Rx(psi_x) Ry(psi_y), R e_z the path tangent): the axis R e_x, the centre ``radius`` along R e_y,
+    so that the mill's axial section lies in the profiling plane, where its edge was fitted."""
+    z = np.asarray(z, dtype=float)
+    axis = np.broadcast_to([1.0, 0.0, 0.0], (len(z), 3))
+    up = np.broadcast_to([0.0, 1.0, 0.0], (len(z), 3))
+    if psi is not None:
+        rot = np.array([tool_rotation(a, b) for a, b in psi])
+        axis, up = rot[:, :, 0], rot[:, :, 1]
+    return np.stack([xy[:, 0], xy[:, 1], z], axis=-1) + radius * up, np.array(axis)
+
+
+def poses_on_path(
+    gear: Gear,
+    mill: DiscMill,
+    space: int,
+    side: Side,
+    z: np.ndarray,
+    xy: np.ndarray,
+    psi: np.ndarray | None = None,
+) -> MillPassPoses:
+    """Poses (gear frame) of the mill whose path point is ``xy`` (n, 2) in the space frame at ``z``, fixed or
+    turned by ``psi`` (:func:`mill_in_space`)."""
+    centre, axis = mill_in_space(mill.radius, z, xy, psi)
+    return MillPassPoses(
+        space, side, np.asarray(z, dtype=float).copy(), from_space(gear, space, centre), from_space(gear, space, axis)
+    )
 
 
 # ---- the steps ----------------------------------------------------------------------------------------------
@@ -252,7 +282,7 @@ def transfer_angles(tangent: np.ndarray) -> np.ndarray:
     return np.stack([np.arctan2(-tangent[:, 1], tangent[:, 2]), np.arcsin(np.clip(tangent[:, 0], -1, 1))], axis=-1)
 
 
-def _rotation(psi_x: float, psi_y: float) -> np.ndarray:
+def tool_rotation(psi_x: float, psi_y: float) -> np.ndarray:
     """Gear (space) frame -> tool frame rotation R with R e_z = T (eq. 6 uses R^T)."""
     cx, sx, cy, sy = math.cos(psi_x), math.sin(psi_x), math.cos(psi_y), math.sin(psi_y)
     rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
@@ -279,7 +309,7 @@ def profiling_sections(
             f = (p - origin) @ t
             zz = zz - f / t[2]
         p = designed_section(gear, design, path.side, L, zz)
-        q = (p - origin) @ _rotation(*psi[i])  # eq. 6: R^T (p - origin), as rows
+        q = (p - origin) @ tool_rotation(*psi[i])  # eq. 6: R^T (p - origin), as rows
         out[i] = q[:, :2]
     return out, psi
 
@@ -327,6 +357,7 @@ def plan_copying(
     checks: int = 3,
     check_points: int = 11,
     path_form: str = "spline",
+    turned: bool = True,
 ) -> CopyingPlan:
     """The seed's 15 steps for ``gear`` carrying ``design``: the mill, both passes' paths and the accuracy check
     (``checks`` rounds at most; 0: none). ``path_form``: "spline" (a C2 spline through the path points) or
@@ -363,7 +394,7 @@ def plan_copying(
         if moved < PATH_TOLERANCE:
             break
     approach = approach_length(gear, radius)
-    plan = CopyingPlan(gear, design, mill, paths, clearance, approach, k_r, k_t, psi, rms, log)
+    plan = CopyingPlan(gear, design, mill, paths, clearance, approach, k_r, k_t, psi, rms, log, turned)
     lc = np.linspace(lf, la, check_points)
     for c in range(checks):
         worst, res = accuracy_check(plan, lc)

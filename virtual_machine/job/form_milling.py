@@ -54,6 +54,14 @@ FORM_PROCESS_KEYS: dict[str, Key] = {
         "cubic Bezier over the face, eq. 17)",
         one_of(*PATH_FORMS),
     ),
+    "mill_axis": Key(
+        str,
+        "turned",
+        "",
+        "'turned': the mill's axis follows the path's transfer angles (seed 003, eq. 6; the machine's swivel head B "
+        "and table A); 'fixed': the axis stays tangential (the accuracy check's corrections make up for it)",
+        one_of("turned", "fixed"),
+    ),
     "machine_iterations": Key(
         int, 2, "", "runs of the accuracy check on the simulated machine (1: the planned path only)", at_least(1)
     ),

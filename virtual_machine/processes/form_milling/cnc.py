@@ -1,12 +1,15 @@
 """The CNC of the form-milling machine (seed 003, the copying method) and its simulation loop.
 
 A pass mills one tooth space k with the profiled disc mill: retract X to the safe radius, rapid Z to the
-pass start and index the **indexing work axis** A to ``-2 pi k / z`` (space k then faces +x, where the mill
-is), approach X/Y to the path, settle, feed along z at the feed rate with X and Y following the path
-(the mill centre in the **profiling plane** z = const), retract X. The spindle runs at the commanded speed
-all the time (velocity loop, half-cosine run-up).
+pass start, index the **indexing work axis** A to ``-2 pi k / z`` (space k then faces +x, where the mill
+is) and swivel the head B to the pass's start, approach X/Y to the path, settle, feed along z at the feed
+rate with X and Y following the path (the mill centre in the **profiling plane** z = const), retract X. A pass
+whose mill is turned with the path (seed 003's transfer angles, eq. 6) gives the mill's axis per face position:
+B tilts it towards the gear axis and A turns the work by the small angle that puts the axis's radial component
+into the head's plane, X Y Z following the centre turned with the work (five axes at once). The spindle runs at
+the commanded speed all the time (velocity loop, half-cosine run-up).
 
-Per axis (A, X, Y, Z) the servo is the usual cascade on the **motor encoder** (semi-closed loop, as a machine
+Per axis (A, X, Y, Z, B) the servo is the usual cascade on the **motor encoder** (semi-closed loop, as a machine
 with rotary encoders): position loop (gain Kv) with velocity feed-forward -> PI velocity loop -> torque,
 plus inertia (acceleration) feed-forward, limited to the motor's peak torque with anti-windup::
 
@@ -39,39 +42,45 @@ from virtual_machine.runtime.integrator import (
     servo_substeps,
 )
 
-AXES = ("A", "X", "Y", "Z", "S")  # the CNC's axes; A rad, X Y Z m, S rad
-MOTORS = ("MA", "MX", "MY", "MZ", "MS")
-_A, _X, _Y, _Z, _S = range(5)
+AXES = ("A", "X", "Y", "Z", "B", "S")  # the CNC's axes; A rad, X Y Z m, B S rad
+MOTORS = ("MA", "MX", "MY", "MZ", "MB", "MS")
+_A, _X, _Y, _Z, _B, _S = range(6)
+POSITIONED = 5  # A X Y Z B have position loops; the spindle S a velocity loop only
+#: following errors in the records: A and B [arcsec], X Y Z [um]
+ERROR_UNITS = (1 / ARCSEC, 1e6, 1e6, 1e6, 1 / ARCSEC)
 
 
 @dataclass(frozen=True)
 class MillPass:
     """One pass of the copying method: tooth space ``space`` (k), fed from ``z_start`` to ``z_end`` [mm, gear
     frame]; ``path(z)`` maps z [mm, array (N,)] to the commanded mill centre [x radial, y tangential] [mm,
-    (N, 2)] in the space's frame (the gear frame turned by 2 pi k / z; for space 0 the gear frame itself)."""
+    (N, 2)] in the space's frame (the gear frame turned by 2 pi k / z; for space 0 the gear frame itself), or
+    (N, 3) with the centre's axial position third (a turned mill's centre is off the profiling plane's z).
+    ``axis(z)`` (optional): the mill's unit axis (N, 3) in that frame; none: tangential (0, 1, 0)."""
 
     space: int
     z_start: float
     z_end: float
     path: Callable[[np.ndarray], np.ndarray]
+    axis: Callable[[np.ndarray], np.ndarray] | None = None
 
 
 @dataclass(frozen=True)
 class CncTuning:
-    """Servo gains and motion limits of the CNC (per axis in the order A, X, Y, Z[, S])."""
+    """Servo gains and motion limits of the CNC (per axis in the order A, X, Y, Z, B[, S])."""
 
     servo_rate: float = 2000.0  # Hz: position and velocity loops (the physics sub-steps a whole number of times)
-    velocity_bandwidth: tuple[float, ...] = (40.0, 80.0, 80.0, 80.0, 20.0)  # Hz: PI velocity loops, A X Y Z S
-    position_gain: tuple[float, ...] = (60.0, 100.0, 100.0, 100.0)  # 1/s: Kv of A X Y Z
-    rapid_speed: tuple[float, ...] = (2.0, 0.25, 0.25, 0.25)  # rad/s, m/s: peak speed of a positioning move
-    rapid_accel: tuple[float, ...] = (10.0, 2.5, 2.5, 2.5)  # rad/s^2, m/s^2: peak acceleration of a move
+    velocity_bandwidth: tuple[float, ...] = (40.0, 80.0, 80.0, 80.0, 40.0, 20.0)  # Hz: PI velocity loops, A-B, S
+    position_gain: tuple[float, ...] = (60.0, 100.0, 100.0, 100.0, 60.0)  # 1/s: Kv of A X Y Z B
+    rapid_speed: tuple[float, ...] = (2.0, 0.25, 0.25, 0.25, 1.0)  # rad/s, m/s: peak speed of a positioning move
+    rapid_accel: tuple[float, ...] = (10.0, 2.5, 2.5, 2.5, 5.0)  # rad/s^2, m/s^2: peak acceleration of a move
     feed_ramp: float = 0.05  # s: cycloidal ramp of the feed at both ends of a pass
     spindle_ramp: float = 0.5  # s: half-cosine run-up of the spindle
     settle_time: float = 0.1  # s: least dwell before the feed starts
     settle_timeout: float = 2.0  # s: the feed starts anyway after this (the record notes the dwell)
-    #: rad, m: encoder following errors of A X Y Z under which the axes count as settled
-    settle_tolerance: tuple[float, ...] = (1.0 * ARCSEC, 0.5e-6, 0.5e-6, 0.5e-6)
-    runaway: tuple[float, ...] = (0.05, 5e-3, 5e-3, 5e-3)  # rad, m: a following error beyond this stops the run
+    #: rad, m: encoder following errors of A X Y Z B under which the axes count as settled
+    settle_tolerance: tuple[float, ...] = (1.0 * ARCSEC, 0.5e-6, 0.5e-6, 0.5e-6, 1.0 * ARCSEC)
+    runaway: tuple[float, ...] = (0.05, 5e-3, 5e-3, 5e-3, 0.05)  # rad, m: a following error beyond this stops the run
     trace_every: int = 4  # servo ticks per sample of the whole-run traces
 
 
@@ -81,7 +90,8 @@ class PassRecord:
 
     ``centre`` [mm] and ``axis`` (unit vector) of the mill (site ``mill_frame``), ``commanded`` centre [mm]
     (the path turned by the space's angle ``angle`` [rad] = 2 pi k / z), ``following_error`` at the encoders
-    (commanded - measured: A [arcsec], X, Y, Z [um]), ``steady``: the feed at constant speed (after the ramp).
+    (commanded - measured: A [arcsec], X, Y, Z [um], B [arcsec]), ``steady``: the feed at constant speed (after
+    the ramp).
     """
 
     space: int
@@ -104,9 +114,9 @@ class PassRecord:
 @dataclass
 class FormMillRecord:
     """A form-milling run: the passes' feed records and whole-run traces (every ``trace_every`` servo ticks) of
-    time [s], axes ``trace_q`` (A [rad], X Y Z [mm], S [rad]), commands ``trace_command`` (A [rad], X Y Z [mm],
-    spindle speed [rad/s]), motor torques ``trace_torque`` [N m] (MA MX MY MZ MS) and encoder following errors
-    ``trace_error`` (A [arcsec], X Y Z [um]). Numpy only: picklable."""
+    time [s], axes ``trace_q`` (A [rad], X Y Z [mm], B S [rad]), commands ``trace_command`` (A [rad], X Y Z [mm],
+    B [rad], spindle speed [rad/s]), motor torques ``trace_torque`` [N m] (MA MX MY MZ MB MS) and encoder
+    following errors ``trace_error`` (A [arcsec], X Y Z [um], B [arcsec]). Numpy only: picklable."""
 
     teeth: int
     feed_mm_min: float
@@ -125,11 +135,11 @@ class FormMillRecord:
 
 @dataclass
 class _Segment:
-    """Commanded A X Y Z (rad, m) with speeds and accelerations per servo tick; a settle segment holds ``pos[0]``
+    """Commanded A X Y Z B (rad, m) with speeds and accelerations per servo tick; a settle segment holds ``pos[0]``
     until the axes have settled; a feed segment is recorded for pass ``index``."""
 
     kind: str  # "move", "settle", "feed"
-    pos: np.ndarray  # (n, 4)
+    pos: np.ndarray  # (n, 5)
     vel: np.ndarray
     acc: np.ndarray  # mean over the tick that starts at the sample (the torque is held for the tick)
     index: int = -1
@@ -138,7 +148,7 @@ class _Segment:
 
 
 def _move(q0: np.ndarray, q1: np.ndarray, dt: float, tuning: CncTuning) -> _Segment | None:
-    """Minimum-jerk point-to-point move of A X Y Z, all axes together: s = 10 u^3 - 15 u^4 + 6 u^5 (peak speed
+    """Minimum-jerk point-to-point move of A X Y Z B, all axes together: s = 10 u^3 - 15 u^4 + 6 u^5 (peak speed
     1.875 D / T, peak acceleration 5.77 D / T^2)."""
     d = q1 - q0
     if np.abs(d).max() < 1e-12:
@@ -166,13 +176,13 @@ def _held(acc: np.ndarray) -> np.ndarray:
 
 
 def _hold(q: np.ndarray) -> _Segment:
-    z = np.zeros((1, 4))
+    z = np.zeros((1, POSITIONED))
     return _Segment("settle", q[None, :].copy(), z, z.copy())
 
 
-def _feed(q0: np.ndarray, p: MillPass, index: int, teeth: int, feed: float, dt: float, tuning: CncTuning):
-    """The feed of pass ``p`` along z with X, Y on its path (velocity and acceleration feed-forward from the
-    path's derivatives by central differences, dz = 1e-3 mm)."""
+def _feed(p: MillPass, index: int, teeth: int, feed: float, dt: float, tuning: CncTuning):
+    """The feed of pass ``p`` along z with the other axes on its path (:func:`_axes_on_path`; velocity and
+    acceleration feed-forward from the path's derivatives by central differences, dz = 1e-3 mm)."""
     z0, z1 = p.z_start * 1e-3, p.z_end * 1e-3
     length, sign = abs(z1 - z0), math.copysign(1.0, z1 - z0)
     speed = feed / 60 * 1e-3  # m/s
@@ -199,25 +209,49 @@ def _feed(q0: np.ndarray, p: MillPass, index: int, teeth: int, feed: float, dt: 
     a = np.where(late, -a_dn, np.where(t < ramp, a_up, 0.0))
     z, zd, zdd = z0 + sign * s, sign * v, sign * a
     zmm, dz = z * 1e3, 1e-3
-    xy = _path(p, zmm)
-    xy_p, xy_m = _path(p, zmm + dz), _path(p, zmm - dz)
-    d1 = (xy_p - xy_m) / (2 * dz)  # mm/mm
-    d2 = (xy_p - 2 * xy + xy_m) / dz**2 * 1e3  # 1/m
-    pos = np.column_stack((np.full(n, q0[_A]), xy * 1e-3, z))
-    vel = np.column_stack((np.zeros(n), d1 * zd[:, None], zd))
-    acc = np.column_stack((np.zeros(n), d2 * (zd**2)[:, None] + d1 * zdd[:, None], zdd))
+    a_k = -2 * math.pi * p.space / teeth  # A with space k facing +x
+    q, centre = _axes_on_path(p, zmm, a_k)
+    q_p, q_m = _axes_on_path(p, zmm + dz, a_k)[0], _axes_on_path(p, zmm - dz, a_k)[0]
+    d1 = (q_p - q_m) / (2 * dz * 1e-3)  # per metre of feed
+    d2 = (q_p - 2 * q + q_m) / (dz * 1e-3) ** 2
+    vel = d1 * zd[:, None]
+    acc = d2 * (zd**2)[:, None] + d1 * zdd[:, None]
     angle = 2 * math.pi * p.space / teeth
     c, s_ = math.cos(angle), math.sin(angle)
-    commanded = np.column_stack((c * xy[:, 0] - s_ * xy[:, 1], s_ * xy[:, 0] + c * xy[:, 1], zmm))
+    commanded = np.column_stack(
+        (c * centre[:, 0] - s_ * centre[:, 1], s_ * centre[:, 0] + c * centre[:, 1], centre[:, 2])
+    )
     steady = (t >= ramp) & (t <= duration - ramp)
-    return _Segment("feed", pos, vel, _held(acc), index, steady, commanded)
+    return _Segment("feed", q, vel, _held(acc), index, steady, commanded)
 
 
 def _path(p: MillPass, z: np.ndarray) -> np.ndarray:
+    """The pass's mill centre (N, 3) [mm] in the space's frame: radial, tangential, axial."""
     xy = np.asarray(p.path(z), dtype=float)
-    if xy.shape != (len(z), 2) or not np.isfinite(xy).all():
-        raise ValueError(f"MillPass.path must map z (N,) to finite (N, 2) [x, y] in mm; got shape {xy.shape}")
-    return xy
+    if xy.ndim != 2 or xy.shape[0] != len(z) or xy.shape[1] not in (2, 3) or not np.isfinite(xy).all():
+        raise ValueError(f"MillPass.path must map z (N,) to finite (N, 2) or (N, 3) in mm; got shape {xy.shape}")
+    return xy if xy.shape[1] == 3 else np.column_stack((xy, z))
+
+
+def _axes_on_path(p: MillPass, z: np.ndarray, a_index: float) -> tuple[np.ndarray, np.ndarray]:
+    """Commanded A X Y Z B (N, 5) [rad, m, m, m, rad] that put the mill of pass ``p`` at face positions ``z`` [mm],
+    and its centre in the space's frame [mm]. The head turns the axis (0, 1, 0) about machine x by B into
+    (0, cos B, sin B); a radial component a_r of the wanted axis a is taken by the work, turned by
+    delta = atan2(a_r, a_t) from the index ``a_index`` (the space's frame turned by delta about z puts a in the
+    head's plane), the centre turned with it."""
+    centre = _path(p, z)
+    if p.axis is None:
+        q = np.column_stack((np.full(len(z), a_index), centre * 1e-3, np.zeros(len(z))))
+        return q, centre
+    axis = np.asarray(p.axis(z), dtype=float)
+    if axis.shape != (len(z), 3) or not np.isfinite(axis).all():
+        raise ValueError(f"MillPass.axis must map z (N,) to finite unit vectors (N, 3); got shape {axis.shape}")
+    axis = axis / np.linalg.norm(axis, axis=1, keepdims=True)
+    delta = np.arctan2(axis[:, 0], axis[:, 1])
+    c, s = np.cos(delta), np.sin(delta)
+    b = np.arctan2(axis[:, 2], s * axis[:, 0] + c * axis[:, 1])
+    x, y = c * centre[:, 0] - s * centre[:, 1], s * centre[:, 0] + c * centre[:, 1]
+    return np.column_stack((a_index + delta, x * 1e-3, y * 1e-3, centre[:, 2] * 1e-3, b)), centre
 
 
 def _plan(
@@ -225,7 +259,7 @@ def _plan(
 ) -> list[_Segment]:
     """The CNC program as servo-rate segments: per pass retract X, rapid Z with the index of A, approach X/Y,
     settle, feed, retract X (zero-length moves left out)."""
-    q = np.array([layout.home_a, layout.home_x, layout.home_y, layout.home_z])
+    q = np.array([layout.home_a, layout.home_x, layout.home_y, layout.home_z, 0.0])
     out: list[_Segment] = []
 
     def go(q1: np.ndarray) -> np.ndarray:
@@ -235,21 +269,21 @@ def _plan(
         return q1
 
     for i, p in enumerate(passes):
-        q = go(np.array([q[_A], layout.safe_radius, q[_Y], q[_Z]]))  # retract X
-        q = go(np.array([-2 * math.pi * p.space / layout.teeth, q[_X], q[_Y], p.z_start * 1e-3]))  # rapid Z, index
-        xy = _path(p, np.array([p.z_start]))[0] * 1e-3
-        q = go(np.array([q[_A], xy[0], xy[1], q[_Z]]))  # approach
+        q = go(np.array([q[_A], layout.safe_radius, q[_Y], q[_Z], q[_B]]))  # retract X
+        start = _axes_on_path(p, np.array([p.z_start]), -2 * math.pi * p.space / layout.teeth)[0][0]
+        q = go(np.array([start[_A], q[_X], q[_Y], start[_Z], start[_B]]))  # rapid Z, index A, swivel B
+        q = go(start.copy())  # approach
         out.append(_hold(q))
-        feed = _feed(q, p, i, layout.teeth, feed_mm_min, dt, tuning)
+        feed = _feed(p, i, layout.teeth, feed_mm_min, dt, tuning)
         out.append(feed)
         q = feed.pos[-1].copy()
-        q = go(np.array([q[_A], layout.safe_radius, q[_Y], q[_Z]]))  # retract
+        q = go(np.array([q[_A], layout.safe_radius, q[_Y], q[_Z], q[_B]]))  # retract
     return out
 
 
 class FormMillServo(CascadeServo):
-    """The five drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops
-    (A X Y Z) and PI velocity loops (A X Y Z S) on the motor encoders; the spindle S has a velocity loop only."""
+    """The six drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops
+    (A X Y Z B) and PI velocity loops (A X Y Z B S) on the motor encoders; the spindle S has a velocity loop only."""
 
     def __init__(
         self,
@@ -267,6 +301,8 @@ class FormMillServo(CascadeServo):
             drive = getattr(params, f"{s.lower()}_drive").ratio
             g.append(drive * lead)
             chains.append(((f"M{s}", 1.0), (f"T{s}", drive), (s, drive * lead)))
+        g.append(params.head_drive.ratio)
+        chains.append((("MB", 1.0), ("B", params.head_drive.ratio)))
         g.append(params.spindle_drive.ratio)
         chains.append((("MS", 1.0), ("S", params.spindle_drive.ratio)))
         gains = (*tuning.position_gain, 0.0)
@@ -282,7 +318,7 @@ def _diagnose(layout: FormMillLayout, params: FormMillParams, t: float) -> str:
 
 def _runaway(servo: FormMillServo, tuning: CncTuning, h: float, t: float) -> str:
     """Which servo ran away and what to change."""
-    axis = AXES[int(np.argmax(np.abs(servo.error[:4]) / np.asarray(tuning.runaway)))]
+    axis = AXES[int(np.argmax(np.abs(servo.error[:POSITIONED]) / np.asarray(tuning.runaway)))]
     return (
         f"the {axis} servo ran away at t = {t:.4f} s (following error beyond {tuning.runaway}): "
         f"lower CncTuning.velocity_bandwidth / position_gain of {axis}, check the motor's peak torque, or "
@@ -341,12 +377,12 @@ def simulate_form_milling(
         qa[_Z],
         lambda t: _diagnose(layout, params, t),
         BAD_ACCELERATION_OR_SPEED,
-        servo.error[:4],  # A X Y Z: the spindle has no position loop
+        servo.error[:POSITIONED],  # A X Y Z B: the spindle has no position loop
         tuning.runaway,
         lambda t: _runaway(servo, tuning, h, t),
     )
     tol = np.asarray(tuning.settle_tolerance)
-    pos, vel, acc = np.zeros(5), np.zeros(5), np.zeros(5)
+    pos, vel, acc = np.zeros(len(AXES)), np.zeros(len(AXES)), np.zeros(len(AXES))
     traces: list[np.ndarray] = []
     records: list[PassRecord] = []
     tick, wall0 = 0, time.perf_counter()
@@ -366,12 +402,12 @@ def simulate_form_milling(
             vel[_S], acc[_S] = omega, 0.0
         servo.update(dt, pos, vel, acc)
         if tick % tuning.trace_every == 0:
-            row = np.empty(20)
+            row = np.empty(24)
             row[0] = t
-            row[1:6] = data.qpos[qa]
-            row[6:10], row[10] = pos[:4], vel[_S]
-            row[11:16] = servo.torque
-            row[16:20] = servo.error[:4]
+            row[1:7] = data.qpos[qa]
+            row[7:12], row[12] = pos[:POSITIONED], vel[_S]
+            row[13:19] = servo.torque
+            row[19:24] = servo.error[:POSITIONED]
             traces.append(row)
         integrator.step()
         tick += 1
@@ -380,25 +416,29 @@ def simulate_form_milling(
 
     for seg in program:
         if seg.kind == "settle":
-            pos[:4], vel[:4], acc[:4] = seg.pos[0], 0.0, 0.0
+            pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[0], 0.0, 0.0
             t0 = data.time
             while True:
                 step()
                 waited = data.time - t0
-                settled = waited >= tuning.settle_time and data.time >= t_ramp and np.all(np.abs(servo.error[:4]) < tol)
+                settled = (
+                    waited >= tuning.settle_time
+                    and data.time >= t_ramp
+                    and np.all(np.abs(servo.error[:POSITIONED]) < tol)
+                )
                 if settled or waited >= tuning.settle_timeout:
                     dwell = waited
                     break
             continue
         n = len(seg.pos)
         if seg.kind == "feed":
-            rec = np.empty((n, 14))
+            rec = np.empty((n, 7 + POSITIONED))
             forces = None
             if load is not None:  # space frame (tangential, radial, axial) -> machine frame (x radial, y tangential)
                 f = np.asarray(load(seg.index, seg.pos[:, _Z] * 1e3), dtype=float)
                 forces = np.column_stack([f[:, 1], f[:, 0], f[:, 2]])
             for k in range(n):
-                pos[:4], vel[:4], acc[:4] = seg.pos[k], seg.vel[k], seg.acc[k]
+                pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[k], seg.vel[k], seg.acc[k]
                 if forces is not None:
                     data.qfrc_applied[:] = 0.0
                     point = xpos[site_m] - np.array([r_mill, 0.0, 0.0])
@@ -411,10 +451,10 @@ def simulate_form_milling(
                 rec[k, 1:4] = rb.T @ (xpos[site_m] - xpos[site_b]) * 1e3
                 rec[k, 4:7] = rb.T @ xmat[site_m].reshape(3, 3)[:, 2]
                 step()
-                rec[k, 7:11] = servo.error[:4]
+                rec[k, 7:] = servo.error[:POSITIONED]
             data.qfrc_applied[:] = 0.0
             p = passes[seg.index]
-            fe = rec[:, 7:11] * np.array([1 / ARCSEC, 1e6, 1e6, 1e6])
+            fe = rec[:, 7:] * np.array(ERROR_UNITS)
             records.append(
                 PassRecord(
                     space=int(p.space),
@@ -430,12 +470,12 @@ def simulate_form_milling(
             )
             continue
         for k in range(n):
-            pos[:4], vel[:4], acc[:4] = seg.pos[k], seg.vel[k], seg.acc[k]
+            pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[k], seg.vel[k], seg.acc[k]
             step()
     if progress is not None:
         progress(1.0)
     tr = np.array(traces)
-    mm = np.array([1.0, 1e3, 1e3, 1e3, 1.0])
+    mm = np.array([1.0, 1e3, 1e3, 1e3, 1.0, 1.0])
     return FormMillRecord(
         teeth=int(layout.teeth),
         feed_mm_min=float(feed_mm_min),
@@ -443,10 +483,10 @@ def simulate_form_milling(
         passes=records,
         spaces=np.array([int(p.space) for p in passes]),
         trace_t=tr[:, 0],
-        trace_q=tr[:, 1:6] * mm,
-        trace_command=tr[:, 6:11] * mm,
-        trace_torque=tr[:, 11:16],
-        trace_error=tr[:, 16:20] * np.array([1 / ARCSEC, 1e6, 1e6, 1e6]),
+        trace_q=tr[:, 1:7] * mm,
+        trace_command=tr[:, 7:13] * mm,
+        trace_torque=tr[:, 13:19],
+        trace_error=tr[:, 19:24] * np.array(ERROR_UNITS),
         wall_time=time.perf_counter() - wall0,
         sim_time=float(data.time),
     )

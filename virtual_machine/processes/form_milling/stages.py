@@ -31,7 +31,9 @@ from cutting.form_milling.copying_path import (
     FlankPath,
     accuracy_check,
     correction_from_residual,
+    mill_in_space,
     plan_copying,
+    transfer_angles,
 )
 from cutting.form_milling.forces import RADIAL_RATIO, MillLoad
 from cutting.form_milling.removal import cut_gear
@@ -66,6 +68,7 @@ def plan_job(job: Job, checks: int = 3) -> CopyingPlan:
             checks=checks,
             check_points=CHECK_POINTS,
             path_form=p["path_form"],
+            turned=p["mill_axis"] == "turned",
         )
     except ValueError as exc:  # the mill the design asks for cannot be made (no periphery, an undercut edge)
         raise InputError(
@@ -214,7 +217,8 @@ def machine_params(job: Job):
 
 def cnc_passes(plan: CopyingPlan) -> list:
     """The passes for the CNC: per space the left pass fed down, the right pass fed up; the path as the mill
-    centre (radial, tangential) in the frame where space k faces +x (the machine indexes it there)."""
+    centre (radial, tangential) in the frame where space k faces +x (the machine indexes it there); a turned
+    plan's mill also gives its centre's axial position and its axis (:func:`mill_pose_in_cnc_frame`)."""
     from virtual_machine.processes.form_milling.cnc import MillPass
 
     half = plan.gear.face_width / 2 + plan.approach
@@ -222,13 +226,34 @@ def cnc_passes(plan: CopyingPlan) -> list:
     for k in range(plan.gear.teeth):
         for side, (z0, z1) in zip(SIDES, ((half, -half), (-half, half)), strict=True):
             path = plan.paths[side]
+            if plan.turned:
 
-            def centre(z: np.ndarray, path: FlankPath = path) -> np.ndarray:
+                def centre(z: np.ndarray, side: str = side) -> np.ndarray:
+                    return mill_pose_in_cnc_frame(plan, side, z)[0]
+
+                def axis(z: np.ndarray, side: str = side) -> np.ndarray:
+                    return mill_pose_in_cnc_frame(plan, side, z)[1]
+
+                out.append(MillPass(k, z0, z1, centre, axis))
+                continue
+
+            def fixed(z: np.ndarray, path: FlankPath = path) -> np.ndarray:
                 xy = path.at(np.asarray(z, dtype=float))
                 return np.column_stack([xy[:, 1] + plan.mill.radius, xy[:, 0]])
 
-            out.append(MillPass(k, z0, z1, centre))
+            out.append(MillPass(k, z0, z1, fixed))
     return out
+
+
+def mill_pose_in_cnc_frame(plan: CopyingPlan, side: str, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The turned mill's centre [mm] and unit axis, (N, 3) each, in the CNC's space frame (radial, tangential,
+    axial) at path positions ``z`` [mm] (cutting.form_milling.copying_path.mill_in_space: the space frame's
+    tangential and radial are the CNC's y and x)."""
+    path = plan.paths[side]
+    z = np.asarray(z, dtype=float)
+    centre, axis = mill_in_space(plan.mill.radius, z, path.at(z), transfer_angles(path.tangent(z)))
+    swap = [1, 0, 2]
+    return centre[:, swap], axis[:, swap]
 
 
 def mill_load(job: Job, plan: CopyingPlan) -> MillLoad:
@@ -401,8 +426,9 @@ def _record(rrd: Path, job: Job, record, stl_path: Path, doc: dict[str, Any], ch
 
     t = np.asarray(record.trace_t, dtype=float)
     with Recorder(rrd, "skive_form_milling") as rec:
-        rec.series("machine/axes", t, record.trace_q[:, :4], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]"])
-        rec.series("machine/following_error", t, record.trace_error, ["A [arcsec]", "X [um]", "Y [um]", "Z [um]"])
+        rec.series("machine/axes", t, record.trace_q[:, :5], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]", "B [rad]"])
+        errors = ["A [arcsec]", "X [um]", "Y [um]", "Z [um]", "B [arcsec]"]
+        rec.series("machine/following_error", t, record.trace_error, errors)
         rec.mesh_file("gear", stl_path)
         for c in charts:
             rec.image(f"measurement/{c.stem}", c)
