@@ -56,3 +56,18 @@ def test_a_setting_angle_that_cannot_be_is_refused_by_its_key():
     with pytest.raises(InputError) as info:
         parse_job(tomllib.loads(text), "bad.toml")
     assert "coupling.L" in str(info.value)
+
+
+def test_combined_controls_and_the_held_head_speed_parse_with_the_setting_sheets_values():
+    """control = "eccentric+cyclic_ratio" takes the straight-slot amplitude and the e that keeps the bottom flat with
+    the ratio's cycle on; head_speed = "held" asks for eq. 16; an unknown head speed is refused by its key."""
+    text = ASSET.read_text().replace('control = "eccentric"', 'control = "eccentric+cyclic_ratio"')
+    text = text.replace("slots_cut = 3", 'slots_cut = 3\nhead_speed = "held"')
+    job = parse_job(tomllib.loads(text), "both.toml")
+    c = job.coupling
+    assert c.eccentric_on and c.cyclic_on and job.process["head_speed"] == "held"
+    assert c.ratio_amplitude == pytest.approx(c.straight_slot_amplitude(), rel=1e-12)
+    assert c.e == pytest.approx(7.8751, abs=1e-3)  # the flat-bottom e, with the cycle on (7.87514 alone)
+    with pytest.raises(InputError) as info:
+        parse_job(tomllib.loads(text.replace('head_speed = "held"', 'head_speed = "fast"')), "bad.toml")
+    assert "process.head_speed" in str(info.value)

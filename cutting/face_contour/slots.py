@@ -76,6 +76,7 @@ __all__ = [
     "exact_sides",
     "face_blank",
     "flat_bottom_eccentricity",
+    "held_speed_factor",
     "path_velocity",
     "phi_at_radius",
     "plate_corners",
@@ -87,8 +88,9 @@ __all__ = [
     "workpiece_angle",
 ]
 
-Control = Literal["fixed", "eccentric", "cyclic_ratio"]
-CONTROLS = ("fixed", "eccentric", "cyclic_ratio")
+Control = Literal["fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio"]
+#: the controls; "eccentric+cyclic_ratio" combines the two (both geared to the head angle, their terms add)
+CONTROLS = ("fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio")
 #: the manifold sweep's chord error [mm] (hull chords of the element's path, the blank's circles)
 SWEEP_TOLERANCE = 1e-3
 #: samples of a pass that bracket a root before bisection; bisection steps (1e-4 rad / 2^50: exact in double)
@@ -129,6 +131,16 @@ class FaceCoupling:
 
     def __post_init__(self) -> None:
         _check(self)
+
+    @property
+    def eccentric_on(self) -> bool:
+        """The eccentric carries the head (control "eccentric", alone or combined)."""
+        return self.control in ("eccentric", "eccentric+cyclic_ratio")
+
+    @property
+    def cyclic_on(self) -> bool:
+        """The speed ratio changes cyclically (control "cyclic_ratio", alone or combined)."""
+        return self.control in ("cyclic_ratio", "eccentric+cyclic_ratio")
 
     @property
     def phases(self) -> np.ndarray:
@@ -186,11 +198,11 @@ def _check(c: FaceCoupling) -> None:
         _fail("ratio_cycles", f"q must be an integer >= 1, got {c.ratio_cycles!r}")
     if not (math.isfinite(c.e) and c.e >= 0):
         _fail("e", f"must be >= 0, got {c.e!r}")
-    if c.e > 0 and c.control != "eccentric":
+    if c.e > 0 and not c.eccentric_on:
         _fail("e", f"an eccentricity needs control = 'eccentric' (control is {c.control!r})")
     if not (math.isfinite(c.ratio_amplitude) and c.ratio_amplitude >= 0):
         _fail("ratio_amplitude", f"must be >= 0, got {c.ratio_amplitude!r}")
-    if c.ratio_amplitude > 0 and c.control != "cyclic_ratio":
+    if c.ratio_amplitude > 0 and not c.cyclic_on:
         _fail("ratio_amplitude", f"needs control = 'cyclic_ratio' (control is {c.control!r})")
     if c.ratio_amplitude * c.ratio_cycles >= 1 / c.m:
         _fail("ratio_amplitude", f"A q = {c.ratio_amplitude * c.ratio_cycles:.4g} >= 1/m: the workpiece would reverse")
@@ -230,7 +242,7 @@ def _check(c: FaceCoupling) -> None:
 def setting_angle(c: FaceCoupling) -> float:
     """lambda = arcsin(L / ((R - N e) m)) [rad] (eq. 1; R - N e is the radius of the tip's horizontal speed at M,
     = R without the eccentric): the tool plane's angle to the radial line OM that makes V radial at M."""
-    e = c.e if c.control == "eccentric" else 0.0
+    e = c.e if c.eccentric_on else 0.0
     return math.asin(c.L / ((c.R - c.eccentric_ratio * e) * c.m))
 
 
@@ -239,7 +251,7 @@ def workpiece_angle(c: FaceCoupling, phi: np.ndarray | float) -> np.ndarray:
     cyclic ratio control."""
     phi = np.asarray(phi, dtype=float)
     a = phi / c.m
-    if c.control == "cyclic_ratio":
+    if c.cyclic_on:
         a = a - c.ratio_amplitude * (1 - np.cos(c.ratio_cycles * phi))
     return a
 
@@ -253,7 +265,7 @@ def _frame(
     tu = a - setting_angle(c)
     u = np.stack([np.cos(tu), np.sin(tu)], axis=-1)
     n = np.stack([-np.sin(tu), np.cos(tu)], axis=-1)
-    e = c.e if c.control == "eccentric" else 0.0
+    e = c.e if c.eccentric_on else 0.0
     N = c.eccentric_ratio
     feed = c.depth if final else c.S * (phi + beta) / (2 * math.pi)
     centre = c.L * np.stack([np.cos(a), np.sin(a)], axis=-1) - (e * np.sin(N * phi))[..., None] * u
@@ -263,7 +275,7 @@ def _frame(
 
 def _along(c: FaceCoupling, phi: np.ndarray, beta: float) -> np.ndarray:
     """The tip's position along the tool plane from the eccentric's axis: R sin psi - e sin N phi [mm]."""
-    e = c.e if c.control == "eccentric" else 0.0
+    e = c.e if c.eccentric_on else 0.0
     return c.R * np.sin(phi + beta) - e * np.sin(c.eccentric_ratio * phi)
 
 
@@ -304,7 +316,7 @@ def cutting_speed(c: FaceCoupling, radius: np.ndarray | float, tool_speed: float
     :func:`path_velocity`."""
     r = np.asarray(radius, dtype=float)
     lam = setting_angle(c)
-    e = c.e if c.control == "eccentric" else 0.0
+    e = c.e if c.eccentric_on else 0.0
     vt = (c.R - c.eccentric_ratio * e) * tool_speed
     vw = r * tool_speed / c.m
     return np.sqrt(vw**2 + vt**2 + 2 * vt * vw * math.cos(math.pi / 2 + lam))
@@ -324,6 +336,20 @@ def eccentric_tool_speed(c: FaceCoupling, v: float, phi: np.ndarray | float) -> 
     phi = np.asarray(phi, dtype=float)
     N, e, R = c.eccentric_ratio, c.e, c.R
     return v / (2 * math.pi * np.sqrt(N**2 * e**2 + R**2 - 2 * e * N * R * np.cos((N - 1) * phi)))
+
+
+def held_speed_factor(c: FaceCoupling, phi: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 16 as a factor on the head's speed: k(phi) = n(phi) / n(0) = (R - N e) / sqrt(N^2 e^2 + R^2 - 2 e N R
+    cos(N phi - phi)) and dk/dphi. The head turning at k(phi) times its speed at M keeps the tip's speed in the tool
+    plane (eq. 15) at its value at M, omega_t (R - N e), all round; k = 1 without the eccentric."""
+    phi = np.asarray(phi, dtype=float)
+    if not c.eccentric_on or c.e == 0.0:
+        return np.ones_like(phi), np.zeros_like(phi)
+    N, e, R = c.eccentric_ratio, c.e, c.R
+    q = N**2 * e**2 + R**2 - 2 * e * N * R * np.cos((N - 1) * phi)
+    k = (R - N * e) / np.sqrt(q)
+    dk = -0.5 * k / q * 2 * e * N * R * (N - 1) * np.sin((N - 1) * phi)
+    return k, dk
 
 
 def straight_slot_amplitude(c: FaceCoupling) -> float:
@@ -367,11 +393,13 @@ def setting_sheet(c: FaceCoupling, tool_speed: float = 1.0) -> dict[str, float]:
     [deg], the flat-bottom eccentricity [mm] (N = ``eccentric_ratio``), the straight-slot ratio amplitude [rad] (q =
     ``ratio_cycles``), the control's cycles per workpiece revolution and the cycle's tool revolutions (plunge at S,
     one workpiece revolution of spark-out)."""
-    e = c.e if c.control == "eccentric" else 0.0
+    e = c.e if c.eccentric_on else 0.0
     ends = np.array([c.inner_radius, c.L, c.outer_radius])
     v = cutting_speed(c, ends, tool_speed)
     direction = np.degrees(speed_direction(c, ends[[0, 2]], tool_speed))
-    cycles = {"fixed": 0, "eccentric": c.eccentric_ratio * c.m, "cyclic_ratio": c.ratio_cycles * c.m}[c.control]
+    # per workpiece revolution: N m of the eccentric, q m of the ratio; combined, the pattern repeats gcd(N, q) m times
+    turns = [c.eccentric_ratio] * c.eccentric_on + [c.ratio_cycles] * c.cyclic_on
+    cycles = math.gcd(*turns) * c.m if turns else 0
     return {
         "setting_angle_deg": math.degrees(setting_angle(c)),
         "tip_speed_radius_mm": c.R - c.eccentric_ratio * e,
@@ -517,7 +545,9 @@ def flat_bottom_eccentricity(c: FaceCoupling) -> float:
     ends = np.array([c.inner_radius, c.middle_radius, c.outer_radius])
 
     def middle(e: float) -> float:
-        z = exact_bottom(replace(c, control="eccentric", e=e, ratio_amplitude=0.0), ends)
+        # with the cyclic ratio combined, its own amplitude stays: the bottom is flat under both
+        both = replace(c, control="eccentric+cyclic_ratio", e=e) if c.cyclic_on else None
+        z = exact_bottom(both or replace(c, control="eccentric", e=e, ratio_amplitude=0.0), ends)
         return float(z[1] - 0.5 * (z[0] + z[2]))
 
     N = c.eccentric_ratio
@@ -590,7 +620,7 @@ def _chord_error(c: FaceCoupling, phi: np.ndarray, beta: float) -> float:
 def pass_samples(c: FaceCoupling, beta: float, tol: float) -> tuple[np.ndarray, float]:
     """Head angles of element beta's final pass (tip below the face, one step beyond) with the plate's chord error
     within ``tol`` [mm] (the path's curvature radius is about R + e N^2, the first guess), and that error."""
-    curvature = c.R + (c.e * c.eccentric_ratio**2 if c.control == "eccentric" else 0.0) + c.L / c.m**2
+    curvature = c.R + (c.e * c.eccentric_ratio**2 if c.eccentric_on else 0.0) + c.L / c.m**2
     span = _pass_phis(c, beta, samples=2)
     steps = max(2, math.ceil((span[1] - span[0]) / math.sqrt(8 * tol / curvature)))
     while True:

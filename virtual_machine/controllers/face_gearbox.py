@@ -9,7 +9,10 @@ eq. 15) or a **cyclic change of the speed ratio**. Every axis counts the pulses 
 pulses per head revolution):
 
 - tool head H: the generator's pulses themselves (divider 6 with kv = 1: the generator's frequency sets the head's
-  speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p;
+  speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p; with ``hold_speed`` the generator's frequency
+  follows eq. 16 (:func:`cutting.face_contour.slots.held_speed_factor`): the head slows where the eccentric's speed
+  adds to the tip's, so the tip keeps its speed at M all round (every axis counts the same pulses: the paths in
+  phi stay the same, only their timing changes);
 - work spindle A: **frequency divider** 7 with k = m (the indexing ratio 1/m, eq. 11) -> **summator** 9, whose
   second input carries the cyclic-ratio modulation - A (1 - cos q phi) of :func:`cutting.face_contour.slots.
   workpiece_angle` (control "cyclic_ratio"; the CNC's function generator of the head's command angle) -> A;
@@ -30,7 +33,7 @@ import math
 
 import numpy as np
 
-from cutting.face_contour.slots import FaceCoupling, workpiece_angle
+from cutting.face_contour.slots import FaceCoupling, held_speed_factor, workpiece_angle
 
 from .pulses import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
 
@@ -44,7 +47,8 @@ class ElectronicGearbox:
 
     Parameters: the coupling ``c``, the head turn ``start_turn`` the run starts at (the axes where the programme has
     them then), the head's full speed ``tool_speed`` [rad/s], ``pulses_per_rev`` (command pulses per revolution of
-    A, H and E), ``infeed_resolution`` [m per infeed pulse] and the generator's half-cosine run-up ``ramp`` [s].
+    A, H and E), ``infeed_resolution`` [m per infeed pulse], the generator's half-cosine run-up ``ramp`` [s] and
+    ``hold_speed``: the head's speed by eq. 16 (the tip's speed held under the eccentric).
     ``command(t, dt)`` gives the axes' positions, speeds and accelerations (A, H, E [rad], Z [m]) for the tick that
     starts at t; ``update(dt, t)`` issues that tick's pulses."""
 
@@ -56,8 +60,10 @@ class ElectronicGearbox:
         pulses_per_rev: int,
         infeed_resolution: float,
         ramp: float,
+        hold_speed: bool = False,
     ):
         self.c, self.infeed_resolution, self.ramp = c, infeed_resolution, ramp
+        self.hold_speed = hold_speed and c.eccentric_on
         p = pulses_per_rev
         self.rad = 2 * math.pi / p  # rad per command pulse
         self.f_full = tool_speed / self.rad  # Hz: generator frequency at the head's full speed
@@ -73,9 +79,9 @@ class ElectronicGearbox:
         self.depth_pulses = round(c.depth * 1e-3 / infeed_resolution)
         self.phi0 = 2 * math.pi * start_turn
         self.a0 = float(workpiece_angle(c, self.phi0))
-        self.e0 = c.eccentric_ratio * self.phi0 if c.control == "eccentric" else 0.0
+        self.e0 = c.eccentric_ratio * self.phi0 if c.eccentric_on else 0.0
         self.feed0 = round(start_turn * n_s)  # infeed pulses issued before the start (the plunge so far)
-        self.eccentric = c.control == "eccentric"
+        self.eccentric = c.eccentric_on
 
     def scale(self, t: float) -> tuple[float, float]:
         """The generator's frequency as a fraction of its full value and its rate [1/s]: half-cosine run-up."""
@@ -84,23 +90,37 @@ class ElectronicGearbox:
             return 1.0, 0.0
         return 0.5 * (1 - math.cos(math.pi * t / ramp)), 0.5 * math.pi / ramp * math.sin(math.pi * t / ramp)
 
+    def _factor(self, phi: float) -> tuple[float, float]:
+        """Eq. 16's factor on the head speed at head angle phi and its derivative in phi (1, 0 without it)."""
+        if not self.hold_speed:
+            return 1.0, 0.0
+        k, dk = held_speed_factor(self.c, phi)
+        return float(k), float(dk)
+
+    @property
+    def phi(self) -> float:
+        """The head's commanded angle [rad]."""
+        return self.phi0 + self.gen14.position * self.rad
+
     def command(self, t: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions and speeds at the tick's start t, accelerations at its middle (the torque is held for the tick:
         a zero-order hold; the acceleration at the start would leave a phase lag of half a tick)."""
         c, rad = self.c, self.rad
+        phi = self.phi
         s, _ = self.scale(t)
-        w = self.f_full * rad * s  # head speed [rad/s]
+        w = self.f_full * rad * s * self._factor(phi)[0]  # head speed [rad/s]
         s_mid, ds_mid = self.scale(t + dt / 2)
-        w_mid, dw = self.f_full * rad * s_mid, self.f_full * rad * ds_mid  # [rad/s, rad/s^2]
+        k_mid, dk_mid = self._factor(phi + w * dt / 2)
+        w_mid = self.f_full * rad * s_mid * k_mid  # [rad/s]
+        dw = self.f_full * rad * (ds_mid * k_mid + s_mid * dk_mid * w_mid)  # [rad/s^2]
         pos, vel, acc = np.zeros(4), np.zeros(4), np.zeros(4)
-        phi = self.phi0 + self.gen14.position * rad
         phi_mid = phi + 0.5 * (w + w_mid) * dt / 2
         pos[_H], vel[_H], acc[_H] = phi, w, dw
         # work: divider 7 -> summator 9 (main: the divided train, second input: the cyclic-ratio modulation)
         self.s9.a = self.d7.fine_position
         self.s9.b = 0.0
         vel[_A], acc[_A] = w / c.m, dw / c.m
-        if c.control == "cyclic_ratio":
+        if c.cyclic_on:
             amp, q = c.ratio_amplitude, c.ratio_cycles
             self.s9.b = (float(workpiece_angle(c, phi)) - phi / c.m) / rad
             vel[_A] -= amp * q * math.sin(q * phi) * w
@@ -121,7 +141,9 @@ class ElectronicGearbox:
         """Issue the pulses of the tick that starts at t, at the generator frequency of its middle (the pulses then
         advance each command by what its speed and held acceleration move the axis: the trapezoid rule)."""
         gen = self.gen14
-        gen.frequency = self.f_full * self.scale(t + dt / 2)[0]
+        s = self.scale(t)[0]
+        w = self.f_full * self.rad * s * self._factor(self.phi)[0]
+        gen.frequency = self.f_full * self.scale(t + dt / 2)[0] * self._factor(self.phi + w * dt / 2)[0]
         gen.update(dt)
         self.d7.inp = gen.out
         self.d7.update(dt)

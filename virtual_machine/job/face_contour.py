@@ -48,8 +48,8 @@ COUPLING_KEYS: dict[str, Key] = {
         str,
         "fixed",
         "",
-        "'fixed', 'eccentric' or 'cyclic_ratio' (seed 004)",
-        one_of("fixed", "eccentric", "cyclic_ratio"),
+        "'fixed', 'eccentric', 'cyclic_ratio' or both, 'eccentric+cyclic_ratio' (seed 004)",
+        one_of("fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio"),
     ),
     "e": Key(float, None, "mm", "eccentricity (default: the setting sheet's flat-bottom e)", at_least(0.0)),
     "eccentric_ratio": Key(int, 4, "", "eccentric turns N per tool revolution", at_least(1)),
@@ -60,7 +60,15 @@ COUPLING_KEYS: dict[str, Key] = {
 }
 
 FACE_PROCESS_KEYS: dict[str, Key] = {
-    "tool_speed": Key(float, 150.0, "rpm", "tool head speed", positive),
+    "tool_speed": Key(float, 150.0, "rpm", "tool head speed (at M)", positive),
+    "head_speed": Key(
+        str,
+        "constant",
+        "",
+        "'constant', or 'held': under the eccentric the head's speed follows eq. 16 so the tip's speed stays that "
+        "at M (seed 004)",
+        one_of("constant", "held"),
+    ),
     "slots_cut": Key(int, 3, "", "slots cut, recorded and measured (0, 1, ...)", at_least(2)),
     "material": MATERIAL,
     "sweep_error": Key(float, 0.001, "mm", "chord error of the slots' manifold solid", positive),
@@ -133,8 +141,9 @@ def _coupling(c: dict[str, Any]) -> FaceCoupling:
         ratio_cycles=c["ratio_cycles"],
         ratio_amplitude=math.radians(c["ratio_amplitude"] or 0.0),
     )
-    if coupling.control == "eccentric" and c["e"] is None:
-        coupling = dataclasses.replace(coupling, e=flat_bottom_eccentricity(coupling))
-    if coupling.control == "cyclic_ratio" and c["ratio_amplitude"] is None:
+    # the amplitude first: combined, the flat-bottom e is solved with the ratio's cycle on
+    if coupling.cyclic_on and c["ratio_amplitude"] is None:
         coupling = dataclasses.replace(coupling, ratio_amplitude=straight_slot_amplitude(coupling))
+    if coupling.eccentric_on and c["e"] is None:
+        coupling = dataclasses.replace(coupling, e=flat_bottom_eccentricity(coupling))
     return coupling

@@ -42,6 +42,7 @@ from cutting.face_contour.slots import (
     bisect_roots,
     element_path,
     first_sign_change,
+    held_speed_factor,
     hull_steps,
     subtract_pieces,
     workpiece_angle,
@@ -267,6 +268,35 @@ def _runaway(servo: FaceServo, tuning: FaceTuning, tool_rpm: float, h: float, t:
     )
 
 
+#: share of a motor's peak torque the held speed's inertia torque may take (the rest: the speed loop, friction)
+HELD_TORQUE_SHARE = 0.8
+
+
+def _check_held_speed(c: FaceCoupling, servo: FaceServo, omega: float, tool_rpm: float) -> None:
+    """Eq. 16 makes the head's speed swing round each revolution (k from 1 at M to (R - N e) / (R + N e)), at
+    accelerations that grow with the speed squared: omega^2 k dk/dphi on the head, N times that on the eccentric,
+    1/m on the work. Each axis's motor needs its inertia times that; a motor it would saturate is refused before the
+    run, naming the motor and the tool speed that keeps within HELD_TORQUE_SHARE of its peak."""
+    phi = np.linspace(0.0, 2 * math.pi, 4001)
+    k, dk = held_speed_factor(c, phi)
+    head = float(np.max(np.abs(k * dk))) * omega**2  # rad/s^2
+    for axis, acc in ((_A, head / c.m), (_H, head), (_E, head * c.eccentric_ratio)):
+        hits = np.flatnonzero(servo.idx == axis)
+        if not len(hits):
+            continue
+        j = int(hits[0])
+        need = servo.inertia[j] * acc / abs(servo.g[j])
+        allowed = HELD_TORQUE_SHARE * servo.peak[j]
+        if need > allowed:
+            rpm = tool_rpm * math.sqrt(allowed / need)
+            raise ValueError(
+                f"head_speed = 'held' (eq. 16) at {tool_rpm:g} rpm swings the head by a factor "
+                f"{float(k.min()):.3f}..1 each turn: {MOTORS[axis]} would need {need:.1f} N m of its "
+                f"{servo.peak[j]:g} N m peak; lower process.tool_speed to {math.floor(rpm)} rpm or below, raise "
+                f"machine.model's {MOTORS[axis][1].lower()}_motor_torque, or use head_speed = 'constant'"
+            )
+
+
 def simulate_face_contour(
     coupling: FaceCoupling,
     params: FaceMachineParams | None = None,
@@ -276,9 +306,11 @@ def simulate_face_contour(
     start_turn: int | None = None,
     tuning: FaceTuning | None = None,
     progress: Callable[[float], None] | None = None,
+    hold_speed: bool = False,
 ) -> FaceContourRecord:
     """Cut ``coupling``'s slots on the simulated machine (MuJoCo) with the electronic gearbox of this module, the
-    head at ``tool_rpm``, and record the final pass over each of ``slots``. The run starts at rest ``run_in`` tool
+    head at ``tool_rpm`` (at M; ``hold_speed``: its speed by eq. 16 all round, so that the tip's speed under the
+    eccentric stays that at M), and record the final pass over each of ``slots``. The run starts at rest ``run_in`` tool
     turns before the first of these passes (or at ``start_turn``) and ends after the last. Raises ValueError for bad
     inputs and :class:`virtual_machine.runtime.integrator.SimulationDivergedError` when the integration blows up or
     a servo runs away (the message names what to change)."""
@@ -311,13 +343,18 @@ def simulate_face_contour(
             f"settled ({(run_up + 0.1 * omega) / (2 * math.pi):.2f} turns); raise run_in or shorten FaceTuning.ramp"
         )
 
-    egb = ElectronicGearbox(coupling, start_turn, omega, tuning.pulses_per_rev, tuning.infeed_resolution, tuning.ramp)
+    egb = ElectronicGearbox(
+        coupling, start_turn, omega, tuning.pulses_per_rev, tuning.infeed_resolution, tuning.ramp, hold_speed
+    )
     pos, _, _ = egb.command(0.0, dt)
     eccentric = layout.eccentric
     axes = {"A": pos[_A], "H": pos[_H] - pos[_E], "Z": pos[_Z]} | ({"E": pos[_E]} if eccentric else {})
     data = mujoco.MjData(model)
     data.qpos[:] = relaxed_qpos(model, axes)
     servo = FaceServo(model, data, params, tuning, pos)
+
+    if hold_speed and coupling.eccentric_on:
+        _check_held_speed(coupling, servo, omega, tool_rpm)
 
     qa = {n: int(model.joint(n).qposadr[0]) for n in ("A", "H", "Z")}
     qe = int(model.joint("E").qposadr[0]) if eccentric else -1

@@ -47,10 +47,9 @@ def format_setting_sheet(job: Job) -> str:
         f"{s['V_outer_mm_s'] * 0.06:.1f} m/min at {job.process['tool_speed']:g} rpm; V turns "
         f"{s['V_direction_inner_deg']:+.3f} / {s['V_direction_outer_deg']:+.3f} deg from radial at the ends",
         f"  eccentric: e for a flat slot bottom = {s['flat_bottom_e_mm']:.4f} mm (N = {c.eccentric_ratio})"
-        + (f"; set e = {c.e:.4f} mm" if c.control == "eccentric" else ""),
+        + (f"; set e = {c.e:.4f} mm" if c.eccentric_on else ""),
         f"  cyclic ratio: amplitude for straight slots = {math.degrees(s['straight_slot_amplitude_rad']):.5f} deg "
-        f"(q = {c.ratio_cycles})"
-        + (f"; set {math.degrees(c.ratio_amplitude):.5f} deg" if c.control == "cyclic_ratio" else ""),
+        f"(q = {c.ratio_cycles})" + (f"; set {math.degrees(c.ratio_amplitude):.5f} deg" if c.cyclic_on else ""),
         f"  cycle: {s['tool_revolutions']:.0f} tool revolutions (plunge at S = {c.S:g} mm/rev, one workpiece "
         "revolution of spark-out)",
     ]
@@ -115,7 +114,12 @@ def simulate_face_job(job: Job, progress=None):
 
     slots = tuple(range(job.process["slots_cut"]))
     record = simulate_face_contour(
-        job.coupling, machine_params(job), slots, job.process["tool_speed"], progress=progress
+        job.coupling,
+        machine_params(job),
+        slots,
+        job.process["tool_speed"],
+        progress=progress,
+        hold_speed=job.process["head_speed"] == "held",
     )
     sync = record.trace_sync
     summary = {
