@@ -213,7 +213,7 @@ def mill_in_space(radius: float, z: np.ndarray, xy: np.ndarray, psi: np.ndarray 
     axis = np.broadcast_to([1.0, 0.0, 0.0], (len(z), 3))
     up = np.broadcast_to([0.0, 1.0, 0.0], (len(z), 3))
     if psi is not None:
-        rot = np.array([tool_rotation(a, b) for a, b in psi])
+        rot = tool_rotations(np.asarray(psi, dtype=float))
         axis, up = rot[:, :, 0], rot[:, :, 1]
     return np.stack([xy[:, 0], xy[:, 1], z], axis=-1) + radius * up, np.array(axis)
 
@@ -283,11 +283,17 @@ def transfer_angles(tangent: np.ndarray) -> np.ndarray:
 
 
 def tool_rotation(psi_x: float, psi_y: float) -> np.ndarray:
-    """Gear (space) frame -> tool frame rotation R with R e_z = T (eq. 6 uses R^T)."""
-    cx, sx, cy, sy = math.cos(psi_x), math.sin(psi_x), math.cos(psi_y), math.sin(psi_y)
-    rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    return rx @ ry
+    """Gear (space) frame -> tool frame rotation R with R e_z = T (eq. 6 uses R^T): R = Rx(psi_x) Ry(psi_y)."""
+    return tool_rotations(np.array([[psi_x, psi_y]]))[0]
+
+
+def tool_rotations(psi: np.ndarray) -> np.ndarray:
+    """:func:`tool_rotation` for transfer angles (n, 2): (n, 3, 3), Rx(psi_x) Ry(psi_y) multiplied out."""
+    cx, sx = np.cos(psi[:, 0]), np.sin(psi[:, 0])
+    cy, sy = np.cos(psi[:, 1]), np.sin(psi[:, 1])
+    zero = np.zeros_like(cx)
+    rows = [[cy, zero, sy], [sx * sy, cx, -sx * cy], [-cx * sy, sx, cx * cy]]
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def profiling_sections(
