@@ -204,6 +204,26 @@ def test_manifold_removal_matches_the_exact_surface_within_its_sweep_error(plann
         assert finite_max(d_exact - d_mesh, 1.0) < tol + 1e-3  # the sweep error and the circles' chords
 
 
+def test_thinning_keeps_a_turning_mill_within_the_tolerance():
+    """Poses on a straight line whose axis turns uniformly by 0.1 rad: the centres alone would need two poses; a
+    point 25 mm from the centre turns on an arc that a chord over theta misses by 25 theta^2 / 8, so with 5 um the
+    kept poses split the turn into steps of at most 0.04 rad (three or more), and every step holds the bound."""
+    from cutting.form_milling.removal import thin_poses
+    from cutting.form_milling.sweep import MillPassPoses
+
+    n = 201
+    z = np.linspace(-10.0, 10.0, n)
+    theta = np.linspace(0.0, 0.1, n)
+    centre = np.column_stack([np.full(n, 40.0), np.zeros(n), z])
+    axis = np.column_stack([np.zeros(n), np.cos(theta), np.sin(theta)])
+    poses = MillPassPoses(0, "left", z, centre, axis)
+    assert list(thin_poses(poses, 0.005)) == [0, n - 1]
+    kept = thin_poses(poses, 0.005, 25.0)
+    steps = np.diff(theta[kept])
+    assert len(kept) >= 4 and kept[0] == 0 and kept[-1] == n - 1
+    assert np.all(25.0 * steps**2 / 8 <= 0.005 + 1e-12)
+
+
 # ---- bad input ------------------------------------------------------------------------------------------------
 FORM_JOB = """
 [gear]
@@ -241,12 +261,13 @@ def test_a_form_milling_job_parses():
 def test_the_single_bezier_path_makes_a_cubic_design_and_misses_an_end_relief():
     """Lead crowning, twist and profile crowning ask for a path that is a parabola and a line in z: the seed's one
     cubic Bezier over the face carries it, and the accuracy check (the exact swept surface against the design)
-    ends within 0.5 um like the spline's (0.29 against 0.26 um). An end relief (kinks 2 mm from each face) is no
-    cubic: the single Bezier misses it by more than 1 um (measured 2.5 um after three checks, where the spline
-    through the points ends at 0.26 um): the reason the spline is the default."""
+    ends within 0.5 um like the spline's (0.23 um with 11 path points; 0.29 against the spline's 0.26 um with 21).
+    An end relief (kinks 2 mm from each face) is no cubic: the single Bezier misses it by more than 1 um (measured
+    2.4 um; 2.5 um with 21 points, where the spline through them ends at 0.26 um): the reason the spline is the
+    default."""
 
     def final_check(design: FlankDesign, form: str, checks: int = 3) -> float:
-        plan = plan_copying(GEAR, Modification(design, design), 50.0, checks=checks, path_form=form)
+        plan = plan_copying(GEAR, Modification(design, design), 50.0, n=5, checks=checks, path_form=form)
         assert all(p.form == form for p in plan.paths.values())
         return [it["max_residual_um"] for it in plan.iterations if it["step"] == "accuracy check"][-1]
 

@@ -4,8 +4,9 @@ another (the chips, the forces' volumes, gear.stl; the micrometre truth is :mod:
 The mill (a solid of revolution) is cut into frusta along its axis where its profile bends by more than the
 tolerance; a frustum is convex, so what it sweeps between two poses that differ by a straight move is the
 convex hull of its two placements. Each pass's poses are thinned to the fewest whose straight moves stay within
-the tolerance of the path, and each circle of a frustum is a polygon fine (chord within the tolerance) over
-the arc that can reach the blank and coarse elsewhere. The swept volume of a space is the union of those hulls.
+the tolerance of the path (and of the mill's turn, where its axis follows the path), and each circle of a frustum
+is a polygon fine (chord within the tolerance) over the arc that can reach the blank and coarse elsewhere. The
+swept volume of a space is the union of those hulls.
 """
 
 from __future__ import annotations
@@ -52,16 +53,19 @@ def _chord_error(u: np.ndarray, h: np.ndarray, i: int, j: int) -> float:
     return float(np.max(np.abs((u[i + 1 : j] - u[i]) * dh - (h[i + 1 : j] - h[i]) * du)) / norm)
 
 
-def thin_poses(p: MillPassPoses, tol: float) -> np.ndarray:
-    """Indices of the fewest poses whose straight moves keep every recorded centre within ``tol`` [mm]."""
+def thin_poses(p: MillPassPoses, tol: float, reach: float = 0.0) -> np.ndarray:
+    """Indices of the fewest poses whose straight moves keep every recorded centre within ``tol`` [mm], and every
+    point of the mill within ``reach`` [mm] of its centre too where the axis turns between them (a mill turned by
+    the path, :mod:`cutting.form_milling.copying_path`)."""
     c = p.centre
+    a = p.axis / np.linalg.norm(p.axis, axis=1, keepdims=True)
     keep = [0]
     i, n = 0, len(c)
     while i < n - 1:
         j = i + 1
         step = 1
         while i + step < n:  # grow the run by doubling, then back off to the last one that holds
-            if _run_error(c, i, min(i + step, n - 1)) > tol:
+            if _run_error(c, a, i, min(i + step, n - 1), reach) > tol:
                 break
             j = min(i + step, n - 1)
             if j == n - 1:
@@ -70,7 +74,7 @@ def thin_poses(p: MillPassPoses, tol: float) -> np.ndarray:
         lo, hi = j, min(i + step, n - 1)
         while lo < hi:
             mid = (lo + hi + 1) // 2
-            if _run_error(c, i, mid) <= tol:
+            if _run_error(c, a, i, mid, reach) <= tol:
                 lo = mid
             else:
                 hi = mid - 1
@@ -79,13 +83,22 @@ def thin_poses(p: MillPassPoses, tol: float) -> np.ndarray:
     return np.array(keep)
 
 
-def _run_error(c: np.ndarray, i: int, j: int) -> float:
+def _run_error(c: np.ndarray, a: np.ndarray, i: int, j: int, reach: float) -> float:
+    """How far the straight move from pose i to pose j misses the poses between: the centres' distance from the
+    chord, plus, where the axis turns, reach * theta_ik * theta_kj / 2 (a point at ``reach`` from the centre turns
+    on an arc; the chord of its turn misses the arc by that much)."""
     if j <= i + 1:
         return 0.0
     d = c[j] - c[i]
     d = d / np.linalg.norm(d)
     v = c[i + 1 : j] - c[i]
-    return float(np.max(np.linalg.norm(v - np.outer(v @ d, d), axis=1)))
+    off = np.linalg.norm(v - np.outer(v @ d, d), axis=1)
+    if reach > 0.0:
+        inner = a[i + 1 : j]
+        t_ik = np.arccos(np.clip(inner @ a[i], -1.0, 1.0))
+        t_kj = np.arccos(np.clip(inner @ a[j], -1.0, 1.0))
+        off = off + reach * t_ik * t_kj / 2
+    return float(np.max(off))
 
 
 def _circle(centre: np.ndarray, axis: np.ndarray, radius: float, down: np.ndarray, fine: float, reach: float):
@@ -114,7 +127,7 @@ def swept_hulls(gear: Gear, mill: DiscMill, p: MillPassPoses, tol: float) -> lis
     for the profile's chords (outside the mill where its side is concave), half for the path's (either side); the
     circles' chords (inside) take half as well."""
     us, hs = profile_slices(mill, tol / 2)
-    idx = thin_poses(p, tol / 2)
+    idx = thin_poses(p, tol / 2, math.hypot(mill.radius, mill.width / 2))
     depth = gear.tip_radius - gear.root_radius + 2 * tol
     reach = math.acos(max(-1.0, (mill.radius - depth) / mill.radius)) + 0.05
     fine = 2 * math.acos(max(0.0, 1 - tol / 2 / mill.radius))
