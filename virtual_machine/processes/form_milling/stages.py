@@ -87,15 +87,31 @@ def format_plan(plan: CopyingPlan) -> str:
         f"clearance {plan.clearance:.3f} mm; run-in/out {plan.approach:.2f} mm beyond each face",
         "  sections' RMS thickness deviation from the mean section (eq. 8): "
         f"left {s['section_rms_um']['left']:.2f} um, right {s['section_rms_um']['right']:.2f} um",
-        "  path point   z [mm]   left: x [um]  y [um]   right: x [um]  y [um]   (from the nominal path point)",
     ]
+    form = plan.paths["left"].form
+    lines.append(
+        "  path: "
+        + ("the seed's single cubic Bezier over the face (eq. 17)" if form == "bezier" else "C2 cubic spline (eq. 17)")
+        + "; mill axis "
+        + (
+            "turned by the path (eq. 6: head B, table A), psi_x / psi_y up to "
+            + ", ".join(
+                f"{side} {np.abs(v[:, 0]).max() * 1e3:.2f} / {np.abs(v[:, 1]).max() * 1e3:.2f}"
+                for side, v in plan.psi.items()
+            )
+            + " mrad"
+            if plan.turned
+            else "fixed (tangential)"
+        )
+    )
+    lines.append("  path point   z [mm]   left: x [um]  y [um]   right: x [um]  y [um]   (from the nominal path point)")
     xn = {"left": -plan.clearance / 2, "right": plan.clearance / 2}
     z = plan.paths["left"].z
+    at = {side: plan.paths[side].at(z) for side in SIDES}  # the curve (a fitted Bezier passes near its points)
     for i in range(len(z)):
         row = f"  {i - len(z) // 2:+10d} {z[i]:8.3f}"
         for side in SIDES:
-            p = plan.paths[side]
-            row += f"   {(p.x[i] - xn[side]) * 1e3:10.3f} {(p.y[i] - plan.gear.root_radius) * 1e3:7.3f}"
+            row += f"   {(at[side][i, 0] - xn[side]) * 1e3:10.3f} {(at[side][i, 1] - plan.gear.root_radius) * 1e3:7.3f}"
         lines.append(row)
     for it in s["iterations"]:
         if it["step"] == "path":
