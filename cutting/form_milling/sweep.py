@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cutting.flank import twist_rate
 from cutting.form_milling.mill import DiscMill
 from cutting.gear import Gear
 
@@ -74,6 +75,8 @@ class MilledGear:
             self._by_space.setdefault(p.space % gear.teeth, []).append(i)
         self._u, self._h = mill.profile
         self._scans: dict[int, tuple[int, int]] = {}
+        lean = max((float(np.max(np.abs(p.axis[:, 2]))) for p in self.passes), default=0.0)
+        self._cos_lean = math.sqrt(max(1.0 - lean**2, 0.25))
 
     # ---- the blank ---------------------------------------------------------------------------------------
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -151,8 +154,12 @@ class MilledGear:
             base = max(1, round(SCAN_BASE / step))
             lateral = np.hypot(*(c[base:, :2] - c[:-base, :2]).T) if len(c) > base else np.zeros(1)
             slope = float(np.max(lateral)) / (base * step) if lateral.size else 0.0
+            # a mill whose axis leans along the feed (set over at a helix angle) touches Q off its centre plane, up
+            # to R sin(lean) away along the feed
+            lean = float(np.max(np.abs(self.passes[index].axis[:, 2])))
             coarse = step * stride
-            k = int(min(200, math.ceil((self.mill.radius * min(slope, 0.05) + coarse) / coarse) + 1))
+            reach = self.mill.radius * (min(slope, 0.05) + lean)
+            k = int(min(400, math.ceil((reach + coarse) / coarse) + 1))
             self._scans[index] = (k, stride)
         return self._scans[index]
 
@@ -162,16 +169,18 @@ class MilledGear:
         negative value may be above the least)."""
         q = np.asarray(q, dtype=float).reshape(-1, 3)
         z = self.gear.teeth
-        pos = np.arctan2(q[:, 1], q[:, 0]) / (2 * math.pi) * z  # in space units: space k spans [k, k+1)
+        twist = twist_rate(self.gear) * q[:, 2]  # a helical space turns along the face
+        pos = (np.arctan2(q[:, 1], q[:, 0]) - twist) / (2 * math.pi) * z  # in space units: space k spans [k, k+1)
         own = np.floor(pos).astype(int) % z
         near = np.where(pos - np.floor(pos) < 0.5, own - 1, own + 1) % z
         out = np.full(len(q), FAR)
         lo, hi = self._u[0] - REACH_PAD, self._u[-1] + REACH_PAD
         for spaces in (own, near):
             for k in np.unique(spaces):
-                a = 2 * math.pi * (k + 0.5) / z  # the space's symmetry line: its passes' mill axis is across it
-                x_s = -math.sin(a) * q[:, 0] + math.cos(a) * q[:, 1]
-                reach = (spaces == k) & (x_s >= lo) & (x_s <= hi)  # within the mill's axial span of this space
+                a = 2 * math.pi * (k + 0.5) / z + twist  # the space's symmetry line: its passes' mill is across it
+                x_s = -np.sin(a) * q[:, 0] + np.cos(a) * q[:, 1]
+                # within the mill's axial span of this space (a leaning axis spans 1 / cos(lean) as much across it)
+                reach = (spaces == k) & (x_s >= lo / self._cos_lean) & (x_s <= hi / self._cos_lean)
                 for i in self._by_space.get(int(k), []):
                     sel = np.nonzero(reach & (out > 0 if sign_only else True))[0]
                     if sel.size:
