@@ -41,7 +41,7 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from cutting.flank import SIDES, Side, flank_normals, flank_points
+from cutting.flank import SIDES, Side, flank_normals, flank_points, twist_rate
 from cutting.form_milling import PATH_FORMS
 from cutting.form_milling.mill import (
     BezierChain,
@@ -170,6 +170,16 @@ class CopyingPlan:
     section_rms: dict[str, float] = field(default_factory=dict)  # eq. 8: sections' RMS from the mean [mm]
     iterations: list[dict] = field(default_factory=list)  # the geometric iterations and the accuracy checks
     turned: bool = True  # the mill's axis turned by the path's transfer angles (eq. 6), else fixed along x
+    #: a helical space: per side the roll lengths and the face positions (from the mill's centre plane) where the
+    #: set-over mill touches the flank (empty on a spur gear: the profiling plane itself)
+    contact: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    def contact_offset(self, side: Side, L: np.ndarray) -> np.ndarray:
+        """Where, from the mill's centre plane, the mill cuts the ``side`` flank at roll lengths L [mm] (0: spur)."""
+        if side not in self.contact:
+            return np.zeros_like(np.asarray(L, dtype=float))
+        grid, offset = self.contact[side]
+        return np.interp(L, grid, offset)
 
     def pass_poses(self, space: int, side: Side, step: float = POSE_STEP, turned: bool | None = None) -> MillPassPoses:
         """The ideal machine's poses of the ``side`` pass of ``space`` (the planned path, exactly); ``turned``: the
@@ -218,6 +228,12 @@ def mill_in_space(radius: float, z: np.ndarray, xy: np.ndarray, psi: np.ndarray 
     return np.stack([xy[:, 0], xy[:, 1], z], axis=-1) + radius * up, np.array(axis)
 
 
+def set_over(gear: Gear) -> float:
+    """The mill's set-over angle about the radial line [rad]: the reference helix angle, signed with the hand (0 on a
+    spur gear); it adds to psi_y (:func:`cutting.form_milling.helical.mill_axis`)."""
+    return math.atan(gear.reference_radius * twist_rate(gear))
+
+
 def poses_on_path(
     gear: Gear,
     mill: DiscMill,
@@ -228,10 +244,16 @@ def poses_on_path(
     psi: np.ndarray | None = None,
 ) -> MillPassPoses:
     """Poses (gear frame) of the mill whose path point is ``xy`` (n, 2) in the space frame at ``z``, fixed or
-    turned by ``psi`` (:func:`mill_in_space`)."""
+    turned by ``psi`` (:func:`mill_in_space`); on a helical gear set over at the helix angle, each pose in the space
+    frame of its face position (the space turns along the face: the poses make its screw motion)."""
+    z = np.asarray(z, dtype=float)
+    beta = set_over(gear)
+    if beta != 0.0:
+        psi = (np.zeros((len(z), 2)) if psi is None else np.asarray(psi, dtype=float)) + np.array([0.0, beta])
     centre, axis = mill_in_space(mill.radius, z, xy, psi)
+    frame = z if beta != 0.0 else 0.0
     return MillPassPoses(
-        space, side, np.asarray(z, dtype=float).copy(), from_space(gear, space, centre), from_space(gear, space, axis)
+        space, side, z.copy(), from_space(gear, space, centre, frame), from_space(gear, space, axis, frame)
     )
 
 
@@ -320,6 +342,35 @@ def profiling_sections(
     return out, psi
 
 
+def helical_sections(
+    gear: Gear,
+    design: Modification | None,
+    path: FlankPath,
+    L: np.ndarray,
+    contact: np.ndarray,
+    radius: float,
+    turned: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Steps 3-6 on a helical space: the set-over mill touches the flank along a space curve, not in a plane (the
+    envelope, :mod:`cutting.form_milling.helical`), at face positions ``contact`` (per roll length, from the mill's
+    centre plane) that the nominal helicoid fixes; the design moves the flank by micrometres, which moves the
+    contact along the flank only to second order. Per path point: the designed flank at those points in the
+    mill's axial coordinates (u along the axis, R - rho above the periphery) about its pose there, (n, m, 2), and
+    the transfer angles (n, 2) (the set-over added to psi_y in the poses)."""
+    z = path.z
+    psi = transfer_angles(path.tangent(z)) if turned else np.zeros((len(z), 2))
+    centre, axis = mill_in_space(radius, z, path.at(z), psi + np.array([0.0, set_over(gear)]))
+    centre, axis = from_space(gear, 0, centre, z), from_space(gear, 0, axis, z)
+    out = np.empty((len(z), len(L), 2))
+    for i in range(len(z)):
+        zz = z[i] + contact
+        p = from_space(gear, 0, designed_section(gear, design, path.side, L, zz), zz) - centre[i]
+        u = p @ axis[i]
+        rho = np.linalg.norm(p - u[:, None] * axis[i], axis=1)
+        out[i] = np.column_stack([u, radius - rho])
+    return out, psi
+
+
 def mean_section(sections: np.ndarray) -> tuple[np.ndarray, float]:
     """Eqs. 7-8: the mean section (m, 2) over the path points and the sections' RMS thickness deviation from it."""
     mean = sections.mean(axis=0)
@@ -373,21 +424,42 @@ def plan_copying(
     L = section_rolls(gear)
     lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)
     bottom, top = 0, tip_index(gear, L)  # the profile's bottom and top points (eqs. 11-15)
+    # a helical space's mill keeps its set-over: turned further by the path's transfer angles, a leaning mill's
+    # envelope changes at first order with the turn, and step 15's corrections (which turn it) diverge (measured
+    # 0.8 -> 1.8 -> 20 um at beta = 20 deg, where the set-over mill converges to 0.9 um)
+    turned = turned and gear.helix_angle == 0.0
     paths = {s: initial_path(gear, design, s, z, clearance, path_form) for s in SIDES}
+    contact = {}
+    if gear.helix_angle != 0.0:  # where the set-over mill touches the nominal helicoid (from its centre plane)
+        from cutting.form_milling.helical import contact_profile, mill_axis
+
+        for s in SIDES:
+            xn, yn = nominal_path_point(gear, s, clearance)
+            centre = np.array([xn, yn + radius, 0.0])
+            contact[s] = contact_profile(gear, s, L, centre, mill_axis(gear))[2]
+            if not np.all(np.isfinite(contact[s])):
+                raise ValueError(
+                    f"the set-over mill of radius {radius} mm cannot touch the {s} flank's whole profile (its normals "
+                    "miss the mill's axis): use a larger mill"
+                )
     log: list[dict] = []
     k_r: dict[str, np.ndarray] = {}
     k_t: dict[str, np.ndarray] = {}
     psi: dict[str, np.ndarray] = {}
     rms: dict[str, float] = {}
-    mill = None
+    mill = previous = None
     for it in range(max_iterations):
-        sections = {s: profiling_sections(gear, design, paths[s], L) for s in SIDES}
+        if contact:
+            sections = {s: helical_sections(gear, design, paths[s], L, contact[s], radius, turned) for s in SIDES}
+        else:
+            sections = {s: profiling_sections(gear, design, paths[s], L) for s in SIDES}
         edges = {}
         for s in SIDES:
             mean, rms[s] = mean_section(sections[s][0])
             edges[s] = BezierChain.fit(mean, through=(top,))  # the edge meets the top point exactly
         mill = DiscMill(radius, edges["left"], edges["right"], mill_teeth)
         moved = 0.0
+        before = dict(paths)
         for s in SIDES:
             secs, psi[s] = sections[s]
             k_r[s], k_t[s] = corrections(mill, s, secs, bottom, top)
@@ -399,18 +471,50 @@ def plan_copying(
         log.append({"step": "path", "iteration": it + 1, "path_change_um": round(moved * 1e3, 5)})
         if moved < PATH_TOLERANCE:
             break
-    approach = approach_length(gear, radius)
+        if it > 0 and moved > log[-2]["path_change_um"] * 1e-3:
+            # the moves grow again: the iteration has reached its noise (a helical space's sections change shape
+            # with the path, so each refitted edge differs by its fit tolerance, which k_r amplifies); the path
+            # and mill before this move are the plan, step 15 takes it from there
+            paths = before
+            mill = previous
+            log[-1]["stopped"] = "the moves grew: kept the path before this one"
+            break
+        previous = mill
+    approach = approach_length(gear, radius) + radius * abs(math.sin(set_over(gear)))  # a leaning mill reaches on
     plan = CopyingPlan(gear, design, mill, paths, clearance, approach, k_r, k_t, psi, rms, log, turned)
+    plan.contact = {s: (L, c) for s, c in contact.items()}
     lc = np.linspace(lf, la, check_points)
+    response: dict[str, np.ndarray | None] = {s: None for s in SIDES}
     for c in range(checks):
         worst, res = accuracy_check(plan, lc)
         log.append({"step": "accuracy check", "round": c + 1, "max_residual_um": round(worst * 1e3, 4)})
         if worst < CHECK_TOLERANCE or c == checks - 1:
             break
+        if contact and response["left"] is None:
+            response = path_response(plan, lc, res)
         for s in SIDES:
-            dx, dy = correction_from_residual(gear, s, lc, res[s])
+            dx, dy = correction_from_residual(gear, s, lc, res[s], response[s])
             plan.paths[s] = plan.paths[s].moved(dx, dy)[0]
     return plan
+
+
+def path_response(plan: CopyingPlan, L: np.ndarray, res: dict[str, np.ndarray], move: float = 1e-3) -> dict:
+    """How the flank's residual at roll lengths L answers a move of the whole path by ``move`` [mm] along x and along
+    y, per side (m, 2) [residual per mm]: measured with the exact sweep. On a spur gear it is the flank normal's
+    (x, y) (a move of the mill moves the flank rigidly); the set-over mill of a helical space touches the flank
+    along a space curve, and a radial move changes that contact: up to 16 % off the normal near the root, which the
+    least squares of the correction (level and slope from two nearly parallel normals) would amplify."""
+    out = {}
+    for s in SIDES:
+        base = plan.paths[s]
+        cols = []
+        for dx, dy in ((move, 0.0), (0.0, move)):
+            plan.paths[s] = base.moved(np.full(len(base.z), dx), np.full(len(base.z), dy))[0]
+            moved = accuracy_check(plan, L)[1][s]
+            cols.append(np.nanmedian((moved - res[s]) / move, axis=0))
+        plan.paths[s] = base
+        out[s] = np.column_stack(cols)  # the residual's change per path move (the flank normals on a spur gear)
+    return out
 
 
 def approach_length(gear: Gear, radius: float) -> float:
@@ -433,23 +537,28 @@ def accuracy_check(
     worst = 0.0
     for s in SIDES:
         zz, LL = np.meshgrid(plan.paths[s].z, L, indexing="ij")
+        zz = zz + plan.contact_offset(s, L)[None, :]  # what the mill cuts at each path point (helical: off its plane)
+        # a helical contact beyond the face: that path point cuts no flank there (no residual to correct it by)
+        beyond = np.abs(zz) > gear.face_width / 2 + 1e-9 if plan.contact else np.zeros(zz.shape, bool)
         zz = np.clip(zz, -gear.face_width / 2 + 1e-3, gear.face_width / 2 - 1e-3)
         tooth = space if s == "left" else space + 1
         p = flank_points(gear, s, LL / gear.base_radius, zz, tooth)
         nrm = flank_normals(gear, s, LL / gear.base_radius, zz, tooth)
         d = cut.probe(p.reshape(-1, 3), nrm.reshape(-1, 3), 0.05).reshape(p.shape[:-1])
         design = 0.0 if plan.design is None else plan.design.deviation(gear, s, LL, zz)
-        res[s] = d - design
+        res[s] = np.where(beyond, np.nan, d - design)
         worst = max(worst, float(np.nanmax(np.abs(res[s]))))
     return worst, res
 
 
-def correction_from_residual(gear: Gear, side: Side, L: np.ndarray, res: np.ndarray) -> tuple[np.ndarray, ...]:
+def correction_from_residual(
+    gear: Gear, side: Side, L: np.ndarray, res: np.ndarray, response: np.ndarray | None = None
+) -> tuple[np.ndarray, ...]:
     """Path corrections (dx, dy) [mm] per path point that cancel the residual's level and slope over the profile
     (least squares; the seed's k_t, k_r match the bottom and top points only, which leaves a bow's whole height at
     mid profile): the surface moves by (dx, dy) . n, n the flank normal out of the material."""
-    n = section_normals(gear, side, L)  # (m, 2)
-    ok = np.isfinite(res)
+    n = section_normals(gear, side, L) if response is None else response  # (m, 2)
+    ok = np.isfinite(res) & np.isfinite(n).all(axis=1)[None, :]
     dx, dy = np.zeros(len(res)), np.zeros(len(res))
     for i in range(len(res)):
         sol = np.linalg.lstsq(n[ok[i]], -res[i, ok[i]], rcond=None)[0]

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.spatial import cKDTree
 
-from cutting.flank import Side, flank_normals, flank_points
+from cutting.flank import Side, flank_normals, flank_points, twist_rate
 from cutting.gear import Gear, form_roll_length
 from cutting.modification import Modification, bernstein, bernstein_derivative, roll
 
@@ -41,18 +41,20 @@ def space_angle(gear: Gear, space: int) -> float:
     return 2 * math.pi * (space + 0.5) / gear.teeth
 
 
-def to_space(gear: Gear, space: int, points: np.ndarray) -> np.ndarray:
-    """Gear-frame points (..., 3) in the frame of space ``space``: (x_s tangential, y_s radial, z)."""
-    a = space_angle(gear, space)
-    c, s = math.cos(a), math.sin(a)
+def to_space(gear: Gear, space: int, points: np.ndarray, frame_z=0.0) -> np.ndarray:
+    """Gear-frame points (..., 3) in the frame of space ``space``: (x_s tangential, y_s radial, z). On a helical gear
+    the space turns along the face: ``frame_z`` [mm] (broadcast with the points) is the face position whose frame
+    is meant (default mid face: one rigid frame); a point's own z gives the frame it lies in."""
+    a = space_angle(gear, space) + twist_rate(gear) * np.asarray(frame_z, dtype=float)
+    c, s = np.cos(a), np.sin(a)
     p = np.asarray(points, dtype=float)
     return np.stack([-s * p[..., 0] + c * p[..., 1], c * p[..., 0] + s * p[..., 1], p[..., 2]], axis=-1)
 
 
-def from_space(gear: Gear, space: int, points: np.ndarray) -> np.ndarray:
-    """Space-frame points (..., 3) back in the gear frame."""
-    a = space_angle(gear, space)
-    c, s = math.cos(a), math.sin(a)
+def from_space(gear: Gear, space: int, points: np.ndarray, frame_z=0.0) -> np.ndarray:
+    """Space-frame points (..., 3) back in the gear frame (``frame_z`` as :func:`to_space`)."""
+    a = space_angle(gear, space) + twist_rate(gear) * np.asarray(frame_z, dtype=float)
+    c, s = np.cos(a), np.sin(a)
     p = np.asarray(points, dtype=float)
     return np.stack([-s * p[..., 0] + c * p[..., 1], c * p[..., 0] + s * p[..., 1], p[..., 2]], axis=-1)
 
@@ -62,11 +64,6 @@ def check_copying_gear(gear: Gear) -> list[str]:
     out = []
     if gear.internal:
         out.append("an internal gear: a disc mill reaches no internal tooth space (use skiving)")
-    if gear.helix_angle != 0.0:
-        out.append(
-            "a helical gear: the mill profile copied in the profiling plane holds for spur gears only here (a "
-            "helical space needs the mill profile by the envelope, which seed 003 does not give); set helix_angle = 0"
-        )
     return out
 
 
@@ -90,8 +87,9 @@ def designed_section(
     gear: Gear, design: Modification | None, side: Side, L: np.ndarray, z: np.ndarray, space: int = 0
 ) -> np.ndarray:
     """Points (..., 3) of the designed ``side`` flank of tooth space ``space`` at roll lengths ``L`` and face
-    positions ``z`` (broadcast), in the space frame: the involute moved along its normal by the design's
-    deviation (excess material positive; beyond the tip the design's own formula continues)."""
+    positions ``z`` (broadcast), in the space frame at their own z (a helical space's section is then the same
+    at every z): the involute moved along its normal by the design's deviation (excess material positive; beyond
+    the tip the design's own formula continues)."""
     L, z = np.broadcast_arrays(np.asarray(L, dtype=float), np.asarray(z, dtype=float))
     tooth = space if side == "left" else space + 1
     xi = L / gear.base_radius
@@ -99,7 +97,7 @@ def designed_section(
     if design is not None:
         e = design.deviation(gear, side, L, z) * math.cos(gear.base_helix_angle)
         p = p + e[..., None] * flank_normals(gear, side, xi, z, tooth)
-    return to_space(gear, space, p)
+    return to_space(gear, space, p, z)
 
 
 def section_normals(gear: Gear, side: Side, L: np.ndarray, space: int = 0) -> np.ndarray:

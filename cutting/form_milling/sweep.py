@@ -150,13 +150,15 @@ class MilledGear:
             c = self.passes[index].centre
             dz = np.diff(c[:, 2])
             step = float(np.median(dz[dz > 0])) if np.any(dz > 0) else SCAN_STEP
-            stride = max(1, round(SCAN_STEP / step))
+            lean = float(np.max(np.abs(self.passes[index].axis[:, 2])))
+            # a leaning mill's wide window is scanned coarser first (the margin is a parabola of curvature ~1 / 2R
+            # along the feed: a step of 0.4 mm misplaces the least sample by little, the fine scan then finds it)
+            stride = max(1, round(SCAN_STEP * (1 + 20 * lean) / step))
             base = max(1, round(SCAN_BASE / step))
             lateral = np.hypot(*(c[base:, :2] - c[:-base, :2]).T) if len(c) > base else np.zeros(1)
             slope = float(np.max(lateral)) / (base * step) if lateral.size else 0.0
             # a mill whose axis leans along the feed (set over at a helix angle) touches Q off its centre plane, up
             # to R sin(lean) away along the feed
-            lean = float(np.max(np.abs(self.passes[index].axis[:, 2])))
             coarse = step * stride
             reach = self.mill.radius * (min(slope, 0.05) + lean)
             k = int(min(400, math.ceil((reach + coarse) / coarse) + 1))

@@ -117,6 +117,17 @@ def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
             Problem("gear", "internal" if gear.internal else f"helix_angle = {g['helix_angle']}", why, "")
             for why in check_copying_gear(gear)
         ]
+        if gear.helix_angle != 0.0:
+            problems.append(
+                Problem(
+                    "gear.helix_angle",
+                    g["helix_angle"],
+                    "a form-milling job makes spur gears for now: the 15 steps plan a helical pinion with the set-over "
+                    "mill on the ideal machine (cutting.form_milling.copying_path.plan_copying, tested), but the job's "
+                    "machine run, forces and report are not yet proven on a helical space",
+                    "set helix_angle = 0, or plan it from Python with plan_copying",
+                )
+            )
         sound = not problems  # the mill and the design are checked on a gear the copying method can make
         if sound and set(MILL_KEYS) <= set(mill):
             problems += _mill_problems(gear, mill)

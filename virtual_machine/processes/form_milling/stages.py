@@ -33,9 +33,11 @@ from cutting.form_milling.copying_path import (
     correction_from_residual,
     mill_in_space,
     plan_copying,
+    set_over,
     transfer_angles,
 )
 from cutting.form_milling.forces import RADIAL_RATIO, MillLoad
+from cutting.form_milling.mill import from_space, to_space
 from cutting.form_milling.removal import cut_gear
 from cutting.form_milling.sweep import MilledGear, MillPassPoses
 from cutting.gear import form_roll_length
@@ -242,7 +244,7 @@ def cnc_passes(plan: CopyingPlan) -> list:
     for k in range(plan.gear.teeth):
         for side, (z0, z1) in zip(SIDES, ((half, -half), (-half, half)), strict=True):
             path = plan.paths[side]
-            if plan.turned:
+            if plan.turned or set_over(plan.gear) != 0.0:
 
                 def centre(z: np.ndarray, side: str = side) -> np.ndarray:
                     return mill_pose_in_cnc_frame(plan, side, z)[0]
@@ -262,12 +264,20 @@ def cnc_passes(plan: CopyingPlan) -> list:
 
 
 def mill_pose_in_cnc_frame(plan: CopyingPlan, side: str, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The turned mill's centre [mm] and unit axis, (N, 3) each, in the CNC's space frame (radial, tangential,
-    axial) at path positions ``z`` [mm] (cutting.form_milling.copying_path.mill_in_space: the space frame's
-    tangential and radial are the CNC's y and x)."""
+    """The mill's centre [mm] and unit axis, (N, 3) each, in the CNC's space frame (radial, tangential, axial) at
+    path positions ``z`` [mm] (cutting.form_milling.copying_path.mill_in_space: turned by the path's transfer
+    angles, set over at a helical space's helix angle; a helical space's frame turns along the face, the CNC's
+    does not: the poses are turned back into it, and the table follows the helix as the CNC turns A to keep the
+    axis in the head's plane; the space frame's tangential and radial are the CNC's y and x)."""
     path = plan.paths[side]
     z = np.asarray(z, dtype=float)
-    centre, axis = mill_in_space(plan.mill.radius, z, path.at(z), transfer_angles(path.tangent(z)))
+    psi = transfer_angles(path.tangent(z)) if plan.turned else np.zeros((len(z), 2))
+    beta = set_over(plan.gear)
+    centre, axis = mill_in_space(plan.mill.radius, z, path.at(z), psi + np.array([0.0, beta]))
+    if beta != 0.0:  # the space frame at z -> the gear frame -> the frame of mid face, which the CNC indexes
+        g = plan.gear
+        centre = to_space(g, 0, from_space(g, 0, centre, z))
+        axis = to_space(g, 0, from_space(g, 0, axis, z))
     swap = [1, 0, 2]
     return centre[:, swap], axis[:, swap]
 
