@@ -348,7 +348,7 @@ def held_speed_factor(c: FaceCoupling, phi: np.ndarray | float) -> tuple[np.ndar
     N, e, R = c.eccentric_ratio, c.e, c.R
     q = N**2 * e**2 + R**2 - 2 * e * N * R * np.cos((N - 1) * phi)
     k = (R - N * e) / np.sqrt(q)
-    dk = -0.5 * k / q * 2 * e * N * R * (N - 1) * np.sin((N - 1) * phi)
+    dk = -k * e * N * R * (N - 1) * np.sin((N - 1) * phi) / q  # k = (R - N e) q^(-1/2)
     return k, dk
 
 

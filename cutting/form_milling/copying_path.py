@@ -41,8 +41,9 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from cutting.flank import SIDES, Side, flank_normals, flank_points, twist_rate
+from cutting.flank import SIDES, Side, flank_normals, flank_points
 from cutting.form_milling import PATH_FORMS
+from cutting.form_milling.helical import contact_profile, mill_axis, set_over
 from cutting.form_milling.mill import (
     BezierChain,
     DiscMill,
@@ -185,10 +186,14 @@ class CopyingPlan:
         """The ideal machine's poses of the ``side`` pass of ``space`` (the planned path, exactly); ``turned``: the
         mill's axis turned by the path's transfer angles (:func:`poses_on_path`), else fixed along x (default: the
         plan's)."""
-        turned = self.turned if turned is None else turned
         half = self.gear.face_width / 2 + self.approach
-        z = np.arange(-half, half + step / 2, step)
+        return self.poses_at(space, side, np.arange(-half, half + step / 2, step), turned)
+
+    def poses_at(self, space: int, side: Side, z: np.ndarray, turned: bool | None = None) -> MillPassPoses:
+        """The poses of the ``side`` pass of ``space`` at path positions ``z`` [mm] (see :meth:`pass_poses`)."""
+        turned = self.turned if turned is None else turned
         path = self.paths[side]
+        z = np.asarray(z, dtype=float)
         psi = transfer_angles(path.tangent(z)) if turned else None
         return poses_on_path(self.gear, self.mill, space, side, z, path.at(z), psi)
 
@@ -228,12 +233,6 @@ def mill_in_space(radius: float, z: np.ndarray, xy: np.ndarray, psi: np.ndarray 
     return np.stack([xy[:, 0], xy[:, 1], z], axis=-1) + radius * up, np.array(axis)
 
 
-def set_over(gear: Gear) -> float:
-    """The mill's set-over angle about the radial line [rad]: the reference helix angle, signed with the hand (0 on a
-    spur gear); it adds to psi_y (:func:`cutting.form_milling.helical.mill_axis`)."""
-    return math.atan(gear.reference_radius * twist_rate(gear))
-
-
 def poses_on_path(
     gear: Gear,
     mill: DiscMill,
@@ -250,11 +249,8 @@ def poses_on_path(
     beta = set_over(gear)
     if beta != 0.0:
         psi = (np.zeros((len(z), 2)) if psi is None else np.asarray(psi, dtype=float)) + np.array([0.0, beta])
-    centre, axis = mill_in_space(mill.radius, z, xy, psi)
-    frame = z if beta != 0.0 else 0.0
-    return MillPassPoses(
-        space, side, z.copy(), from_space(gear, space, centre, frame), from_space(gear, space, axis, frame)
-    )
+    centre, axis = mill_in_space(mill.radius, z, xy, psi)  # in the space frame at z (one frame on a spur gear)
+    return MillPassPoses(space, side, z.copy(), from_space(gear, space, centre, z), from_space(gear, space, axis, z))
 
 
 # ---- the steps ----------------------------------------------------------------------------------------------
@@ -431,8 +427,6 @@ def plan_copying(
     paths = {s: initial_path(gear, design, s, z, clearance, path_form) for s in SIDES}
     contact = {}
     if gear.helix_angle != 0.0:  # where the set-over mill touches the nominal helicoid (from its centre plane)
-        from cutting.form_milling.helical import contact_profile, mill_axis
-
         for s in SIDES:
             xn, yn = nominal_path_point(gear, s, clearance)
             centre = np.array([xn, yn + radius, 0.0])
@@ -447,7 +441,7 @@ def plan_copying(
     k_t: dict[str, np.ndarray] = {}
     psi: dict[str, np.ndarray] = {}
     rms: dict[str, float] = {}
-    mill = previous = None
+    mill = None
     for it in range(max_iterations):
         if contact:
             sections = {s: helical_sections(gear, design, paths[s], L, contact[s], radius, turned) for s in SIDES}
@@ -459,7 +453,6 @@ def plan_copying(
             edges[s] = BezierChain.fit(mean, through=(top,))  # the edge meets the top point exactly
         mill = DiscMill(radius, edges["left"], edges["right"], mill_teeth)
         moved = 0.0
-        before = dict(paths)
         for s in SIDES:
             secs, psi[s] = sections[s]
             k_r[s], k_t[s] = corrections(mill, s, secs, bottom, top)
@@ -471,50 +464,19 @@ def plan_copying(
         log.append({"step": "path", "iteration": it + 1, "path_change_um": round(moved * 1e3, 5)})
         if moved < PATH_TOLERANCE:
             break
-        if it > 0 and moved > log[-2]["path_change_um"] * 1e-3:
-            # the moves grow again: the iteration has reached its noise (a helical space's sections change shape
-            # with the path, so each refitted edge differs by its fit tolerance, which k_r amplifies); the path
-            # and mill before this move are the plan, step 15 takes it from there
-            paths = before
-            mill = previous
-            log[-1]["stopped"] = "the moves grew: kept the path before this one"
-            break
-        previous = mill
     approach = approach_length(gear, radius) + radius * abs(math.sin(set_over(gear)))  # a leaning mill reaches on
     plan = CopyingPlan(gear, design, mill, paths, clearance, approach, k_r, k_t, psi, rms, log, turned)
     plan.contact = {s: (L, c) for s, c in contact.items()}
     lc = np.linspace(lf, la, check_points)
-    response: dict[str, np.ndarray | None] = {s: None for s in SIDES}
     for c in range(checks):
         worst, res = accuracy_check(plan, lc)
         log.append({"step": "accuracy check", "round": c + 1, "max_residual_um": round(worst * 1e3, 4)})
         if worst < CHECK_TOLERANCE or c == checks - 1:
             break
-        if contact and response["left"] is None:
-            response = path_response(plan, lc, res)
         for s in SIDES:
-            dx, dy = correction_from_residual(gear, s, lc, res[s], response[s])
+            dx, dy = correction_from_residual(gear, s, lc, res[s])
             plan.paths[s] = plan.paths[s].moved(dx, dy)[0]
     return plan
-
-
-def path_response(plan: CopyingPlan, L: np.ndarray, res: dict[str, np.ndarray], move: float = 1e-3) -> dict:
-    """How the flank's residual at roll lengths L answers a move of the whole path by ``move`` [mm] along x and along
-    y, per side (m, 2) [residual per mm]: measured with the exact sweep. On a spur gear it is the flank normal's
-    (x, y) (a move of the mill moves the flank rigidly); the set-over mill of a helical space touches the flank
-    along a space curve, and a radial move changes that contact: up to 16 % off the normal near the root, which the
-    least squares of the correction (level and slope from two nearly parallel normals) would amplify."""
-    out = {}
-    for s in SIDES:
-        base = plan.paths[s]
-        cols = []
-        for dx, dy in ((move, 0.0), (0.0, move)):
-            plan.paths[s] = base.moved(np.full(len(base.z), dx), np.full(len(base.z), dy))[0]
-            moved = accuracy_check(plan, L)[1][s]
-            cols.append(np.nanmedian((moved - res[s]) / move, axis=0))
-        plan.paths[s] = base
-        out[s] = np.column_stack(cols)  # the residual's change per path move (the flank normals on a spur gear)
-    return out
 
 
 def approach_length(gear: Gear, radius: float) -> float:
@@ -551,14 +513,12 @@ def accuracy_check(
     return worst, res
 
 
-def correction_from_residual(
-    gear: Gear, side: Side, L: np.ndarray, res: np.ndarray, response: np.ndarray | None = None
-) -> tuple[np.ndarray, ...]:
+def correction_from_residual(gear: Gear, side: Side, L: np.ndarray, res: np.ndarray) -> tuple[np.ndarray, ...]:
     """Path corrections (dx, dy) [mm] per path point that cancel the residual's level and slope over the profile
     (least squares; the seed's k_t, k_r match the bottom and top points only, which leaves a bow's whole height at
     mid profile): the surface moves by (dx, dy) . n, n the flank normal out of the material."""
-    n = section_normals(gear, side, L) if response is None else response  # (m, 2)
-    ok = np.isfinite(res) & np.isfinite(n).all(axis=1)[None, :]
+    n = section_normals(gear, side, L)  # (m, 2)
+    ok = np.isfinite(res)
     dx, dy = np.zeros(len(res)), np.zeros(len(res))
     for i in range(len(res)):
         sol = np.linalg.lstsq(n[ok[i]], -res[i, ok[i]], rcond=None)[0]

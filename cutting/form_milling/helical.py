@@ -27,10 +27,16 @@ from cutting.gear import Gear
 CONTACT_REACH = 6.0
 
 
+def set_over(gear: Gear) -> float:
+    """The mill's set-over angle about the radial line [rad]: the reference helix angle, signed with the hand (0 on a
+    spur gear); the copying method's poses add it to psi_y."""
+    return math.atan(gear.reference_radius * twist_rate(gear))
+
+
 def mill_axis(gear: Gear) -> np.ndarray:
-    """The set-over mill's axis in the space frame: the tangential direction turned by the reference helix angle
-    about the radial line (its plane along the space at the reference cylinder)."""
-    beta = math.atan(gear.reference_radius * twist_rate(gear))  # signed with the hand
+    """The set-over mill's axis in the space frame: the tangential direction turned by the set-over angle about the
+    radial line (its plane along the space at the reference cylinder)."""
+    beta = set_over(gear)
     return np.array([math.cos(beta), 0.0, -math.sin(beta)])
 
 

@@ -102,16 +102,24 @@ class ElectronicGearbox:
         """The head's commanded angle [rad]."""
         return self.phi0 + self.gen14.position * self.rad
 
+    def _mid_tick(self, t: float, dt: float) -> tuple[float, float]:
+        """The head angle and the generator's fraction of full frequency (run-up times eq. 16's factor) at the
+        middle of the tick that starts at t."""
+        phi = self.phi
+        w = self.f_full * self.rad * self.scale(t)[0] * self._factor(phi)[0]
+        phi_mid = phi + w * dt / 2
+        return phi_mid, self.scale(t + dt / 2)[0] * self._factor(phi_mid)[0]
+
     def command(self, t: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions and speeds at the tick's start t, accelerations at its middle (the torque is held for the tick:
         a zero-order hold; the acceleration at the start would leave a phase lag of half a tick)."""
         c, rad = self.c, self.rad
         phi = self.phi
-        s, _ = self.scale(t)
-        w = self.f_full * rad * s * self._factor(phi)[0]  # head speed [rad/s]
+        w = self.f_full * rad * self.scale(t)[0] * self._factor(phi)[0]  # head speed [rad/s]
+        phi_est, fraction = self._mid_tick(t, dt)
+        w_mid = self.f_full * rad * fraction  # [rad/s]
         s_mid, ds_mid = self.scale(t + dt / 2)
-        k_mid, dk_mid = self._factor(phi + w * dt / 2)
-        w_mid = self.f_full * rad * s_mid * k_mid  # [rad/s]
+        k_mid, dk_mid = self._factor(phi_est)
         dw = self.f_full * rad * (ds_mid * k_mid + s_mid * dk_mid * w_mid)  # [rad/s^2]
         pos, vel, acc = np.zeros(4), np.zeros(4), np.zeros(4)
         phi_mid = phi + 0.5 * (w + w_mid) * dt / 2
@@ -141,9 +149,7 @@ class ElectronicGearbox:
         """Issue the pulses of the tick that starts at t, at the generator frequency of its middle (the pulses then
         advance each command by what its speed and held acceleration move the axis: the trapezoid rule)."""
         gen = self.gen14
-        s = self.scale(t)[0]
-        w = self.f_full * self.rad * s * self._factor(self.phi)[0]
-        gen.frequency = self.f_full * self.scale(t + dt / 2)[0] * self._factor(self.phi + w * dt / 2)[0]
+        gen.frequency = self.f_full * self._mid_tick(t, dt)[1]
         gen.update(dt)
         self.d7.inp = gen.out
         self.d7.update(dt)

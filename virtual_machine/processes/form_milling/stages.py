@@ -31,13 +31,11 @@ from cutting.form_milling.copying_path import (
     FlankPath,
     accuracy_check,
     correction_from_residual,
-    mill_in_space,
     plan_copying,
-    set_over,
-    transfer_angles,
 )
 from cutting.form_milling.forces import RADIAL_RATIO, MillLoad
-from cutting.form_milling.mill import from_space, to_space
+from cutting.form_milling.helical import set_over
+from cutting.form_milling.mill import to_space
 from cutting.form_milling.removal import cut_gear
 from cutting.form_milling.sweep import MilledGear, MillPassPoses
 from cutting.gear import form_roll_length
@@ -265,21 +263,13 @@ def cnc_passes(plan: CopyingPlan) -> list:
 
 def mill_pose_in_cnc_frame(plan: CopyingPlan, side: str, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The mill's centre [mm] and unit axis, (N, 3) each, in the CNC's space frame (radial, tangential, axial) at
-    path positions ``z`` [mm] (cutting.form_milling.copying_path.mill_in_space: turned by the path's transfer
-    angles, set over at a helical space's helix angle; a helical space's frame turns along the face, the CNC's
-    does not: the poses are turned back into it, and the table follows the helix as the CNC turns A to keep the
-    axis in the head's plane; the space frame's tangential and radial are the CNC's y and x)."""
-    path = plan.paths[side]
-    z = np.asarray(z, dtype=float)
-    psi = transfer_angles(path.tangent(z)) if plan.turned else np.zeros((len(z), 2))
-    beta = set_over(plan.gear)
-    centre, axis = mill_in_space(plan.mill.radius, z, path.at(z), psi + np.array([0.0, beta]))
-    if beta != 0.0:  # the space frame at z -> the gear frame -> the frame of mid face, which the CNC indexes
-        g = plan.gear
-        centre = to_space(g, 0, from_space(g, 0, centre, z))
-        axis = to_space(g, 0, from_space(g, 0, axis, z))
+    path positions ``z`` [mm]: the plan's poses of space 0 (turned by the path, set over on a helical space) in the
+    frame of its mid face, which the CNC indexes (a helical space's own frame turns along the face; the CNC keeps
+    the axis in the head's plane by turning A, and so follows the helix); its tangential and radial are the CNC's
+    y and x."""
+    poses = plan.poses_at(0, side, z)
     swap = [1, 0, 2]
-    return centre[:, swap], axis[:, swap]
+    return to_space(plan.gear, 0, poses.centre)[:, swap], to_space(plan.gear, 0, poses.axis)[:, swap]
 
 
 def mill_load(job: Job, plan: CopyingPlan) -> MillLoad:
