@@ -57,6 +57,9 @@ class ThreadRecord:
     torque: np.ndarray  # (n, 2)
     lead_error_um: np.ndarray
     on_thread: np.ndarray
+    #: (n, 3) cutting forces on the tool [N] (F_c tangential, F_f axial against the feed, F_p radial off the work),
+    #: the mean over each tick's physics steps; None when the run had no cutting load
+    force: np.ndarray | None = None
 
     def stats(self) -> dict[str, float]:
         """Lead error statistics while the tool is on the thread [um] (as MotionRecord.sync_stats)."""
@@ -69,6 +72,19 @@ class ThreadRecord:
         slope = np.polyfit(z - z[0], e, 1)[0]
         travel = float(z[-1] - z[0])
         return float(slope * travel), travel
+
+
+@dataclass(frozen=True)
+class CuttingLoad:
+    """A cutting load on the lathe (vibration turning): ``force(t, theta, z)`` is called at every physics step with
+    the time [s], the spindle angle theta = B1 - B1_0 [rad] and the carriage's travel along the feed z =
+    hand_sign (P2 - P2_0) [mm], and returns the forces on the tool (F_c, F_f, F_p) [N]. They act at the tool's
+    cutting point (``radius`` [mm] from the axis, on the spindle's +x side, at the carriage's z): on the carriage
+    F_p along +x (off the work), F_c along +y (with the workpiece's surface, the spindle turning about +z) and F_f
+    against the feed; reversed on the spindle (its torque F_c radius brakes it)."""
+
+    force: Callable[[float, float, float], tuple[float, float, float]]
+    radius: float
 
 
 def _ramp(t: float, runup: float) -> float:
@@ -150,10 +166,13 @@ def simulate_thread(
     disturbance: Callable[[float], float] | None = None,
     servo_substeps: int = 2,
     vibration=None,
+    cut: CuttingLoad | None = None,
 ) -> ThreadRecord:
     """Run-up and the first threading stroke of ``job``, until the tool leaves the thread (``duration`` [s]
     overrides that). ``disturbance(t)`` is an extra torque on the spindle [N m] (a load on the master);
-    ``vibration`` a feed vibration (vibration turning, seed 004) on the slave's command.
+    ``vibration`` a feed vibration (vibration turning, seed 004) on the slave's command; ``cut`` the cutting load
+    (:class:`CuttingLoad`), applied with ``mj_applyFT`` before every physics step (the servo tick's sub-steps are
+    then stepped one by one).
     Raises :class:`virtual_machine.runtime.integrator.SimulationDivergedError` when MuJoCo reports bad
     accelerations."""
     params = params or override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
@@ -189,7 +208,11 @@ def simulate_thread(
             f"lower a stage's stiffness, raise its damping or reduce the timestep (now {model.opt.timestep:g} s)"
         )
 
-    step = Integrator(model, data, servo_substeps, i_p2, diverged).step
+    if cut is None:
+        step = Integrator(model, data, servo_substeps, i_p2, diverged).step
+    else:
+        step = _cutting_step(model, data, servo_substeps, Integrator(model, data, 1, i_p2, diverged).step, cut, lay)
+    forces = np.zeros((n, 3)) if cut is not None else None
     for k in range(n):
         t = k * dt
         cnc.scale = _ramp(t, runup)
@@ -197,9 +220,12 @@ def simulate_thread(
         ctrl[a_m1] = t1
         if electronic:
             ctrl[a_m2] = t2
-        if disturbance is not None:
-            qfrc[dof_b1] = disturbance(t)
-        step()
+        if cut is None:
+            if disturbance is not None:
+                qfrc[dof_b1] = disturbance(t)
+            step()
+        else:
+            forces[k] = step(disturbance(t) if disturbance is not None else 0.0)
         rows[k] = (data.time, qpos[i_b1], qpos[i_p2], qpos[i_tv], qpos[i_m1], qpos[i_m2] if electronic else 0.0, t1, t2)
     b1, p2 = rows[:, 1], rows[:, 2]
     error = (p2 - p2_0) - lay.lead / (2 * math.pi) * (b1 - b1_0) * lay.hand_sign
@@ -218,4 +244,46 @@ def simulate_thread(
         torque=rows[:, 6:8],
         lead_error_um=error * 1e6,
         on_thread=(travel >= lay.approach) & (travel <= lay.approach + lay.length),
+        force=forces,
     )
+
+
+def _cutting_step(model: mujoco.MjModel, data: mujoco.MjData, substeps: int, step1, cut: CuttingLoad, lay):
+    """One servo tick of ``substeps`` physics steps (``step1`` each), the cutting load applied before each from the
+    state then (:class:`CuttingLoad`); returns the tick's mean forces (F_c, F_f, F_p) [N].
+
+    mj_applyFT builds the Jacobian at the cutting point from ``data``'s kinematics, which ``mj_step`` leaves one step
+    old (library notes A5). Here that is exact: B1 turns about the world z axis through the origin and P2 slides
+    along z, so the Jacobian of a given world point does not depend on the configuration; the point itself is
+    taken from the current ``qpos``."""
+    qpos, qfrc = data.qpos, data.qfrc_applied
+    i_b1, i_p2 = int(model.jnt_qposadr[model.joint("B1").id]), int(model.jnt_qposadr[model.joint("P2").id])
+    dof_b1 = int(model.jnt_dofadr[model.joint("B1").id])
+    body_c, body_s = int(model.body("carriage").id), int(model.body("spindle").id)
+    b1_0, p2_0 = float(qpos[i_b1]), float(qpos[i_p2])
+    hand, radius, force = float(lay.hand_sign), cut.radius * 1e-3, cut.force
+    f, back, torque, point, total = np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3), np.zeros(3)
+    point[0] = radius
+    apply = mujoco.mj_applyFT
+
+    def step(extra_b1: float) -> np.ndarray:
+        total[:] = 0.0
+        for _ in range(substeps):
+            z = float(qpos[i_p2])
+            fc, ff, fp = force(data.time, float(qpos[i_b1]) - b1_0, hand * (z - p2_0) * 1e3)
+            qfrc[:] = 0.0
+            qfrc[dof_b1] = extra_b1
+            if fc or ff or fp:
+                f[0], f[1], f[2] = fp, fc, -hand * ff
+                point[2] = z
+                apply(model, data, f, torque, point, body_c, qfrc)
+                np.negative(f, out=back)
+                apply(model, data, back, torque, point, body_s, qfrc)
+                total[0] += fc
+                total[1] += ff
+                total[2] += fp
+            step1()
+        qfrc[:] = 0.0
+        return total / substeps
+
+    return step

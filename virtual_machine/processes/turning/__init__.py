@@ -1,7 +1,8 @@
 """Vibration turning (seed 004): the process of a "turning" job.
 
 - setup: the turned surface the commanded path predicts (crests, chip breaking);
-- simulate: the lathe turns with the feed vibration: its path against the command, the surface it leaves;
+- simulate: the lathe turns with the feed vibration under its cutting forces: its path against the command, the
+  surface it leaves, the forces and what they change (against the same run without them);
 - run: the same, the turned surface also made by manifold3d and its crests held against the exact envelope
 (:mod:`virtual_machine.processes.turning.stages`). A turning job has no `cut`: its surface comes from the lathe's path.
 """
