@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from cutting.flank import Side, flank_normals, flank_points, twist_rate
-from cutting.form_milling.mill import BezierChain, DiscMill, from_space, section_rolls, tip_index, to_space
+from cutting.form_milling.mill import BezierChain, DiscMill, from_space, section_rolls, space_tooth, tip_index, to_space
 from cutting.form_milling.sweep import MillPassPoses
 from cutting.gear import Gear
 
@@ -44,7 +44,7 @@ def contact_profile(gear: Gear, side: Side, L: np.ndarray, centre: np.ndarray, a
     """Per roll length L (n,): the contact point of the ``side`` flank of space 0 with a surface of revolution about
     (``centre``, ``axis``) (space frame), as the mill's axial coordinate u and radius rho [mm], and the contact's
     face position z [mm] (NaN where the normal never meets the axis within CONTACT_REACH mn)."""
-    tooth = 0 if side == "left" else 1
+    tooth = space_tooth(gear, 0, side)
     xi = np.asarray(L, dtype=float) / gear.base_radius
     reach = CONTACT_REACH * gear.mn
     zs = np.linspace(-reach, reach, 241)

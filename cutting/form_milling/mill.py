@@ -12,6 +12,11 @@ edge each a chain of cubic Bezier segments (seed eq. 9) fitted to a flank sectio
 edge's end tangent down to the periphery, and the periphery itself (y = 0). The mill is a solid of revolution
 about its axis (the tool x axis through the centre at y = R): at axial position u its radius is R - h(u), h the
 edge height at x = u.
+
+What the exact swept surface (:mod:`cutting.form_milling.sweep`) and the removal (:mod:`cutting.form_milling.removal`)
+ask of a mill is :class:`Mill`: a solid of revolution about the axis of its poses, given by the axial table u -> R -
+h(u) from its reference point (the pose's centre); the disc mill here and the finger mill
+(:mod:`cutting.form_milling.finger`) both answer it.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import ClassVar, Protocol
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -59,12 +65,32 @@ def from_space(gear: Gear, space: int, points: np.ndarray, frame_z=0.0) -> np.nd
     return np.stack([-s * p[..., 0] + c * p[..., 1], c * p[..., 0] + s * p[..., 1], p[..., 2]], axis=-1)
 
 
-def check_copying_gear(gear: Gear) -> list[str]:
-    """Why the copying method here cannot make ``gear`` (empty if it can)."""
+def check_copying_gear(gear: Gear, mill: str = "disc") -> list[str]:
+    """Why the copying method here cannot make ``gear`` with a ``mill`` ("disc" or "finger") mill (empty if it can)."""
+    if mill not in ("disc", "finger"):
+        raise ValueError(f"mill {mill!r}: use 'disc' or 'finger'")
     out = []
-    if gear.internal:
-        out.append("an internal gear: a disc mill reaches no internal tooth space (use skiving)")
+    if gear.internal and mill == "disc":
+        out.append(
+            "an internal gear: a disc mill reaches no internal tooth space (cut it with the finger mill, "
+            "cutting.form_milling.finger, or by skiving)"
+        )
     return out
+
+
+def space_tooth(gear: Gear, space: int, side: Side) -> int:
+    """The tooth whose ``side`` flank bounds tooth space ``space`` (between tooth k and k+1): on an external gear the
+    left flank is tooth k's, on an internal one (its left flank on a tooth's clockwise side) tooth k+1's."""
+    first = side == "left"
+    if gear.internal:
+        first = not first
+    return space if first else space + 1
+
+
+def flank_sign(gear: Gear, side: Side) -> int:
+    """The sign of x_s (space frame) of the ``side`` flank of a tooth space: -1 left / +1 right on an external gear,
+    reversed on an internal one."""
+    return -1 if space_tooth(gear, 0, side) == 0 else 1
 
 
 def section_rolls(gear: Gear, points: int = 81) -> np.ndarray:
@@ -91,7 +117,7 @@ def designed_section(
     at every z): the involute moved along its normal by the design's deviation (excess material positive; beyond
     the tip the design's own formula continues)."""
     L, z = np.broadcast_arrays(np.asarray(L, dtype=float), np.asarray(z, dtype=float))
-    tooth = space if side == "left" else space + 1
+    tooth = space_tooth(gear, space, side)
     xi = L / gear.base_radius
     p = flank_points(gear, side, xi, z, tooth)
     if design is not None:
@@ -102,7 +128,7 @@ def designed_section(
 
 def section_normals(gear: Gear, side: Side, L: np.ndarray, space: int = 0) -> np.ndarray:
     """Unit normals (..., 2) (x_s, y_s) of the nominal ``side`` flank of the space, out of the material."""
-    tooth = space if side == "left" else space + 1
+    tooth = space_tooth(gear, space, side)
     n = flank_normals(gear, side, np.asarray(L, dtype=float) / gear.base_radius, 0.0, tooth)
     return to_space(gear, space, n)[..., :2]
 
@@ -207,6 +233,36 @@ def _bernstein_second(t: np.ndarray) -> np.ndarray:
     return np.stack([6 * (1 - t), -12 * (1 - t) + 6 * t, 6 * (1 - t) - 12 * t, 6 * t], -1)
 
 
+class Mill(Protocol):
+    """A mill as the exact swept surface and the removal see it: a solid of revolution about the axis of its pose,
+    whose radius at u [mm] along the axis from the pose's centre is ``radius - h(u)`` (``profile``: the table u
+    increasing, h) over u's span, nothing beyond it."""
+
+    radius: float  # its largest radius [mm] (the scale of how far along the feed it touches a point)
+    teeth: int
+    #: the exact surface scans a pass for a point's least margin up to radius x min(path slope, scan_slope) along the
+    #: feed from the point (plus the axis's lean): how far off its centre plane a sloped path makes it touch
+    scan_slope: float
+
+    @property
+    def profile(self) -> tuple[np.ndarray, np.ndarray]: ...
+
+    @property
+    def width(self) -> float: ...
+
+    @property
+    def tangential_span(self) -> tuple[float, float]:
+        """How far [mm] across the tooth space (x_s, from the path point) the mill reaches."""
+        ...
+
+    def reach_angle(self, depth: float) -> float:
+        """Half the angle [rad] of its circles, about the side towards the gear axis, that can reach material a
+        tooth depth ``depth`` [mm] deep (pi: all round)."""
+        ...
+
+    def summary(self) -> dict: ...
+
+
 @dataclass(frozen=True, eq=False)
 class DiscMill:
     """The profiled disc mill: outer radius ``radius`` [mm] and its left and right cutting edges (Bezier chains in
@@ -216,6 +272,9 @@ class DiscMill:
     left: BezierChain
     right: BezierChain
     teeth: int = 12
+    #: a disc's contact stays in its axial plane, turned with the path (set over: its lean): a recorded path's
+    #: slope counts up to 0.05 (its vibration is no slope)
+    scan_slope: ClassVar[float] = 0.05
 
     @cached_property
     def profile(self) -> tuple[np.ndarray, np.ndarray]:
@@ -245,6 +304,16 @@ class DiscMill:
     def width(self) -> float:
         u, _ = self.profile
         return float(u[-1] - u[0])
+
+    @property
+    def tangential_span(self) -> tuple[float, float]:
+        """The disc's axis is tangential: its axial span [mm]."""
+        u, _ = self.profile
+        return u[0], u[-1]
+
+    def reach_angle(self, depth: float) -> float:
+        """Half the angle of its circles within ``depth`` [mm] of the periphery, and 0.05 rad more."""
+        return math.acos(max(-1.0, (self.radius - depth) / self.radius)) + 0.05
 
     @property
     def periphery(self) -> tuple[float, float]:

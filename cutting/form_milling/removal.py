@@ -5,8 +5,9 @@ The mill (a solid of revolution) is cut into frusta along its axis where its pro
 tolerance; a frustum is convex, so what it sweeps between two poses that differ by a straight move is the
 convex hull of its two placements. Each pass's poses are thinned to the fewest whose straight moves stay within
 the tolerance of the path (and of the mill's turn, where its axis follows the path), and each circle of a frustum
-is a polygon fine (chord within the tolerance) over the arc that can reach the blank and coarse elsewhere. The
-swept volume of a space is the union of those hulls.
+is a polygon fine (chord within the tolerance) over the arc that can reach the blank and coarse elsewhere (a
+disc's arc towards the gear axis; a finger mill's whole circle). The swept volume of a space is the union of those
+hulls.
 """
 
 from __future__ import annotations
@@ -19,13 +20,13 @@ from dataclasses import dataclass
 import manifold3d as mf
 import numpy as np
 
-from cutting.form_milling.mill import DiscMill
+from cutting.form_milling.mill import Mill
 from cutting.form_milling.sweep import MillPassPoses
 from cutting.gear import Gear
 from cutting.skiving.solids import blank
 
 
-def profile_slices(mill: DiscMill, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def profile_slices(mill: Mill, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Axial positions u and edge heights h of the frusta's ends: the profile's polyline simplified so that no
     point of it is more than ``tol`` [mm] from a frustum (greedy: each frustum as long as it can be)."""
     u, h = mill.profile
@@ -105,10 +106,12 @@ def _circle(centre: np.ndarray, axis: np.ndarray, radius: float, down: np.ndarra
     """Polygon of the circle (centre, axis, radius): chord ``fine`` [rad] within +-``reach`` of ``down`` (towards
     the gear axis), eight steps over the rest."""
     e1 = down - axis * (down @ axis)
+    if np.linalg.norm(e1) < 1e-9 * np.linalg.norm(down):  # the axis points at the gear axis (a finger mill)
+        e1 = np.cross(axis, [0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.cross(axis, [1.0, 0.0, 0.0])
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(axis, e1)
     a_fine = np.linspace(-reach, reach, max(3, math.ceil(2 * reach / fine) + 1))
-    a_rest = np.linspace(reach, 2 * math.pi - reach, 9)[1:-1]
+    a_rest = np.linspace(reach, 2 * math.pi - reach, 9)[1:-1] if reach < math.pi else np.empty(0)
     a = np.concatenate([a_fine, a_rest])
     return centre + radius * (np.outer(np.cos(a), e1) + np.outer(np.sin(a), e2))
 
@@ -122,14 +125,14 @@ class FormCutResult:
     hulls: int
 
 
-def swept_hulls(gear: Gear, mill: DiscMill, p: MillPassPoses, tol: float) -> list[mf.Manifold]:
+def swept_hulls(gear: Gear, mill: Mill, p: MillPassPoses, tol: float) -> list[mf.Manifold]:
     """The convex pieces of the pass's swept volume (frustum x straight move) within ``tol`` [mm] of it: half of it
     for the profile's chords (outside the mill where its side is concave), half for the path's (either side); the
     circles' chords (inside) take half as well."""
     us, hs = profile_slices(mill, tol / 2)
     idx = thin_poses(p, tol / 2, math.hypot(mill.radius, mill.width / 2))
     depth = gear.tip_radius - gear.root_radius + 2 * tol
-    reach = math.acos(max(-1.0, (mill.radius - depth) / mill.radius)) + 0.05
+    reach = mill.reach_angle(depth)
     fine = 2 * math.acos(max(0.0, 1 - tol / 2 / mill.radius))
     out = []
     for a, b in itertools.pairwise(idx):
@@ -148,7 +151,7 @@ def swept_hulls(gear: Gear, mill: DiscMill, p: MillPassPoses, tol: float) -> lis
 
 def cut_gear(
     gear: Gear,
-    mill: DiscMill,
+    mill: Mill,
     passes: Sequence[MillPassPoses],
     tol: float = 0.005,
     progress: Callable[[float], None] | None = None,

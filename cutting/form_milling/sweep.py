@@ -3,15 +3,17 @@
 A disc mill is a solid of revolution (its teeth, many and fine, make its envelope of revolution: the feed per
 tooth leaves marks of f_z^2 / 8R, nanometres here). A point Q of the gear frame is removed by a pass if at some
 instant of the pass Q lies inside the mill: with the mill's centre C(t) and axis a(t), u = (Q - C).a and
-w = |Q - C - u a|, Q is inside when w < R(u) (:class:`cutting.form_milling.mill.DiscMill`). Along a pass the margin
+w = |Q - C - u a|, Q is inside when w < R(u) (:class:`cutting.form_milling.mill.DiscMill`; the finger mill of
+:mod:`cutting.form_milling.finger` alike, C its tip centre and a its axis into it). Along a pass the margin
 g(t) = w - R(u) is least where Q crosses the mill's axial plane (the seed's profiling plane), so each pass
 contributes min_t g, found from the pose table (sorted along the feed) and refined at the vertex of the
 parabola through the least sample and its neighbours (poses interpolated between samples): the margin is
 exact to ~1e-9 mm, whatever the path (the planned Bezier path, or the poses the simulated machine made).
 
-A point is material when it is in the blank (the tip cylinder between the end faces) and every pass of its own
-and the nearer neighbouring tooth space leaves it (margin > 0). A probe line is sampled, its first material
-sample from the air end found, and the surface solved by regula falsi (Illinois) to 1e-8 mm.
+A point is material when it is in the blank (the tip cylinder between the end faces; an internal gear's ring from
+the tip circle out to the root circle plus RIM mn) and every pass of its own and the nearer neighbouring tooth space
+leaves it (margin > 0). A probe line is sampled, its first material sample from the air end found, and the surface
+solved by regula falsi (Illinois) to 1e-8 mm.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cutting.flank import twist_rate
-from cutting.form_milling.mill import DiscMill
+from cutting.form_milling.mill import Mill
 from cutting.gear import Gear
 
 GOLDEN = (math.sqrt(5) - 1) / 2
@@ -41,6 +43,8 @@ SCAN_STEP = 0.05
 #: (the path's own tangential moves, clearance and corrections, stay far within it)
 REACH_PAD = 1.0
 SCAN_BASE = 0.5  # the margin of a point the mill's axial span does not reach [mm]
+#: an internal gear's blank: a ring out to the root circle plus this many module (as cutting.skiving.solids.blank)
+RIM = 3.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,12 +66,12 @@ class MillPassPoses:
 
 
 class MilledGear:
-    """The gear the passes cut from the blank (an external spur gear's tip cylinder): a
+    """The gear the passes cut from the blank (an external gear's tip cylinder, an internal one's ring): a
     :class:`metrology.workpiece.Workpiece`."""
 
     kind = "exact swept surface"
 
-    def __init__(self, gear: Gear, mill: DiscMill, passes: Sequence[MillPassPoses], name: str = "form-milled gear"):
+    def __init__(self, gear: Gear, mill: Mill, passes: Sequence[MillPassPoses], name: str = "form-milled gear"):
         self.gear, self.mill, self.name = gear, mill, name
         self.passes = [p.sorted_along_feed() for p in passes]
         self._by_space: dict[int, list[int]] = {}
@@ -79,14 +83,23 @@ class MilledGear:
         self._cos_lean = math.sqrt(max(1.0 - lean**2, 0.25))
 
     # ---- the blank ---------------------------------------------------------------------------------------
+    @property
+    def outer_radius(self) -> float:
+        """The blank's outside [mm]: the tip circle, or an internal gear's rim."""
+        return self.gear.root_radius + RIM * self.gear.mn if self.gear.internal else self.gear.tip_radius
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        r, half = self.gear.tip_radius, self.gear.face_width / 2
+        r, half = self.outer_radius, self.gear.face_width / 2
         return np.array([-r, -r, -half]), np.array([r, r, half])
 
     def in_blank(self, q: np.ndarray) -> np.ndarray:
-        return (np.hypot(q[..., 0], q[..., 1]) <= self.gear.tip_radius) & (
-            np.abs(q[..., 2]) <= self.gear.face_width / 2
-        )
+        return self._blank(q) >= 0
+
+    def _blank(self, q: np.ndarray) -> np.ndarray:
+        """The blank's margin [mm]: > 0 inside, <= 0 outside."""
+        r = np.hypot(q[..., 0], q[..., 1])
+        out = np.minimum(self.outer_radius - r, self.gear.face_width / 2 - np.abs(q[..., 2]))
+        return np.minimum(out, r - self.gear.tip_radius) if self.gear.internal else out
 
     # ---- the mill's margin ---------------------------------------------------------------------------------
     def _pose(self, p: MillPassPoses, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -158,9 +171,9 @@ class MilledGear:
             lateral = np.hypot(*(c[base:, :2] - c[:-base, :2]).T) if len(c) > base else np.zeros(1)
             slope = float(np.max(lateral)) / (base * step) if lateral.size else 0.0
             # a mill whose axis leans along the feed (set over at a helix angle) touches Q off its centre plane, up
-            # to R sin(lean) away along the feed
+            # to R sin(lean) away along the feed; a finger mill on a helix up to R times the path's slope
             coarse = step * stride
-            reach = self.mill.radius * (min(slope, 0.05) + lean)
+            reach = self.mill.radius * (min(slope, self.mill.scan_slope) + lean)
             k = int(min(400, math.ceil((reach + coarse) / coarse) + 1))
             self._scans[index] = (k, stride)
         return self._scans[index]
@@ -176,7 +189,8 @@ class MilledGear:
         own = np.floor(pos).astype(int) % z
         near = np.where(pos - np.floor(pos) < 0.5, own - 1, own + 1) % z
         out = np.full(len(q), FAR)
-        lo, hi = self._u[0] - REACH_PAD, self._u[-1] + REACH_PAD
+        lo, hi = self.mill.tangential_span
+        lo, hi = lo - REACH_PAD, hi + REACH_PAD
         for spaces in (own, near):
             for k in np.unique(spaces):
                 a = 2 * math.pi * (k + 0.5) / z + twist  # the space's symmetry line: its passes' mill is across it
@@ -201,8 +215,7 @@ class MilledGear:
 
     def _material(self, q: np.ndarray) -> np.ndarray:
         """Signed material function: > 0 material, <= 0 air (blank margin and mill margin)."""
-        r = np.hypot(q[:, 0], q[:, 1])
-        blank = np.minimum(self.gear.tip_radius - r, self.gear.face_width / 2 - np.abs(q[:, 2]))
+        blank = self._blank(q)
         out = blank.copy()
         inb = blank > 0
         if inb.any():
