@@ -6,6 +6,9 @@ is radial) on machine +x. The tool head turns in a vertical plane above M; its p
 lambda from the radial line OM (cutting/face_contour/slots.py: the tool plane's horizontal direction u = (cos -lambda,
 sin -lambda), the tool axis n = (sin lambda, cos lambda)). Bodies and joints:
 
+- ``cross_slide``   (control "work_setting" only) slide ``Y`` along the tool axis n: the work's setting changed
+  during the cut (seed 004), Y = T (1 - cos q_s phi) moves the work's axis across the tool plane; it carries the work
+  spindle and its motor;
 - ``work_spindle``  hinge ``A`` about -z: table, fixture and blank; A is the seed's workpiece angle a (the workpiece
   frame turns by -a in the machine, so the head advances by +a in it, as in eq. 5). Site ``blank_frame`` = the
   workpiece frame of cutting/face_contour/slots.py (axis z, slotted face at z = 0, slot k's centre line at 2 pi k / m);
@@ -31,7 +34,8 @@ their masses' accelerations instead), and a phase error that moves the head cent
 Drives (each a :func:`machine_models.drives.couple` tendon; motors are torque actuators of the same names, ctrl in
 N m, ctrlrange = peak torque): ``MA`` -> worm ``work_drive`` -> A; ``MH`` -> gear stage ``head_drive`` -> the head's
 absolute angle H + E (an Oldham coupling passes the absolute angle across the offset e); ``ME`` -> gear stage
-``eccentric_drive`` -> E; ``MZ`` -> ``z_drive`` -> screw ``TZ`` -> nut ``z_nut`` (ratio pitch / 2 pi) -> Z. A hydraulic
+``eccentric_drive`` -> E; ``MZ`` -> ``z_drive`` -> screw ``TZ`` -> nut ``z_nut`` (ratio pitch / 2 pi) -> Z; ``MY`` ->
+``y_drive`` (ball screw and preloaded double nut, ratio pitch / 2 pi) -> Y. A hydraulic
 counterbalance (``counterbalance`` of the slide's whole weight) acts on the slide only. Lengths are metres here;
 the geometry and the records use mm.
 """
@@ -126,6 +130,15 @@ class FaceMachineParams:
     nut_backlash: float = 2.0e-6  # m
     nut_damping: float = 2.0e4  # N s/m
 
+    # ---- cross slide Y (control "work_setting"): the work spindle on a slide along the tool axis, ball screw ---
+    cross_slide_mass: float = 140.0  # kg: the slide itself on its guides (the table, blank and motor MA ride on it)
+    cross_ways_friction: float = 100.0  # N: preloaded roller guides
+    y_motor_inertia: float = 1.6e-3  # kg m^2: 12 N m class AC servo rotor (1.0e-3) + 32 mm screw 0.6 m (0.6e-3)
+    y_motor_torque: float = 12.0  # N m: MY peak
+    #: MY -> slide: 10 mm pitch ball screw with a preloaded double nut (no play: the slide reverses every cycle),
+    #: 2e8 N/m axial (screw, nut, fixed bearing), 2e4 N s/m
+    y_drive: DriveStage = field(default_factory=lambda: DriveStage(0.010 / (2 * math.pi), 2.0e8, 0.0, 2.0e4))
+
     # ---- simulation ----------------------------------------------------------------------------------------
     timestep: float = 2.5e-4  # s: 4 kHz physics, two sub-steps of the 2 kHz servo; the stages keep omega h < 0.5
     #: RK4: the cyclic ratio varies the work's speed, and first-order integrators shift positions by (h/2) dw (library
@@ -155,6 +168,9 @@ class FaceMachineParams:
                 "screw_inertia",
                 "z_motor_inertia",
                 "z_motor_torque",
+                "cross_slide_mass",
+                "y_motor_inertia",
+                "y_motor_torque",
             ),
         )
         if not 0 <= self.eccentric_balance <= 1.5:
@@ -163,7 +179,14 @@ class FaceMachineParams:
 
     def stiff(self) -> FaceMachineParams:
         """The ideal machine: every stage rigid and free of backlash, no friction (for the proofs)."""
-        return rigid(self, work_friction=0.0, head_friction=0.0, eccentric_friction=0.0, ways_friction=0.0)
+        return rigid(
+            self,
+            work_friction=0.0,
+            head_friction=0.0,
+            eccentric_friction=0.0,
+            ways_friction=0.0,
+            cross_ways_friction=0.0,
+        )
 
     def with_overrides(self, values: dict[str, Any]) -> FaceMachineParams:
         return override(self, values)
@@ -174,8 +197,9 @@ class FaceMachineLayout:
     """What the coupling and its setting sheet fix in the machine (metres, radians): the slotted face
     (``inner_radius``..``outer_radius``), the m slots, M's radius L, the tool radius R to the tips, the setting angle
     lambda, the eccentricity e and the eccentric's ratio N (``eccentric``: the machine has the eccentric), the
-    elements' phases beta_j, height and tip edge width, the blank's thickness (for its mass) and the slide's home
-    ``home_z`` (Z at the home keyframe: the tip this far above the face). Numbers only:
+    elements' phases beta_j, height and tip edge width, the blank's thickness (for its mass), the slide's home
+    ``home_z`` (Z at the home keyframe: the tip this far above the face) and ``work_setting``: the work on the cross
+    slide Y (its setting changed during the cut). Numbers only:
     ``virtual_machine.setting.machine_layout.face_layout`` builds it from a coupling."""
 
     m: int
@@ -192,6 +216,7 @@ class FaceMachineLayout:
     edge_width: float = 2 * MM
     blank_thickness: float = 20 * MM
     home_z: float = 5 * MM
+    work_setting: bool = False
 
     def problems(self) -> list[str]:
         out = []
@@ -248,8 +273,15 @@ def build_face_machine_spec(layout: FaceMachineLayout, params: FaceMachineParams
     visual(world, box, (0.4, 0.3, 0.04), DARK, pos=(0.1, 0, -thick - 0.2))  # bed
     visual(world, box, (0.12, 0.25, 0.5), GREY, pos=(layout.L + 0.45, 0, 0.3))  # column
 
-    # ---- work spindle A: table, fixture and blank (annulus) ------------------------------------------------
-    table = world.add_body(name="work_spindle")
+    # ---- cross slide Y (work setting), work spindle A: table, fixture and blank (annulus) ---------------------
+    base = world
+    if layout.work_setting:
+        n_tool = [math.sin(layout.setting_angle), math.cos(layout.setting_angle), 0.0]  # the tool axis n
+        base = world.add_body(name="cross_slide")
+        inertial(base, params.cross_slide_mass, 8.0, 8.0)
+        base.add_joint(name="Y", type=slide, axis=n_tool, frictionloss=params.cross_ways_friction)
+        visual(base, box, (0.2, 0.2, 0.02), BLUE, pos=(0, 0, -thick - 0.1))
+    table = base.add_body(name="work_spindle")
     blank_mass = STEEL * math.pi * (r_out**2 - r_in**2) * thick
     blank_inertia = blank_mass * (r_out**2 + r_in**2) / 2
     inertial(table, params.table_mass + blank_mass, params.table_inertia + blank_inertia)
@@ -258,7 +290,7 @@ def build_face_machine_spec(layout: FaceMachineLayout, params: FaceMachineParams
     visual(table, cyl, (r_out, thick / 2), STEELC, pos=(0, 0, -thick / 2))  # blank
     visual(table, box, ((r_out - r_in) / 2, 0.001, 0.001), ORANGE, pos=((r_out + r_in) / 2, 0, 0))  # slot 0 mark
     table.add_site(name="blank_frame", size=[0.002, 0.002, 0.002])
-    a_motor = world.add_body(name="a_motor", pos=[-0.25, -0.2, -thick - 0.05])
+    a_motor = base.add_body(name="a_motor", pos=[-0.25, -0.2, -thick - 0.05])
     motor(spec, a_motor, "MA", params.a_motor_inertia, params.a_motor_torque)
     couple(spec, "work_drive", "A", "MA", params.work_drive)
 
@@ -329,17 +361,30 @@ def build_face_machine_spec(layout: FaceMachineLayout, params: FaceMachineParams
         riding += params.eccentric_mass + MOTOR_MASS
     zs.gravcomp = params.counterbalance * riding / params.slide_mass  # a force on the slide, not on the rotors
 
+    if layout.work_setting:
+        y_motor = world.add_body(name="y_motor", pos=[-0.35, 0.3, -thick - 0.1])
+        motor(spec, y_motor, "MY", params.y_motor_inertia, params.y_motor_torque)
+        couple(spec, "y_drive", "Y", "MY", params.y_drive)
+
     home = {"A": 0.0, "H": 0.0, "Z": layout.home_z} | ({"E": 0.0} if layout.eccentric else {})
+    home |= {"Y": 0.0} if layout.work_setting else {}
     spec.add_key(name="home", qpos=relaxed_qpos(spec.compile(), home).tolist())
     return spec
 
 
 #: each drive's tendon and the joint it solves for when relaxed (in this order: the screw before its motor)
-DRIVES = (("work_drive", "MA"), ("eccentric_drive", "ME"), ("head_drive", "MH"), ("z_nut", "TZ"), ("z_drive", "MZ"))
+DRIVES = (
+    ("work_drive", "MA"),
+    ("eccentric_drive", "ME"),
+    ("head_drive", "MH"),
+    ("z_nut", "TZ"),
+    ("z_drive", "MZ"),
+    ("y_drive", "MY"),
+)
 
 
 def relaxed_qpos(model: mujoco.MjModel, axes: dict[str, float]) -> np.ndarray:
-    """qpos with the machine's axes (``A``, ``H``, ``E``, ``Z`` as given; the others 0) and every stage relaxed
+    """qpos with the machine's axes (``A``, ``H``, ``E``, ``Z``, ``Y`` as given; the others 0) and every stage relaxed
     (tendon lengths zero): each motor, and the screw, from what it drives."""
     q = np.zeros(model.nq)
     adr = {model.joint(j).name: int(model.joint(j).qposadr[0]) for j in range(model.njnt)}
@@ -386,4 +431,12 @@ def stage_omega_h(layout: FaceMachineLayout, params: FaceMachineParams) -> dict[
     if layout.eccentric:
         riding += p.eccentric_mass + MOTOR_MASS
     put("nut_stiffness", DriveStage(lead, p.nut_stiffness), riding, p.screw_inertia)
+    if layout.work_setting:
+        carried = (
+            p.cross_slide_mass
+            + p.table_mass
+            + STEEL * math.pi * (layout.outer_radius**2 - layout.inner_radius**2) * layout.blank_thickness
+            + MOTOR_MASS
+        )
+        put("y_drive", p.y_drive, carried, p.y_motor_inertia)
     return out

@@ -26,18 +26,29 @@ def test_setup_prints_the_setting_sheet():
 
 @pytest.mark.parametrize("command", ["cut", "run"])
 def test_cut_and_run_make_flat_slots_with_the_setting_sheets_e(command, tmp_path):
-    """The job's eccentric takes the setting sheet's e: the bottoms come out flat within 2 um, on the ideal
-    kinematics and on the simulated machine, the solid agreeing with the exact measure within its sweep error."""
+    """The job's eccentric takes the setting sheet's e: the bottoms come out flat within 2 um on the ideal
+    kinematics, and on the simulated machine without cutting forces (the run's comparison run); the solid agrees with
+    the exact measure within its sweep error. Under the cut's forces the run reports what they do: the head slows and
+    lags while an element crosses a slot, so the bottoms come out convex and the spacing moves (measured with the
+    slaves on the head's encoder: -23..-16 um and -1.0 arcsec; -61 um and -5.1 arcsec with the slaves on its
+    command, issue 28)."""
     res = CliRunner().invoke(main, [command, str(ASSET), "--out", str(tmp_path)])
     assert res.exit_code == 0, res.output
     doc = json.loads((tmp_path / "measurement.json").read_text())
     assert len(doc["slots"]) == 3 and (tmp_path / "coupling.stl").stat().st_size > 10_000
-    for s in doc["slots"]:
-        assert s["bottom_shape"] == "flat" and abs(s["bottom_form_um"]) < 2.0
     assert doc["mesh"]["bottom_form_difference_um"] < 1.0
-    assert all(abs(v) < 0.5 for v in doc["spacing_arcsec"])  # 2 pi / m between the slots
-    if command == "run":
-        assert doc["run"]["job"]["kind"] == "face_contour" and (tmp_path / "report.html").is_file()
+    if command == "cut":
+        for s in doc["slots"]:
+            assert s["bottom_shape"] == "flat" and abs(s["bottom_form_um"]) < 2.0
+        assert all(abs(v) < 0.5 for v in doc["spacing_arcsec"])  # 2 pi / m between the slots
+        return
+    assert doc["run"]["job"]["kind"] == "face_contour" and (tmp_path / "report.html").is_file()
+    f = doc["forces"]
+    assert all(abs(s["bottom_form_without_forces_um"]) < 2.0 for s in f["slots"])
+    assert all(abs(v) < 0.5 for v in f["spacing_without_forces_arcsec"])
+    assert f["spacing_with_forces_arcsec"] == pytest.approx(doc["spacing_arcsec"], abs=1e-9)
+    assert all(s["F_c_peak_N"] > 100.0 for s in f["slots"]) and 0.2 < abs(doc["spacing_arcsec"][0]) < 3.0
+    assert all(-40.0 < s["bottom_form_um"] < -5.0 for s in doc["slots"])  # convex: the head's lag under the cut
 
 
 def test_simulate_reports_the_gearbox_synchronisation_and_run_records(tmp_path):

@@ -25,7 +25,7 @@ from machine_models.face_contour_machine import (
     relaxed_qpos,
 )
 from machine_models.parameters import ARCSEC
-from metrology.face_slots import FLAT_TOLERANCE, measure_mesh, measure_slots, slot_spacing
+from metrology.face_slots import FLAT_TOLERANCE, measure_mesh, measure_slots, side_lines, slot_spacing
 from virtual_machine.processes.face_contour.cnc import (
     FaceContourRecord,
     FaceTuning,
@@ -41,6 +41,8 @@ ECCENTRIC = replace(COUPLING, control="eccentric", e=COUPLING.flat_bottom_eccent
 CYCLIC = replace(COUPLING, control="cyclic_ratio", ratio_amplitude=COUPLING.straight_slot_amplitude())
 _BOTH = replace(COUPLING, control="eccentric+cyclic_ratio", e=ECCENTRIC.e, ratio_amplitude=CYCLIC.ratio_amplitude)
 COMBINED = replace(_BOTH, e=_BOTH.flat_bottom_eccentricity())  # both controls, the bottom flat under both
+_WORK = replace(ECCENTRIC, control="eccentric+work_setting")
+WORK = replace(_WORK, setting_offset=_WORK.straight_slot_offset())  # tool and work settings changed together
 RPM = 150.0  # tool head: 2 m/s at the tips
 HELD_RPM = 100.0  # eq. 16's head speed: within the eccentric motor's torque up to 127 rpm
 STIFF, DEFAULT = FaceMachineParams().stiff(), FaceMachineParams()
@@ -60,6 +62,9 @@ def runs() -> dict[str, tuple[FaceContourRecord, list[float]]]:
         "stiff_combined": (COMBINED, STIFF, {"slots": (0,)}),
         "stiff_held": (ECCENTRIC, STIFF, {"slots": (0,), "hold_speed": True, "tool_rpm": HELD_RPM}),
         "default_cyclic": (CYCLIC, DEFAULT, {"slots": (0,)}),
+        "stiff_work": (WORK, STIFF, {"slots": (0,)}),
+        "stiff_head_master": (WORK, STIFF, {"slots": (0,), "master": "head"}),
+        "default_work": (WORK, DEFAULT, {"slots": (0,)}),
         "plunge": (COUPLING, STIFF, {"slots": (13, 14), "start_turn": 58}),
     }
     out = {}
@@ -128,7 +133,19 @@ def test_model_compiles_with_named_parts_a_relaxed_home_and_the_seeds_kinematics
     assert (m2.nq, m2.nu, m2.ntendon, m2.neq) == (m.nq, m.nu, m.ntendon, m.neq)
 
 
-@pytest.mark.parametrize("case", ["stiff", "stiff_eccentric", "stiff_cyclic", "stiff_combined", "stiff_held", "plunge"])
+@pytest.mark.parametrize(
+    "case",
+    [
+        "stiff",
+        "stiff_eccentric",
+        "stiff_cyclic",
+        "stiff_combined",
+        "stiff_held",
+        "stiff_work",
+        "stiff_head_master",
+        "plunge",
+    ],
+)
 def test_ideal_machine_makes_the_seeds_path(runs, case: str) -> None:
     """The issue's proof. Stiff stages, no friction: the recorded element tip (sites, workpiece frame) is the seed's
     x, y, z (element_path, final pass) at the recorded head angle within 0.1 um over every final pass. Measured:
@@ -336,6 +353,35 @@ def test_combined_controls_give_a_flat_bottom_and_straighter_sides(runs) -> None
     assert finite_max((got.sides - ideal.sides) * got.radii, 1.0) < 0.1e-3
     alone = measure_slots(ExactSlots(ECCENTRIC), ECCENTRIC)[0]
     assert np.abs(got.side_bow).max() < 0.012 and np.abs(alone.side_bow).min() > 0.02
+
+
+def test_work_setting_changed_during_the_cut_on_the_machine(runs) -> None:
+    """The work's setting changed during the cut, with the eccentric (tool and work together): the cross slide Y
+    carries the work spindle along the tool axis by T (1 - cos q_s phi) from the gearbox's function generator. On the
+    ideal machine the recorded slot is the exact slot (bottom within 0.01 um, sides within 0.1 um; measured 0.006 and
+    0.023 um), flat and straight (centre line 0.58 um, sides 1.6 / 2.0 um); the eccentric alone bows the centre line
+    by 25 um. On the default machine the slide's guide friction (100 N) at its reversals leaves a following error of
+    ~1.7 um and the nut's compliance under the slide's inertia the rest of its 4.5 um sync error: the slot stays flat
+    and its centre line within 1.1 um (measured)."""
+    alone = measure_slots(ExactSlots(ECCENTRIC), ECCENTRIC)[0]
+    for case in ("stiff_work", "default_work"):
+        rec, _ = runs[case]
+        c = rec.coupling
+        got, ideal = measure_recorded(rec)[0], measure_slots(ExactSlots(c), c)[0]
+        centre = side_lines(got.radii, got.sides.mean(axis=0, keepdims=True))[1][0]
+        free = side_lines(alone.radii, alone.sides.mean(axis=0, keepdims=True))[1][0]
+        assert abs(free) > 0.02 and got.shape == "flat"
+        settled = rec.trace_t > 0.6
+        y = rec.trace_cross[settled]
+        assert np.ptp(y[:, 0]) == pytest.approx(2 * c.setting_offset * 1e3, rel=0.02)  # the work really moves
+        if case == "stiff_work":
+            assert np.abs(got.bottom - ideal.bottom).max() < 0.01e-3
+            assert finite_max((got.sides - ideal.sides) * got.radii, 1.0) < 0.1e-3
+            assert abs(centre) < 1e-3 and np.abs(got.side_bow).max() < 3e-3
+            assert np.abs(y[:, 1]).max() < 0.1  # um: the slide follows the head's real angle
+        else:
+            assert abs(centre) < 2.5e-3 and np.abs(got.side_bow).max() < 4e-3
+            assert 0.5 < np.abs(y[:, 3]).max() < 5.0  # um: the friction's reversal error at the encoder
 
 
 @pytest.mark.parametrize(

@@ -85,12 +85,24 @@ __all__ = [
     "slot_hulls",
     "speed_direction",
     "straight_slot_amplitude",
+    "straight_slot_offset",
+    "work_offset",
     "workpiece_angle",
 ]
 
-Control = Literal["fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio"]
-#: the controls; "eccentric+cyclic_ratio" combines the two (both geared to the head angle, their terms add)
-CONTROLS = ("fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio")
+Control = Literal[
+    "fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio", "work_setting", "eccentric+work_setting"
+]
+#: the controls; the combined ones add their terms (all geared to the head angle): "eccentric+cyclic_ratio" the
+#: tool's setting and the ratio, "eccentric+work_setting" the tool's setting and the work's together
+CONTROLS = (
+    "fixed",
+    "eccentric",
+    "cyclic_ratio",
+    "eccentric+cyclic_ratio",
+    "work_setting",
+    "eccentric+work_setting",
+)
 #: the manifold sweep's chord error [mm] (hull chords of the element's path, the blank's circles)
 SWEEP_TOLERANCE = 1e-3
 #: samples of a pass that bracket a root before bisection; bisection steps (1e-4 rad / 2^50: exact in double)
@@ -108,7 +120,7 @@ class FaceCoupling:
     ``depth`` the slot depth at M; ``inner_radius``..``outer_radius`` the slotted face; the tool's ``elements``
     (count, phase pitch ``element_pitch``, tip edge ``edge_width``, ``flank_angle``, ``element_height``); the
     ``control`` and its settings: eccentricity ``e`` and ``eccentric_ratio`` N, ``ratio_cycles`` q and
-    ``ratio_amplitude`` A.
+    ``ratio_amplitude`` A, ``setting_cycles`` q_s and ``setting_offset`` T (the work's setting changed during the cut).
     """
 
     m: int = 24
@@ -128,6 +140,8 @@ class FaceCoupling:
     eccentric_ratio: int = 4
     ratio_cycles: int = 6
     ratio_amplitude: float = 0.0
+    setting_cycles: int = 6
+    setting_offset: float = 0.0
 
     def __post_init__(self) -> None:
         _check(self)
@@ -135,12 +149,17 @@ class FaceCoupling:
     @property
     def eccentric_on(self) -> bool:
         """The eccentric carries the head (control "eccentric", alone or combined)."""
-        return self.control in ("eccentric", "eccentric+cyclic_ratio")
+        return self.control in ("eccentric", "eccentric+cyclic_ratio", "eccentric+work_setting")
 
     @property
     def cyclic_on(self) -> bool:
         """The speed ratio changes cyclically (control "cyclic_ratio", alone or combined)."""
         return self.control in ("cyclic_ratio", "eccentric+cyclic_ratio")
+
+    @property
+    def work_setting_on(self) -> bool:
+        """The work's setting changes during the cut (control "work_setting", alone or with the eccentric)."""
+        return self.control in ("work_setting", "eccentric+work_setting")
 
     @property
     def phases(self) -> np.ndarray:
@@ -162,6 +181,9 @@ class FaceCoupling:
 
     def straight_slot_amplitude(self) -> float:
         return straight_slot_amplitude(self)
+
+    def straight_slot_offset(self) -> float:
+        return straight_slot_offset(self)
 
 
 def _fail(name: str, why: str) -> None:
@@ -204,6 +226,16 @@ def _check(c: FaceCoupling) -> None:
         _fail("ratio_amplitude", f"must be >= 0, got {c.ratio_amplitude!r}")
     if c.ratio_amplitude > 0 and not c.cyclic_on:
         _fail("ratio_amplitude", f"needs control = 'cyclic_ratio' (control is {c.control!r})")
+    if not isinstance(c.setting_cycles, int) or c.setting_cycles < 1:
+        _fail("setting_cycles", f"q_s must be an integer >= 1, got {c.setting_cycles!r}")
+    if not (math.isfinite(c.setting_offset) and c.setting_offset >= 0):
+        _fail("setting_offset", f"must be >= 0, got {c.setting_offset!r}")
+    if c.setting_offset > 0 and not c.work_setting_on:
+        _fail("setting_offset", f"needs control = 'work_setting' (control is {c.control!r})")
+    if c.setting_offset >= 0.1 * c.L:
+        _fail(
+            "setting_offset", f"T = {c.setting_offset} mm moves the work by {2 * c.setting_offset} mm: keep T < L / 10"
+        )
     if c.ratio_amplitude * c.ratio_cycles >= 1 / c.m:
         _fail("ratio_amplitude", f"A q = {c.ratio_amplitude * c.ratio_cycles:.4g} >= 1/m: the workpiece would reverse")
     radius = c.R - c.eccentric_ratio * c.e
@@ -256,6 +288,22 @@ def workpiece_angle(c: FaceCoupling, phi: np.ndarray | float) -> np.ndarray:
     return a
 
 
+def work_offset(c: FaceCoupling, phi: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """The work's setting during the cut (control "work_setting"): how far the work's axis has moved along the tool
+    axis n at head angle phi, T (1 - cos q_s phi) [mm], and its rate in phi [mm/rad]; zero at M and without it.
+
+    The seed's setting parameters are the work axis's place relative to the tool plane: L along OM and the setting
+    angle lambda, i.e. L cos lambda along the tool plane and L sin lambda across it. Moving the work across the
+    plane, cyclically with q_s cycles per tool revolution (q_s m per workpiece revolution: "the number of cycles a
+    multiple of the number of slots"), changes L sin lambda during the cut, and so the tip's path eq. 5 by
+    - T (1 - cos q_s phi) n."""
+    phi = np.asarray(phi, dtype=float)
+    if not c.work_setting_on:
+        return np.zeros_like(phi), np.zeros_like(phi)
+    T, q = c.setting_offset, c.setting_cycles
+    return T * (1 - np.cos(q * phi)), T * q * np.sin(q * phi)
+
+
 def _frame(
     c: FaceCoupling, phi: np.ndarray, final: bool = True, beta: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -269,6 +317,8 @@ def _frame(
     N = c.eccentric_ratio
     feed = c.depth if final else c.S * (phi + beta) / (2 * math.pi)
     centre = c.L * np.stack([np.cos(a), np.sin(a)], axis=-1) - (e * np.sin(N * phi))[..., None] * u
+    if c.work_setting_on:  # the work moved along the tool axis: the head centre moves back relative to it
+        centre = centre - work_offset(c, phi)[0][..., None] * n
     height = c.R - e + e * np.cos(N * phi) - feed
     return u, n, centre, height, a
 
@@ -359,6 +409,16 @@ def straight_slot_amplitude(c: FaceCoupling) -> float:
     return 2 * c.R * math.cos(lam) / (c.m * c.L * c.ratio_cycles**2)
 
 
+def straight_slot_offset(c: FaceCoupling) -> float:
+    """The work setting's amplitude T [mm] that cancels the bow of the slot's centre line to second order. Near M
+    the tip's path eq. 5 leaves the radial line by (R - N e) phi^2 cos lambda / m towards larger polar angles (the
+    tool plane at a - lambda turns with the work while the tip runs along it; R - N e the tip's radius of speed at M),
+    and the work's move T (1 - cos q_s phi) along n (n at cos lambda to the tangential direction) takes
+    T q_s^2 phi^2 cos lambda / 2 off it: T = 2 (R - N e) / (m q_s^2)."""
+    e = c.e if c.eccentric_on else 0.0
+    return 2 * (c.R - c.eccentric_ratio * e) / (c.m * c.setting_cycles**2)
+
+
 def phi_at_radius(c: FaceCoupling, radius: np.ndarray | float, element: int | None = None) -> np.ndarray:
     """Head angles [rad] at which the tip of ``element`` (default: the one nearest beta = 0) is at ``radius`` on the
     final pass through slot 0."""
@@ -391,7 +451,8 @@ def setting_sheet(c: FaceCoupling, tool_speed: float = 1.0) -> dict[str, float]:
     """The setting sheet's figures (tool speed omega_t [rad/s]): the setting angle [deg], the tip's radius of speed at
     M, the cutting speed |V| (eq. 4) at the slot's inner end, M and outer end [mm/s], V's direction at the ends
     [deg], the flat-bottom eccentricity [mm] (N = ``eccentric_ratio``), the straight-slot ratio amplitude [rad] (q =
-    ``ratio_cycles``), the control's cycles per workpiece revolution and the cycle's tool revolutions (plunge at S,
+    ``ratio_cycles``), the straight-slot work setting T [mm] (q_s = ``setting_cycles``), the control's cycles per
+    workpiece revolution and the cycle's tool revolutions (plunge at S,
     one workpiece revolution of spark-out)."""
     e = c.e if c.eccentric_on else 0.0
     ends = np.array([c.inner_radius, c.L, c.outer_radius])
@@ -399,6 +460,7 @@ def setting_sheet(c: FaceCoupling, tool_speed: float = 1.0) -> dict[str, float]:
     direction = np.degrees(speed_direction(c, ends[[0, 2]], tool_speed))
     # per workpiece revolution: N m of the eccentric, q m of the ratio; combined, the pattern repeats gcd(N, q) m times
     turns = [c.eccentric_ratio] * c.eccentric_on + [c.ratio_cycles] * c.cyclic_on
+    turns += [c.setting_cycles] * c.work_setting_on
     cycles = math.gcd(*turns) * c.m if turns else 0
     return {
         "setting_angle_deg": math.degrees(setting_angle(c)),
@@ -410,6 +472,7 @@ def setting_sheet(c: FaceCoupling, tool_speed: float = 1.0) -> dict[str, float]:
         "V_direction_outer_deg": float(direction[1]),
         "flat_bottom_e_mm": flat_bottom_eccentricity(c),
         "straight_slot_amplitude_rad": straight_slot_amplitude(c),
+        "straight_slot_offset_mm": straight_slot_offset(c),
         "control_cycles_per_workpiece_rev": float(cycles),
         "tool_revolutions": c.depth / c.S + c.m,
     }
@@ -544,10 +607,12 @@ def flat_bottom_eccentricity(c: FaceCoupling) -> float:
     ``eccentric_ratio``; near R (1 - cos delta) / (1 - cos N delta), and R / N^2 for a short slot."""
     ends = np.array([c.inner_radius, c.middle_radius, c.outer_radius])
 
+    # with the cyclic ratio or the work setting combined, its own amplitude stays: the bottom is flat under both
+    both = "eccentric+cyclic_ratio" if c.cyclic_on else "eccentric+work_setting" if c.work_setting_on else None
+
     def middle(e: float) -> float:
-        # with the cyclic ratio combined, its own amplitude stays: the bottom is flat under both
-        both = replace(c, control="eccentric+cyclic_ratio", e=e) if c.cyclic_on else None
-        z = exact_bottom(both or replace(c, control="eccentric", e=e, ratio_amplitude=0.0), ends)
+        trial = replace(c, control=both, e=e) if both else replace(c, control="eccentric", e=e, ratio_amplitude=0.0)
+        z = exact_bottom(trial, ends)
         return float(z[1] - 0.5 * (z[0] + z[2]))
 
     N = c.eccentric_ratio

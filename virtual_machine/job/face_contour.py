@@ -48,14 +48,26 @@ COUPLING_KEYS: dict[str, Key] = {
         str,
         "fixed",
         "",
-        "'fixed', 'eccentric', 'cyclic_ratio' or both, 'eccentric+cyclic_ratio' (seed 004)",
-        one_of("fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio"),
+        "'fixed', 'eccentric', 'cyclic_ratio', 'work_setting' (the work's setting changed during the cut), or "
+        "the tool's eccentric with either: 'eccentric+cyclic_ratio', 'eccentric+work_setting' (seed 004)",
+        # the literal of cutting.face_contour.slots.CONTROLS (not imported: the job parser stays light)
+        one_of(
+            "fixed", "eccentric", "cyclic_ratio", "eccentric+cyclic_ratio", "work_setting", "eccentric+work_setting"
+        ),
     ),
     "e": Key(float, None, "mm", "eccentricity (default: the setting sheet's flat-bottom e)", at_least(0.0)),
     "eccentric_ratio": Key(int, 4, "", "eccentric turns N per tool revolution", at_least(1)),
     "ratio_cycles": Key(int, 6, "", "cycles q of the speed ratio per tool revolution", at_least(1)),
     "ratio_amplitude": Key(
         float, None, "deg", "amplitude of the ratio's cycle (default: straight slots)", at_least(0.0)
+    ),
+    "setting_cycles": Key(int, 6, "", "cycles q_s of the work's setting per tool revolution", at_least(1)),
+    "setting_offset": Key(
+        float,
+        None,
+        "mm",
+        "the work's move T (1 - cos q_s phi) along the tool axis (default: straight slots)",
+        at_least(0.0),
     ),
 }
 
@@ -68,6 +80,14 @@ FACE_PROCESS_KEYS: dict[str, Key] = {
         "'constant', or 'held': under the eccentric the head's speed follows eq. 16 so the tip's speed stays that "
         "at M (seed 004)",
         one_of("constant", "held"),
+    ),
+    "master": Key(
+        str,
+        "head",
+        "",
+        "what the work, eccentric and cross slide follow: 'head' (the cutter spindle's encoder, seed 001's "
+        "master-slave) or 'generator' (the head's command, seed 000's equal coordinates)",
+        one_of("head", "generator"),
     ),
     "slots_cut": Key(int, 3, "", "slots cut, recorded and measured (0, 1, ...)", at_least(2)),
     "material": MATERIAL,
@@ -117,10 +137,15 @@ def parse_face_contour_job(data: dict[str, Any], source: str) -> Job:
 
 def _coupling(c: dict[str, Any]) -> FaceCoupling:
     """The FaceCoupling of [coupling]; an eccentric without e gets the flat-bottom e, a cyclic ratio without its
-    amplitude the straight-slot one (both from the setting sheet)."""
+    amplitude and a work setting without its offset the straight-slot ones (all from the setting sheet)."""
     import dataclasses
 
-    from cutting.face_contour.slots import FaceCoupling, flat_bottom_eccentricity, straight_slot_amplitude
+    from cutting.face_contour.slots import (
+        FaceCoupling,
+        flat_bottom_eccentricity,
+        straight_slot_amplitude,
+        straight_slot_offset,
+    )
 
     coupling = FaceCoupling(
         m=c["slots"],
@@ -140,10 +165,14 @@ def _coupling(c: dict[str, Any]) -> FaceCoupling:
         eccentric_ratio=c["eccentric_ratio"],
         ratio_cycles=c["ratio_cycles"],
         ratio_amplitude=math.radians(c["ratio_amplitude"] or 0.0),
+        setting_cycles=c["setting_cycles"],
+        setting_offset=c["setting_offset"] or 0.0,
     )
     # the amplitude first: combined, the flat-bottom e is solved with the ratio's cycle on
     if coupling.cyclic_on and c["ratio_amplitude"] is None:
         coupling = dataclasses.replace(coupling, ratio_amplitude=straight_slot_amplitude(coupling))
     if coupling.eccentric_on and c["e"] is None:
         coupling = dataclasses.replace(coupling, e=flat_bottom_eccentricity(coupling))
+    if coupling.work_setting_on and c["setting_offset"] is None:  # after e: T depends on R - N e
+        coupling = dataclasses.replace(coupling, setting_offset=straight_slot_offset(coupling))
     return coupling

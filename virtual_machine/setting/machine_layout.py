@@ -72,4 +72,5 @@ def face_layout(c: FaceCoupling, blank_thickness: float = 20 * MM, home_z: float
         edge_width=c.edge_width * MM,
         blank_thickness=blank_thickness,
         home_z=home_z,
+        work_setting=c.work_setting_on,
     )

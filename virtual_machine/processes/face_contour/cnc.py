@@ -16,6 +16,11 @@ leave. It runs up, and records, at the servo rate, the element tips' poses in th
 ``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest; each
 tick's physics with the divergence and runaway checks of :class:`virtual_machine.runtime.integrator.Integrator`.
 
+**Cutting forces** (``load``, :mod:`cutting.face_contour.forces`): checked before the run against the motors
+(:func:`check_cutting_load`: a feed the head motor cannot cut is refused, naming the feed that would do), then fed
+back at every tick (:class:`ForceFeedback`, ``mj_applyFT`` at the element tips on the head and, reversed, on the
+workpiece); the passes record the forces and the work and head drives' twists.
+
 **Cut and measure** the recorded motion: :func:`cut_recorded` sweeps the elements' plates (the plate corners of
 :func:`cutting.face_contour.slots.plate_corners`, here from the recorded frames) as hulls through the face blank;
 :func:`measure_recorded` measures the slot bottom and sides exactly on the recorded path (cubic splines of the
@@ -35,6 +40,8 @@ import mujoco
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from cutting.errors import InputError, Problem
+from cutting.face_contour.forces import FaceLoad, sizing
 from cutting.face_contour.slots import (
     SWEEP_TOLERANCE,
     FaceCoupling,
@@ -45,6 +52,7 @@ from cutting.face_contour.slots import (
     held_speed_factor,
     hull_steps,
     subtract_pieces,
+    work_offset,
     workpiece_angle,
 )
 from machine_models.face_contour_machine import (
@@ -56,6 +64,7 @@ from machine_models.face_contour_machine import (
     stage_omega_h,
 )
 from machine_models.parameters import ARCSEC
+from machine_models.parts import tendon_coefs
 from metrology.face_slots import SlotMeasure, bottom_form, measuring_radii, side_lines
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.controllers.face_gearbox import ElectronicGearbox
@@ -69,11 +78,15 @@ from virtual_machine.setting.machine_layout import face_layout
 
 __all__ = [
     "AXES",
+    "CUT_TORQUE_SHARE",
     "FaceContourRecord",
     "FacePassRecord",
     "FaceServo",
     "FaceTuning",
+    "ForceFeedback",
+    "check_cutting_load",
     "cut_recorded",
+    "drive_twists",
     "final_turn",
     "measure_recorded",
     "pass_window",
@@ -84,24 +97,24 @@ __all__ = [
     "simulate_face_contour",
 ]
 
-AXES = ("A", "H", "E", "Z")  # work angle a [rad], head angle phi [rad], eccentric [rad], infeed [m]
-MOTORS = ("MA", "MH", "ME", "MZ")
-_A, _H, _E, _Z = range(4)
+AXES = ("A", "H", "E", "Z", "Y")  # work angle a, head angle phi, eccentric [rad], infeed, cross slide [m]
+MOTORS = ("MA", "MH", "ME", "MZ", "MY")
+_A, _H, _E, _Z, _Y = range(5)
 #: bisection steps on a recorded pass (half a servo period / 2^40: far below a nanometre of tip motion)
 BISECTION_STEPS = 40
 
 
 @dataclass(frozen=True)
 class FaceTuning:
-    """Servo gains, the electronic gearbox's resolution and the run's limits (per axis in the order A, H, E, Z)."""
+    """Servo gains, the electronic gearbox's resolution and the run's limits (per axis in the order A, H, E, Z, Y)."""
 
     servo_rate: float = 2000.0  # Hz: position and speed loops (the physics sub-steps a whole number of times)
-    velocity_bandwidth: tuple[float, ...] = (40.0, 40.0, 60.0, 80.0)  # Hz: PI speed loops
-    position_gain: tuple[float, ...] = (60.0, 60.0, 80.0, 100.0)  # 1/s: Kv
+    velocity_bandwidth: tuple[float, ...] = (40.0, 40.0, 60.0, 80.0, 80.0)  # Hz: PI speed loops
+    position_gain: tuple[float, ...] = (60.0, 60.0, 80.0, 100.0, 100.0)  # 1/s: Kv
     ramp: float = 0.5  # s: half-cosine run-up of reference generator 14
     pulses_per_rev: int = 2**24  # command pulses per revolution of A, H and E (3.7e-7 rad: 0.05 um at R = 125 mm)
     infeed_resolution: float = 1e-9  # m per infeed command pulse
-    runaway: tuple[float, ...] = (0.01, 0.05, 0.05, 1e-3)  # rad, rad, rad, m: following error that stops the run
+    runaway: tuple[float, ...] = (0.01, 0.05, 0.05, 1e-3, 1e-3)  # rad, rad, rad, m, m: following error that stops
     trace_every: int = 8  # servo ticks per sample of the whole-run traces
     window_margin: float = 0.5  # mm: a pass is recorded while an element's tip (final pass) is below this height
 
@@ -113,7 +126,7 @@ class FacePassRecord:
     (joints) and its command ``phi_cmd`` [rad], the workpiece angle ``a`` [rad]; per element j (first axis) the tip
     ``tip`` [mm], the tip edge's direction ``edge`` (the tool axis, site x) and the element's radial direction
     ``radial`` (head centre -> tip, site z), (E, n, 3); ``following_error`` at the encoders (A, H, E [arcsec],
-    Z [um]) (n, 4)."""
+    Z, Y [um]) (n, 5)."""
 
     slot: int
     turn: int
@@ -125,6 +138,11 @@ class FacePassRecord:
     edge: np.ndarray
     radial: np.ndarray
     following_error: np.ndarray
+    #: with cutting forces (``load``): per element the force on the tool in the workpiece frame (E, n, 3) [N], and
+    #: the work drive's and the head drive's twists (driven - ratio x motor: the table behind its worm, the head
+    #: behind its gear) (n, 2) [rad]; None without
+    force: np.ndarray | None = None
+    twist: np.ndarray | None = None
 
     def deviation(self, c: FaceCoupling) -> np.ndarray:
         """Recorded tip - the seed's tip (:func:`cutting.face_contour.slots.element_path`, final pass) at the
@@ -162,6 +180,9 @@ class FaceContourRecord:
     trace_torque: np.ndarray
     trace_error: np.ndarray
     eccentric: bool
+    #: the cross slide (control "work_setting"): Y and its sync error Y - T (1 - cos q_s phi) [um], MY [N m], its
+    #: encoder's following error [um]; zeros without it
+    trace_cross: np.ndarray | None = None
     wall_time: float = 0.0  # s
     sim_time: float = 0.0  # s
     axes: tuple[str, ...] = field(default=AXES)
@@ -216,8 +237,8 @@ def final_turn(c: FaceCoupling, slot: int, window: tuple[float, float]) -> int:
 
 class FaceServo(CascadeServo):
     """The drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops and PI
-    speed loops on the motor encoders (A, H, [E,] Z); commands and ``torque``, ``error`` as (A, H, E, Z), E zero
-    without the eccentric. ``axis0``: the axes' start positions."""
+    speed loops on the motor encoders (A, H, [E,] Z, [Y]); commands and ``torque``, ``error`` as (A, H, E, Z, Y), E
+    zero without the eccentric, Y without the work setting. ``axis0``: the axes' start positions."""
 
     def __init__(
         self,
@@ -230,23 +251,35 @@ class FaceServo(CascadeServo):
         self.tuning = tuning
         self.eccentric = "E" in head_angle_joints(model)
         idx = [_A, _H, _E, _Z] if self.eccentric else [_A, _H, _Z]
+        if _has_joint(model, "Y"):
+            idx.append(_Y)
         lead = params.screw_pitch / (2 * math.pi)
         g = [
             params.work_drive.ratio,
             params.head_drive.ratio,
             params.eccentric_drive.ratio,
             params.z_drive.ratio * lead,
+            params.y_drive.ratio,
         ]
         chains = {
             _A: (("MA", 1.0), ("A", g[_A])),
             _H: (("MH", 1.0), ("H", g[_H])),  # the head's absolute angle moves, the eccentric held
             _E: (("ME", 1.0), ("E", g[_E]), ("H", -g[_E])),  # the head's absolute angle held by its drive
             _Z: (("MZ", 1.0), ("TZ", params.z_drive.ratio), ("Z", g[_Z])),
+            _Y: (("MY", 1.0), ("Y", g[_Y])),
         }
         axes = [
             ServoAxis(MOTORS[i], g[i], chains[i], tuning.velocity_bandwidth[i], tuning.position_gain[i]) for i in idx
         ]
-        super().__init__(model, data, axes, np.asarray(axis0)[idx], index=idx, size=4)
+        super().__init__(model, data, axes, np.asarray(axis0)[idx], index=idx, size=5)
+
+
+def _has_joint(model: mujoco.MjModel, name: str) -> bool:
+    try:
+        model.joint(name)
+    except KeyError:
+        return False
+    return True
 
 
 def _diagnose(layout: FaceMachineLayout, params: FaceMachineParams, t: float) -> str:
@@ -297,6 +330,89 @@ def _check_held_speed(c: FaceCoupling, servo: FaceServo, omega: float, tool_rpm:
             )
 
 
+#: share of a motor's peak torque the cutting load may take (the rest: the servo's acceleration, friction)
+CUT_TORQUE_SHARE = 0.8
+
+
+def check_cutting_load(c: FaceCoupling, load: FaceLoad, params: FaceMachineParams) -> dict[str, dict[str, float]]:
+    """The motors' torques under the cycle's heaviest pass (:func:`cutting.face_contour.forces.sizing`: the head
+    torque on MH, the work's on MA, the thrust on MZ); a motor the cut would take beyond CUT_TORQUE_SHARE of its
+    peak refuses the job before the run (InputError on ``coupling.feed``, naming the motor, the torque needed and the
+    feed that would do). The motors' other loads (friction, the slide's unbalanced weight, the servo's
+    acceleration) take the rest of the peak. Returns the sizing."""
+    lead = params.screw_pitch / (2 * math.pi)
+    motors = {
+        "MH": (abs(params.head_drive.ratio), params.h_motor_torque),
+        "MA": (abs(params.work_drive.ratio), params.a_motor_torque),
+        "MZ": (abs(params.z_drive.ratio) * lead, params.z_motor_torque),
+    }
+    size = sizing(c, load.material, load.window, motors, CUT_TORQUE_SHARE)
+    problems = [
+        Problem(
+            "coupling.feed",
+            c.S,
+            f"the heaviest pass (layer m S = {c.m * c.S:.4g} mm, F_c {row['F_c_N']:.0f} N, thrust "
+            f"{row['thrust_N']:.0f} N in {load.material.key}) needs {row['needed_N_m']:.1f} N m of {name}, beyond "
+            f"{CUT_TORQUE_SHARE:.0%} of its {row['peak_N_m']:g} N m peak",
+            f"a feed of {row['feed_mm']:.4g} mm per tool revolution or less, or a stronger "
+            f"machine.model.{name[1].lower()}_motor_torque",
+        )
+        for name, row in size.items()
+        if "feed_mm" in row
+    ]
+    if problems:
+        raise InputError(problems)
+    return size
+
+
+class ForceFeedback:
+    """The cutting forces fed back into the physics (as form milling does): each servo tick, at the head's real
+    angle, every element's force from ``load`` acts at its tip (site ``element_frame*``) on the tool head and,
+    reversed, on the workpiece (``blank_frame``'s body), through ``mujoco.mj_applyFT`` into ``qfrc_applied``, held
+    over the tick's physics sub-steps as their mean over the tick's head angles (the impulse right at the entry
+    step); ``last`` the forces of the tick (E, 3) in the workpiece frame [N]."""
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, load: FaceLoad, sites: list[int], site_b: int):
+        self.model, self.data, self.load = model, data, load
+        self.sites, self.site_b = sites, site_b
+        self.body_t = [int(model.site_bodyid[s]) for s in sites]
+        self.body_b = int(model.site_bodyid[site_b])
+        self.last = np.zeros((len(sites), 3))
+        self.zero3 = np.zeros(3)
+        self.on = False
+
+    def apply(self, phi: float, dphi: float) -> None:
+        """Apply the mean forces over the tick's head angles phi..phi + dphi [rad]."""
+        m, d = self.model, self.data
+        f = self.load.at(phi, dphi)
+        if f is None:
+            if self.on:
+                d.qfrc_applied[:] = 0.0
+                self.last[:] = 0.0
+                self.on = False
+            return
+        mujoco.mj_kinematics(m, d)  # mj_applyFT takes the present kinematics (after mj_step they are stale)
+        d.qfrc_applied[:] = 0.0
+        rb = d.site_xmat[self.site_b].reshape(3, 3)
+        for j, s in enumerate(self.sites):
+            fw = rb @ f[j]
+            point = d.site_xpos[s]
+            mujoco.mj_applyFT(m, d, fw, self.zero3, point, self.body_t[j], d.qfrc_applied)
+            mujoco.mj_applyFT(m, d, -fw, self.zero3, point, self.body_b, d.qfrc_applied)
+        self.last[:] = f
+        self.on = True
+
+
+def drive_twists(model: mujoco.MjModel) -> Callable[[np.ndarray], np.ndarray]:
+    """qpos -> the work drive's and the head drive's twists [rad] (their tendons: driven - ratio x motor)."""
+    rows = []
+    for tendon in ("work_drive", "head_drive"):
+        coef = tendon_coefs(model, tendon)
+        adr = np.array([int(model.joint(j).qposadr[0]) for j in coef])
+        rows.append((adr, np.array(list(coef.values()))))
+    return lambda q: np.array([float(q[a] @ k) for a, k in rows])
+
+
 def simulate_face_contour(
     coupling: FaceCoupling,
     params: FaceMachineParams | None = None,
@@ -307,13 +423,19 @@ def simulate_face_contour(
     tuning: FaceTuning | None = None,
     progress: Callable[[float], None] | None = None,
     hold_speed: bool = False,
+    load: FaceLoad | None = None,
+    master: str = "generator",
 ) -> FaceContourRecord:
     """Cut ``coupling``'s slots on the simulated machine (MuJoCo) with the electronic gearbox of this module, the
     head at ``tool_rpm`` (at M; ``hold_speed``: its speed by eq. 16 all round, so that the tip's speed under the
     eccentric stays that at M), and record the final pass over each of ``slots``. The run starts at rest ``run_in`` tool
     turns before the first of these passes (or at ``start_turn``) and ends after the last. Raises ValueError for bad
     inputs and :class:`virtual_machine.runtime.integrator.SimulationDivergedError` when the integration blows up or
-    a servo runs away (the message names what to change)."""
+    a servo runs away (the message names what to change). ``load``: the cutting forces
+    (:class:`cutting.face_contour.forces.FaceLoad`), fed back at every tick (:class:`ForceFeedback`) after a check
+    that the motors can take the cycle's heaviest pass (:func:`check_cutting_load`, InputError if not); none: the
+    elements cut air. ``master``: what the work, the eccentric and the cross slide follow (the gearbox's
+    ``master``): "generator" (the head's command) or "head" (its spindle encoder, what the head really does)."""
     params = params or FaceMachineParams()
     tuning = tuning or FaceTuning()
     if not (math.isfinite(tool_rpm) and tool_rpm > 0):
@@ -344,23 +466,30 @@ def simulate_face_contour(
         )
 
     egb = ElectronicGearbox(
-        coupling, start_turn, omega, tuning.pulses_per_rev, tuning.infeed_resolution, tuning.ramp, hold_speed
+        coupling, start_turn, omega, tuning.pulses_per_rev, tuning.infeed_resolution, tuning.ramp, hold_speed, master
     )
     pos, _, _ = egb.command(0.0, dt)
     eccentric = layout.eccentric
     axes = {"A": pos[_A], "H": pos[_H] - pos[_E], "Z": pos[_Z]} | ({"E": pos[_E]} if eccentric else {})
+    axes |= {"Y": pos[_Y]} if layout.work_setting else {}
     data = mujoco.MjData(model)
     data.qpos[:] = relaxed_qpos(model, axes)
     servo = FaceServo(model, data, params, tuning, pos)
 
     if hold_speed and coupling.eccentric_on:
         _check_held_speed(coupling, servo, omega, tool_rpm)
+    if load is not None:
+        check_cutting_load(coupling, load, params)
 
     qa = {n: int(model.joint(n).qposadr[0]) for n in ("A", "H", "Z")}
     qe = int(model.joint("E").qposadr[0]) if eccentric else -1
+    qy = int(model.joint("Y").qposadr[0]) if layout.work_setting else -1
     site_b = int(model.site("blank_frame").id)
     sites = [int(model.site("element_frame" if j == 0 else f"element_frame_{j}").id) for j in range(coupling.elements)]
     xpos, xmat = data.site_xpos, data.site_xmat
+    feedback = ForceFeedback(model, data, load, sites, site_b) if load is not None else None
+    twists = drive_twists(model)
+    extras: list[np.ndarray] = []  # per recorded tick: the forces (E x 3, with a load), the two twists
     integrator = Integrator(
         model,
         data,
@@ -381,7 +510,7 @@ def simulate_face_contour(
     passes: list[FacePassRecord] = []
     traces: list[np.ndarray] = []
     n_el = coupling.elements
-    to_arcsec = np.array([1 / ARCSEC, 1 / ARCSEC, 1 / ARCSEC, 1e6])
+    to_arcsec = np.array([1 / ARCSEC, 1 / ARCSEC, 1 / ARCSEC, 1e6, 1e6])
     tick, wall0 = 0, time.perf_counter()
 
     def close_pass() -> None:
@@ -401,18 +530,31 @@ def simulate_face_contour(
                 edge=poses[:, :, 1].copy(),
                 radial=poses[:, :, 2].copy(),
                 following_error=r[:, 4 + 9 * n_el :] * to_arcsec,
+                force=np.array(extras)[:, :-2].reshape(n, n_el, 3).transpose(1, 0, 2) if feedback else None,
+                twist=np.array(extras)[:, -2:],
             )
         )
         rows.clear()
+        extras.clear()
 
+    head_dofs = [int(model.joint(j).dofadr[0]) for j in head_angle_joints(model)]
+    w_prev = None
     while True:
         t = data.time
-        cmd_pos, cmd_vel, cmd_acc = egb.command(t, dt)
+        head = None
+        if egb.master == "head":  # the spindle encoder: angle at the command resolution, speed, its change a tick
+            angle = data.qpos[qa["H"]] + (data.qpos[qe] if eccentric else 0.0)
+            w_now = float(sum(data.qvel[k] for k in head_dofs))
+            head = (round(angle / egb.rad) * egb.rad, w_now, 0.0 if w_prev is None else (w_now - w_prev) / dt)
+            w_prev = w_now
+        cmd_pos, cmd_vel, cmd_acc = egb.command(t, dt, head)
         phi_cmd = cmd_pos[_H]
         if phi_cmd > phi_end:
             break
         servo.update(dt, cmd_pos, cmd_vel, cmd_acc)
         phi = data.qpos[qa["H"]] + (data.qpos[qe] if eccentric else 0.0)
+        if feedback is not None:
+            feedback.apply(phi, cmd_vel[_H] * dt)
         if n_slot < len(windows) and phi_cmd >= windows[n_slot][1]:
             if phi_cmd <= windows[n_slot][2]:
                 mujoco.mj_kinematics(model, data)  # the state at this tick (site poses after mj_step are stale)
@@ -423,6 +565,7 @@ def simulate_face_contour(
                     row += [rb.T @ (xpos[s] - xpos[site_b]) * 1e3, rs[:, 0], rs[:, 2]]
                 row.append(servo.error.copy())
                 rows.append(np.concatenate(row))
+                extras.append(np.concatenate([feedback.last.ravel() if feedback else [], twists(data.qpos)]))
             else:
                 close_pass()
                 n_slot += 1
@@ -435,7 +578,22 @@ def simulate_face_contour(
                 (q[2] - coupling.eccentric_ratio * phi) / ARCSEC if eccentric else 0.0,
                 (q[3] - ideal_z) * 1e6,
             ]
-            traces.append(np.concatenate([[t, phi_cmd], q, sync, servo.torque, servo.error * to_arcsec]))
+            y = data.qpos[qy] if qy >= 0 else 0.0
+            cross = [y * 1e6, (y * 1e3 - float(work_offset(coupling, phi)[0])) * 1e3]  # Y, Y - T (1 - cos q_s phi) [um]
+            traces.append(
+                np.concatenate(
+                    [
+                        [t, phi_cmd],
+                        q,
+                        sync,
+                        servo.torque[:4],
+                        servo.error[:4] * to_arcsec[:4],
+                        cross,
+                        servo.torque[4:],
+                        servo.error[4:] * to_arcsec[4:],
+                    ]
+                )
+            )
         integrator.step()
         tick += 1
         egb.update(dt, t)
@@ -443,6 +601,7 @@ def simulate_face_contour(
             progress(min((phi_cmd - egb.phi0) / total, 0.999))
     if rows:
         close_pass()
+    data.qfrc_applied[:] = 0.0
     if progress is not None:
         progress(1.0)
     tr = np.array(traces)
@@ -457,6 +616,7 @@ def simulate_face_contour(
         trace_sync=tr[:, 6:9],
         trace_torque=tr[:, 9:13],
         trace_error=tr[:, 13:17],
+        trace_cross=tr[:, 17:21],
         eccentric=eccentric,
         wall_time=time.perf_counter() - wall0,
         sim_time=float(data.time),

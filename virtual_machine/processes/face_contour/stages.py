@@ -5,7 +5,10 @@
 - `skive cut`: the ideal kinematics cut the first ``process.slots_cut`` slots
 (:func:`cutting.face_contour.slots.cut_slots`).
 - `skive run`: the face-contour machine (MuJoCo, its electronic gearbox) cuts them; the slots are cut from the
-  motion it recorded (:mod:`virtual_machine.processes.face_contour.cnc`).
+  motion it recorded (:mod:`virtual_machine.processes.face_contour.cnc`), under the cutting forces of the job's
+  material (:mod:`cutting.face_contour.forces`; a feed the machine's motors cannot cut is refused before the run);
+  the forces section of measurement.json gives per slot the layer, F_c and thrust and the drives' twists, and the
+  slot spacing with the forces and, on the same machine, without them.
 
 Either way the coupling is measured exactly (from the motion) and on the manifold solid
 (:mod:`metrology.face_slots`): slot bottom form (+ concave), side deviations and bows, slot spacing; written to
@@ -50,6 +53,9 @@ def format_setting_sheet(job: Job) -> str:
         + (f"; set e = {c.e:.4f} mm" if c.eccentric_on else ""),
         f"  cyclic ratio: amplitude for straight slots = {math.degrees(s['straight_slot_amplitude_rad']):.5f} deg "
         f"(q = {c.ratio_cycles})" + (f"; set {math.degrees(c.ratio_amplitude):.5f} deg" if c.cyclic_on else ""),
+        f"  work setting: the work's move along the tool axis T (1 - cos q_s phi) for straight slots, T = "
+        f"{s['straight_slot_offset_mm'] * UM:.1f} um (q_s = {c.setting_cycles})"
+        + (f"; set T = {c.setting_offset * UM:.1f} um" if c.work_setting_on else ""),
         f"  cycle: {s['tool_revolutions']:.0f} tool revolutions (plunge at S = {c.S:g} mm/rev, one workpiece "
         "revolution of spark-out)",
     ]
@@ -113,6 +119,7 @@ def simulate_face_job(job: Job, progress=None):
     from virtual_machine.processes.face_contour.cnc import simulate_face_contour
 
     slots = tuple(range(job.process["slots_cut"]))
+    load = cutting_load(job)
     record = simulate_face_contour(
         job.coupling,
         machine_params(job),
@@ -120,6 +127,8 @@ def simulate_face_job(job: Job, progress=None):
         job.process["tool_speed"],
         progress=progress,
         hold_speed=job.process["head_speed"] == "held",
+        load=load,
+        master=job.process["master"],
     )
     sync = record.trace_sync
     summary = {
@@ -129,18 +138,115 @@ def simulate_face_job(job: Job, progress=None):
             "work_arcsec": float(np.ptp(sync[:, 0])),
             "eccentric_arcsec": float(np.ptp(sync[:, 1])) if record.eccentric else None,
             "infeed_um": float(np.ptp(sync[:, 2])),
+            "cross_slide_um": float(np.ptp(record.trace_cross[:, 1])) if job.coupling.work_setting_on else None,
         },
         "following_error_peak": {
             axis: float(np.max(np.abs(record.trace_error[:, i])))
             for i, axis in enumerate(("A_arcsec", "H_arcsec", "E_arcsec", "Z_um"))
-        },
+        }
+        | ({"Y_um": float(np.max(np.abs(record.trace_cross[:, 3])))} if job.coupling.work_setting_on else {}),
     }
+    summary["cutting_load"] = motor_loads(job, load)
     return record, summary
+
+
+def cutting_load(job: Job):
+    """The cutting forces of the job's elements in its material (:class:`cutting.face_contour.forces.FaceLoad`)
+    over the passes' windows (the tip below the face)."""
+    from cutting.face_contour.forces import FaceLoad
+    from cutting.materials import material
+    from virtual_machine.processes.face_contour.cnc import pass_window
+
+    c: FaceCoupling = job.coupling
+    return FaceLoad(c, material(job.process["material"]), pass_window(c, 0.0))
+
+
+def motor_loads(job: Job, load) -> dict[str, Any]:
+    """The motors' torques under the cycle's heaviest pass (the pre-run check's sizing) [N m]."""
+    from virtual_machine.processes.face_contour.cnc import check_cutting_load
+
+    size = check_cutting_load(job.coupling, load, machine_params(job))
+    first = next(iter(size.values()))
+    return {
+        "heaviest_layer_mm": job.coupling.m * job.coupling.S,
+        "F_c_peak_N": first["F_c_N"],
+        "thrust_peak_N": first["thrust_N"],
+        "motors_N_m": {k: {"needed": v["needed_N_m"], "peak": v["peak_N_m"]} for k, v in size.items()},
+    }
+
+
+def forces_report(job: Job, record, load, slots: tuple[int, ...]) -> dict[str, Any]:
+    """The forces section of the run: per recorded slot the layer at M, the mean and peak F_c and thrust over its
+    final pass (where the element cuts), the work drive's and the head drive's twists when the tip passes M
+    (arcsec, and um at radius L) and the slot shift they make, work twist - head twist / m (the slot k is cut where
+    the head's real angle passes 2 pi k, the work then at a = (2 pi k - head twist) / m + work twist), and the whole
+    shift, the work's error against the head's real angle then (the twists and the servos' following errors); then
+    the slot spacing and the bottom's depth at M measured with the forces and on the same machine without them (a
+    second run, cutting air)."""
+    from cutting.face_contour.forces import chip
+    from cutting.face_contour.slots import workpiece_angle
+    from virtual_machine.processes.face_contour.cnc import measure_recorded, simulate_face_contour
+
+    c: FaceCoupling = job.coupling
+    rows = []
+    for p in record.passes:
+        mid = 2 * math.pi * p.turn
+        f = load.passes(p.turn)
+        fc = np.sum([x.F_c for x in f], axis=0)
+        fp = np.sum([x.F_p for x in f], axis=0)
+        cut = fc > 0
+        i = int(np.argmin(np.abs(p.phi - mid)))
+        work, head = p.twist[i]
+        sync = float(p.a[i] - workpiece_angle(c, p.phi[i]))  # the work's error at the head's real angle: the shift
+        rows.append(
+            {
+                "slot": p.slot,
+                "turn": p.turn,
+                # the layer at M: the element passing first takes it (the others follow it within the turn)
+                "layer_um": max(float(chip(c, mid - b, j).layer) for j, b in enumerate(c.phases)) * UM,
+                "F_c_mean_N": float(fc[cut].mean()) if cut.any() else 0.0,
+                "F_c_peak_N": float(fc.max()),
+                "thrust_mean_N": float(fp[cut].mean()) if cut.any() else 0.0,
+                "thrust_peak_N": float(fp.max()),
+                "work_drive_twist_arcsec": work / ARCSEC,
+                "work_drive_twist_um_at_L": work * c.L * UM,
+                "head_drive_twist_arcsec": head / ARCSEC,
+                "slot_shift_from_twists_um_at_L": (work - head / c.m) * c.L * UM,
+                "sync_at_M_arcsec": sync / ARCSEC,
+                "sync_at_M_um_at_L": sync * c.L * UM,
+            }
+        )
+    free = simulate_face_contour(
+        c,
+        machine_params(job),
+        slots,
+        job.process["tool_speed"],
+        hold_speed=job.process["head_speed"] == "held",
+        master=job.process["master"],
+    )
+    with_f, without_f = measure_recorded(record, slots), measure_recorded(free, slots)
+    loaded, unloaded = slot_spacing(c, with_f), slot_spacing(c, without_f)
+    for row, a, b in zip(rows, with_f, without_f, strict=True):
+        deeper = np.interp(c.L, b.radii, b.bottom) - np.interp(c.L, a.radii, a.bottom)
+        row["bottom_depth_change_um_at_M"] = float(deeper) * UM  # the bottom at radius L, + deeper with the forces
+        row["bottom_form_without_forces_um"] = b.form * UM
+    return {
+        "model": "Kienzle F_c = k_c(h) b h along -V on the element's tip edge and flanks, thrust "
+        "normal to the face (cutting/face_contour/forces.py)",
+        "material": load.material.key,
+        "slots": rows,
+        "spacing_with_forces_arcsec": (loaded / ARCSEC).tolist(),
+        "spacing_without_forces_arcsec": (unloaded / ARCSEC).tolist(),
+        "spacing_change_um_at_L": ((loaded - unloaded) * c.L * UM).tolist(),
+        "cutting_load": motor_loads(job, load),
+    }
 
 
 def format_simulation(summary: dict[str, Any]) -> str:
     s = summary["synchronisation_peak_to_peak"]
     ecc = f", eccentric - N phi {s['eccentric_arcsec']:.2f} arcsec" if s["eccentric_arcsec"] is not None else ""
+    if s.get("cross_slide_um") is not None:
+        ecc += f", cross slide - T (1 - cos q_s phi) {s['cross_slide_um']:.2f} um"
     return (
         "FACE-CONTOUR MACHINE (seed 004): the electronic gearbox's synchronisation, peak to peak: work - a(phi) "
         f"{s['work_arcsec']:.2f} arcsec{ecc}, infeed - z(phi) {s['infeed_um']:.2f} um; "
@@ -166,6 +272,10 @@ def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None, rrd
     cut = cut_recorded(record, tol)
     doc = measurement(c, measure_recorded(record, slots), measure_mesh(cut, c), cut, tol)
     durations["cut and measurement"] = time.perf_counter() - t0
+    stage("cutting forces: the slots again on the machine without them")
+    t0 = time.perf_counter()
+    doc["forces"] = forces_report(job, record, cutting_load(job), slots)
+    durations["machine without forces"] = time.perf_counter() - t0
     ideal = measure_slots(ExactSlots(c), c, slots[:1])[0]
     doc["ideal_bottom_form_um"] = ideal.form * UM
     doc["setting_sheet"] = setting_sheet(c, tool_speed(job))
@@ -197,6 +307,13 @@ def _record(rrd: Path, record, stl: Path) -> None:
             record.trace_sync,
             ["A - a(phi) [arcsec]", "E - N phi [arcsec]", "Z - z(phi) [um]"],
         )
+        if record.trace_cross is not None and record.coupling.work_setting_on:
+            rec.series(
+                "machine/cross_slide",
+                t,
+                record.trace_cross[:, :2],
+                ["Y [um]", "Y - T (1 - cos q_s phi) [um]"],
+            )
         rec.mesh_file("coupling", stl)
 
 
@@ -216,6 +333,23 @@ def format_result(doc: dict[str, Any]) -> str:
         )
     if "ideal_bottom_form_um" in doc:
         lines.append(f"  the ideal kinematics' bottom form: {doc['ideal_bottom_form_um']:+.2f} um")
+    if "forces" in doc:
+        f = doc["forces"]
+        lines.append(f"  cutting forces ({f['material']}, Kienzle):")
+        for s in f["slots"]:
+            lines.append(
+                f"    slot {s['slot']}: layer {s['layer_um']:.1f} um, F_c mean {s['F_c_mean_N']:.0f} / peak "
+                f"{s['F_c_peak_N']:.0f} N, thrust {s['thrust_mean_N']:.0f} / {s['thrust_peak_N']:.0f} N; work drive "
+                f"{s['work_drive_twist_arcsec']:+.2f} arcsec ({s['work_drive_twist_um_at_L']:+.3f} um at L), head "
+                f"drive {s['head_drive_twist_arcsec']:+.1f} arcsec"
+            )
+        lines.append(
+            "    spacing with forces "
+            + ", ".join(f"{v:+.3f}" for v in f["spacing_with_forces_arcsec"])
+            + " arcsec, without "
+            + ", ".join(f"{v:+.3f}" for v in f["spacing_without_forces_arcsec"])
+            + " arcsec"
+        )
     return "\n".join(lines)
 
 
@@ -229,6 +363,35 @@ def _write(out: Path, doc: dict[str, Any], cut) -> None:
     write_json(out / "measurement.json", doc)
 
 
+def _forces_tables(f: dict[str, Any] | None) -> list[str]:
+    """The report's forces section: per slot the layer, F_c and thrust, the drives' twists; the spacing with and
+    without the forces."""
+    from virtual_machine.output.report import html_table
+
+    if not f:
+        return []
+    keys = (
+        "layer_um",
+        "F_c_mean_N",
+        "F_c_peak_N",
+        "thrust_mean_N",
+        "thrust_peak_N",
+        "work_drive_twist_arcsec",
+        "work_drive_twist_um_at_L",
+        "head_drive_twist_arcsec",
+        "slot_shift_from_twists_um_at_L",
+        "sync_at_M_um_at_L",
+        "bottom_depth_change_um_at_M",
+    )
+    rows = [[s["slot"], *(s[k] for k in keys)] for s in f["slots"]]
+    spacing = zip(f["spacing_with_forces_arcsec"], f["spacing_without_forces_arcsec"], strict=True)
+    return [
+        f"<h2>Cutting forces ({html.escape(f['material'])})</h2><p>{html.escape(f['model'])}</p>",
+        html_table(["slot", *keys], rows),
+        html_table(["spacing with forces [arcsec]", "without [arcsec]"], [list(v) for v in spacing]),
+    ]
+
+
 def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
     from virtual_machine.output.report import html_table, write_page
 
@@ -239,6 +402,7 @@ def _report(page: Path, path: Path, doc: dict[str, Any], job: Job) -> None:
         "from the motion it recorded, measured exactly and on the manifold solid.</p>",
         html_table(["slot", "bottom", "bottom form [um]", "side bow 1 [um]", "side bow 2 [um]"], rows),
         html_table(["spacing deviation [arcsec]"], [[v] for v in doc["spacing_arcsec"]]),
+        *_forces_tables(doc.get("forces")),
         html_table(["", ""], [[k, v] for k, v in doc["run"]["durations_s"].items()]),
         f"<pre>{html.escape(format_setting_sheet(job))}</pre>",
         f"<pre>{html.escape(Path(path).read_text())}</pre>",
