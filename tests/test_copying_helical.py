@@ -5,9 +5,11 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import quad
 
 from cutting.flank import SIDES, flank_normals, flank_points
 from cutting.form_milling.copying_path import plan_copying
+from cutting.form_milling.forces import removed_areas
 from cutting.form_milling.helical import contact_profile, envelope_mill, helical_pass, mill_axis
 from cutting.form_milling.mill import designed_section, section_rolls
 from cutting.form_milling.sweep import MilledGear
@@ -128,3 +130,20 @@ def test_the_form_milling_machine_makes_the_helical_passes(helical_plan):
             assert np.abs(got.axis[inside, k] - a).max() < 1e-6
         turn = np.ptp(np.unwrap(np.arctan2(got.centre[inside, 1], got.centre[inside, 0])))
         assert turn > 0.8 * gear.face_width * math.tan(math.radians(20.0)) / gear.reference_radius  # the helix
+
+
+def test_the_set_over_mills_removal_rate_is_the_transverse_space_section():
+    """The force model's removal per millimetre of feed (cutting/form_milling/forces.py) on a helical space: the
+    set-over mill's profile read in the transverse plane (stretched by 1 / cos beta) against the nominal transverse
+    space between root and tip circles (the reference outline below the base circle): within 3 % (measured -2.6 % at
+    beta = 20 deg, -0.8 % on the spur gear: the mill's flanks run on along their tangents below the form circle)."""
+    for beta in (0.0, 20.0):
+        gear = Gear(teeth=20, normal_module=2.0, helix_angle=math.radians(beta), face_width=10.0)
+        mill = envelope_mill(gear, 25.0)
+        got = sum(removed_areas(gear, mill, 0.0).values())
+
+        def width(r: float, gear: Gear = gear) -> float:
+            return (2 * math.pi / gear.teeth - 2 * gear.half_thickness_angle(max(r, gear.base_radius))) * r
+
+        area = quad(width, gear.root_radius, gear.tip_radius, points=[gear.base_radius], limit=200)[0]
+        assert got == pytest.approx(area, rel=0.03)

@@ -31,13 +31,19 @@ RADIAL_RATIO = 0.4
 
 
 def removed_areas(gear: Gear, mill: DiscMill, clearance: float, lift: float = 0.0, samples: int = 4001) -> dict:
-    """Area [mm^2] of the space section each pass removes (nominal path points, left pass first), the mill
-    raised by ``lift`` [mm] (its lowest point above the root circle: the section it cuts entering the face)."""
+    """Area [mm^2] of the transverse space section each pass removes (nominal path points, left pass first), the
+    mill raised by ``lift`` [mm] (its lowest point above the root circle: the section it cuts entering the face).
+    On a helical space the mill's axis is set over by the helix angle (:func:`cutting.form_milling.helical.set_over`),
+    so the transverse plane cuts its profile stretched by 1 / cos(set-over): the transverse u is u cos(set-over) along
+    the mill's axis (the removal per millimetre of feed along the gear axis is the transverse section's)."""
+    from cutting.form_milling.helical import set_over
+
     u0, u1 = -gear.tip_radius * math.sin(math.pi / gear.teeth), gear.tip_radius * math.sin(math.pi / gear.teeth)
     u = np.linspace(u0, u1, samples)
     tip = np.sqrt(np.maximum(gear.tip_radius**2 - u**2, 0.0)) - gear.root_radius  # the blank, from the root
-    h_left = np.nan_to_num(mill.height(u + clearance / 2), nan=np.inf) + lift  # the mill at -c/2: profile at u + c/2
-    h_right = np.nan_to_num(mill.height(u - clearance / 2), nan=np.inf) + lift
+    k = math.cos(set_over(gear))
+    h_left = np.nan_to_num(mill.height(k * u + clearance / 2), nan=np.inf) + lift  # the mill at -c/2
+    h_right = np.nan_to_num(mill.height(k * u - clearance / 2), nan=np.inf) + lift
     left = np.clip(tip - h_left, 0.0, None)
     both = np.clip(tip - np.minimum(h_left, h_right), 0.0, None)
     du = u[1] - u[0]
