@@ -13,7 +13,11 @@ and joints:
 - ``mill_head``    hinge ``B`` about machine x through the mill centre on the Y slide: the swivel head that
   turns the mill's axis out of the transverse plane (seed 003's psi_y: the mill turned with the path);
 - ``mill_spindle`` hinge ``S`` about the head's y axis (machine y at B = 0): arbor and disc mill; site
-  ``mill_frame`` at the mill centre, its local z the mill axis (machine +y at B = 0).
+  ``mill_frame`` at the mill centre, its local z the mill axis (machine +y at B = 0). With a finger mill
+  (``FormMillLayout.head``, issue 28 item 2) the head is a right-angle head: ``S`` about machine +x (external
+  gear: the finger's tip towards the gear axis) or -x (internal gear: the head reaches into the ring's bore, the
+  tip outwards), ``mill_frame`` at the finger's tip centre, its local z the axis from the tip into the mill; B then
+  turns the finger about its own axis and is held at 0 (the finger's axis stays along the symmetry line).
 
 The slides sit at the origin, so the slide coordinates (X, Y, Z) are the mill centre in the machine frame
 and, at A = 0, in the gear frame. Each slide is driven by a ball screw: motor ``MX``/``MY``/``MZ`` -> screw
@@ -54,6 +58,7 @@ from machine_models.parts import (
 )
 
 SLIDES = ("X", "Y", "Z")
+HEADS = ("disc", "finger_external", "finger_internal")
 
 
 @dataclass(frozen=True)
@@ -192,6 +197,11 @@ class FormMillLayout:
     home_y: float = 0.0  # m
     home_z: float = 0.0  # m
     home_a: float = 0.0  # rad
+    #: the mill head: "disc" (the disc mill's spindle along machine y at B = 0) or a finger (end) mill's
+    #: right-angle head whose spindle lies along the radial symmetry line: "finger_external" (its tip towards the
+    #: gear axis, the axis from the tip into the mill along machine +x) or "finger_internal" (inside the ring, its
+    #: tip outwards, axis along -x); for a finger ``mill_radius`` is its largest radius, ``mill_width`` its length
+    head: str = "disc"
 
     @classmethod
     def for_gear(
@@ -208,9 +218,40 @@ class FormMillLayout:
         safe = tip_radius + mill_radius + 2 * MM
         return cls(tip_radius, face_width, tip_radius, teeth, mill_radius, mill_width, screw_pitch, home_x=safe)
 
+    @classmethod
+    def for_finger(
+        cls,
+        tip_radius: float,
+        face_width: float,
+        teeth: int,
+        mill_radius: float,
+        mill_length: float,
+        internal: bool,
+        screw_pitch: float = 0.010,
+    ) -> FormMillLayout:
+        """A finger-mill layout (the reference point is the finger's tip centre), home at the safe radius in front
+        of space 0 (inside the ring's bore for an internal gear)."""
+        head = "finger_internal" if internal else "finger_external"
+        safe = tip_radius + (-2 * MM if internal else 2 * MM)
+        return cls(
+            tip_radius, face_width, tip_radius, teeth, mill_radius, mill_length, screw_pitch, home_x=safe, head=head
+        )
+
+    @property
+    def finger(self) -> bool:
+        return self.head != "disc"
+
+    @property
+    def axis_sign(self) -> float:
+        """A finger's axis (tip into the mill) along machine x at A = 0: +1 external, -1 internal."""
+        return -1.0 if self.head == "finger_internal" else 1.0
+
     @property
     def safe_radius(self) -> float:
-        """Mill centre radius [m] at which the mill clears the tip circle by 2 mm (retract position of X)."""
+        """Mill centre radius [m] at which the mill clears the tip circle by 2 mm (retract position of X); a finger's
+        tip centre 2 mm outside an external gear's tip circle or inside an internal gear's."""
+        if self.finger:
+            return self.tip_radius + 2 * MM * self.axis_sign
         return self.tip_radius + self.mill_radius + 2 * MM
 
     def problems(self) -> list[str]:
@@ -219,6 +260,8 @@ class FormMillLayout:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 out.append(f"{name} = {v}: must be > 0 [m]")
+        if self.head not in HEADS:
+            out.append(f"head = {self.head!r}: must be one of {', '.join(HEADS)}")
         if not (isinstance(self.teeth, int | np.integer) and self.teeth >= 1):
             out.append(f"teeth = {self.teeth}: must be an integer >= 1")
         for name in ("home_x", "home_y", "home_z", "home_a"):
@@ -282,14 +325,23 @@ def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None =
     motor(spec, b_motor, "MB", params.b_motor_inertia, params.b_motor_torque)
     b_motor.gravcomp = gc
     couple(spec, "head_drive", "B", "MB", params.head_drive)
-    spindle = head.add_body(name="mill_spindle", quat=quat_x(-math.pi / 2))  # local z = machine +y at B = 0
+    if layout.finger:  # right-angle head: local z = the finger's axis along machine +-x (B turns it about itself)
+        turn = layout.axis_sign * math.pi / 4
+        spindle = head.add_body(name="mill_spindle", quat=[math.cos(turn), 0.0, math.sin(turn), 0.0])
+    else:
+        spindle = head.add_body(name="mill_spindle", quat=quat_x(-math.pi / 2))  # local z = machine +y at B = 0
     mill_mass = STEEL * math.pi * r_mill**2 * layout.mill_width
     inertial(spindle, params.spindle_mass + mill_mass, params.spindle_inertia + mill_mass * r_mill**2 / 2)
     spindle.gravcomp = gc
     spindle.add_joint(name="S", type=hinge, axis=[0, 0, 1], frictionloss=params.spindle_friction)
-    visual(spindle, cyl, (r_mill, layout.mill_width / 2), ORANGE)  # disc mill
-    visual(spindle, box, (r_mill * 0.9, 0.002, layout.mill_width / 2 + 0.001), DARK)  # angle mark
-    visual(spindle, cyl, (0.012, 0.06), STEELC, pos=(0, 0, -layout.mill_width / 2 - 0.06))  # arbor
+    if layout.finger:  # the finger from its tip (the site) along its axis, the shank behind it
+        w = layout.mill_width
+        visual(spindle, cyl, (r_mill, w / 2), ORANGE, pos=(0, 0, w / 2))
+        visual(spindle, cyl, (max(r_mill, 0.003), 0.03), STEELC, pos=(0, 0, w + 0.03))
+    else:
+        visual(spindle, cyl, (r_mill, layout.mill_width / 2), ORANGE)  # disc mill
+        visual(spindle, box, (r_mill * 0.9, 0.002, layout.mill_width / 2 + 0.001), DARK)  # angle mark
+        visual(spindle, cyl, (0.012, 0.06), STEELC, pos=(0, 0, -layout.mill_width / 2 - 0.06))  # arbor
     spindle.add_site(name="mill_frame", size=[0.002, 0.002, 0.002])
     s_motor = head.add_body(name="s_motor", pos=[r_mill + 0.05, 0.0, 0.18])
     motor(spec, s_motor, "MS", params.s_motor_inertia, params.s_motor_torque)

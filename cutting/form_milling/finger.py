@@ -437,12 +437,15 @@ def plan_finger(
     return plan
 
 
-def finger_check(plan: FingerPlan, L: np.ndarray, space: int = 0) -> tuple[float, dict[str, np.ndarray]]:
+def finger_check(
+    plan: FingerPlan, L: np.ndarray, space: int = 0, passes: list[MillPassPoses] | None = None
+) -> tuple[float, dict[str, np.ndarray]]:
     """Step 15: the flanks of ``space`` the finger cuts on the planned paths (exact swept surface of the passes of
-    it and its neighbours) against the design at every path point and roll length ``L``: residual [mm] per side
-    (n, m), excess material positive, and the largest |residual|."""
+    it and its neighbours; or of ``passes``, e.g. those a machine made) against the design at every path point and
+    roll length ``L``: residual [mm] per side (n, m), excess material positive, and the largest |residual|."""
     gear = plan.gear
-    cut = MilledGear(gear, plan.mill, plan.all_passes(spaces=[space - 1, space, space + 1]), "accuracy check")
+    passes = plan.all_passes(spaces=[space - 1, space, space + 1]) if passes is None else passes
+    cut = MilledGear(gear, plan.mill, passes, "accuracy check")
     res, worst = {}, 0.0
     for s in SIDES:
         zz, LL = np.meshgrid(plan.paths[s].z, L, indexing="ij")

@@ -1,11 +1,13 @@
 """A form-milling job (kind "form_milling", the copying method of seed 003): [gear], [mill], [process], [machine],
 and optionally [measurement] and [modification] (virtual_machine.job.gear_sections).
 
-[mill] the profiled disc mill: its outer diameter (mm), teeth, and its clearance in the tooth space (mm; one pass
-per flank). [process] the table feed (mm/min), the mill speed (rpm), the path points per half face width, the runs of
-the accuracy check on the machine, the material, and the tolerances of the swept volumes and gear.stl (mm).
+[mill] the profiled mill: its type ("disc", the default, or "finger": an end mill along the space's symmetry line,
+whose diameter is fitted to the space), the disc's outer diameter (mm), its teeth, and its clearance in the tooth
+space (mm; one pass per flank). [process] the table feed (mm/min), the mill speed (rpm), the path points per half
+face width, the runs of the accuracy check on the machine, the material, and the tolerances of the swept volumes and
+gear.stl (mm).
 Its [machine] only overrides the form-milling machine's model ([machine.model]). The gear must be one the copying
-method can make (external spur), the mill must fit its tooth space.
+method can make (spur; internal only with the finger mill), the mill must fit its tooth space.
 """
 
 from __future__ import annotations
@@ -22,7 +24,6 @@ from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear
 from virtual_machine.job.head import MODEL_ONLY_MACHINE_KEYS, Job, model_problems
 from virtual_machine.job.keys import (
     MATERIAL,
-    REQUIRED,
     STL_TOLERANCE,
     Key,
     at_least,
@@ -32,11 +33,28 @@ from virtual_machine.job.keys import (
     unknown_sections,
 )
 
+MILL_TYPES = ("disc", "finger")
+#: teeth of the mill when [mill] gives none: a disc mill's and a finger (end) mill's
+DEFAULT_TEETH = {"disc": 12, "finger": 4}
+
 MILL_KEYS: dict[str, Key] = {
-    "diameter": Key(
-        float, REQUIRED, "mm", "outer diameter of the profiled disc mill (copying method, seed 003)", positive
+    "type": Key(
+        str,
+        "disc",
+        "",
+        "'disc': a profiled disc mill, axis tangential (external gears); 'finger': a profiled end mill whose axis lies "
+        "along the space's symmetry line (external and internal gears)",
+        one_of(*MILL_TYPES),
     ),
-    "teeth": Key(int, 12, "", "teeth of the mill (feed per tooth)", at_least(1)),
+    "diameter": Key(
+        float,
+        None,
+        "mm",
+        "outer diameter of the profiled disc mill (copying method, seed 003; required for the disc mill, the finger "
+        "mill's is fitted to the space: the parsed job gives its largest diameter)",
+        positive,
+    ),
+    "teeth": Key(int, None, "", "teeth of the mill (feed per tooth; default 12 disc, 4 finger)", at_least(1)),
     "clearance": Key(
         float, 0.2, "mm", "the mill is this much narrower than the tooth space: one pass per flank", positive
     ),
@@ -97,7 +115,7 @@ def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
             Problem(
                 "mill",
                 "[mill] and [cutter]",
-                "a job cuts with either a skiving cutter or a disc mill",
+                "a job cuts with either a skiving cutter or a profiled (disc or finger) mill",
                 "remove [cutter] (form milling) or [mill] (skiving)",
             )
         )
@@ -107,16 +125,29 @@ def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
     measurement, modification = parse_optional_sections(data, problems)
     problems += model_problems(parsed["machine"].get("model"), _form_mill_machine)
     g, mill = parsed["gear"], parsed["mill"]
+    kind = mill.get("type", "disc")
+    if "teeth" in mill and mill["teeth"] is None and kind in DEFAULT_TEETH:
+        mill["teeth"] = DEFAULT_TEETH[kind]
+    problems += _mill_type_problems(mill, parsed["process"], data.get("process"))
     gear = None
     if set(GEAR_KEYS) <= set(g):
         gear = gear_from(g)
         problems += check_gear(gear, "gear")
         from cutting.form_milling.mill import check_copying_gear
 
-        problems += [
-            Problem("gear", "internal" if gear.internal else f"helix_angle = {g['helix_angle']}", why, "")
-            for why in check_copying_gear(gear)
-        ]
+        if kind in MILL_TYPES:
+            for why in check_copying_gear(gear, kind):
+                if gear.internal and kind == "disc":
+                    problems.append(
+                        Problem(
+                            "mill.type",
+                            kind,
+                            f"the gear is internal ([gear] internal = true): {why}",
+                            'set mill.type = "finger" (and leave mill.diameter out: the finger is fitted to the space)',
+                        )
+                    )
+                else:
+                    problems.append(Problem("gear", f"helix_angle = {g['helix_angle']}", why, ""))
         if gear.helix_angle != 0.0:
             problems.append(
                 Problem(
@@ -129,14 +160,68 @@ def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
                 )
             )
         sound = not problems  # the mill and the design are checked on a gear the copying method can make
-        if sound and set(MILL_KEYS) <= set(mill):
+        if sound and set(MILL_KEYS) <= set(mill) and kind == "disc" and mill["diameter"] is not None:
             problems += _mill_problems(gear, mill)
+        if sound and set(MILL_KEYS) <= set(mill) and kind == "finger" and mill["diameter"] is None:
+            found, fitted = _finger_problems(gear, mill, modification)
+            problems += found
+            mill["diameter"] = fitted  # derived: the finger's largest diameter as fitted to the space
         if sound and modification is not None:
             problems += design_problems(modification, gear)
     if problems:
         raise InputError(problems, source)
     payload = FormMillingPayload(gear, mill, measurement, modification)
     return Job(source, "form_milling", parsed["machine"], parsed["process"], payload)
+
+
+def _mill_type_problems(mill: dict[str, Any], process: dict[str, Any], raw_process: Any) -> list[Problem]:
+    """The keys each mill type needs or cannot take: the disc's diameter, the finger's none (its radius is fitted
+    to the space) and no ``process.mill_axis`` (its axis stays along the symmetry line)."""
+    kind = mill.get("type")
+    out = []
+    if kind == "disc" and "diameter" in mill and mill["diameter"] is None:
+        out.append(
+            Problem(
+                "mill.diameter",
+                None,
+                "missing required key for the disc mill (outer diameter of the profiled disc mill)",
+                'add diameter = <number, mm>, or set mill.type = "finger"',
+            )
+        )
+    if kind == "finger" and mill.get("diameter") is not None:
+        out.append(
+            Problem(
+                "mill.diameter",
+                mill["diameter"],
+                "a finger mill's diameter is not chosen: its radius is fitted to the tooth space (seed 003, eq. 9)",
+                "remove mill.diameter (skive setup prints the fitted diameter)",
+            )
+        )
+    if kind == "finger" and isinstance(raw_process, dict) and "mill_axis" in raw_process:
+        out.append(
+            Problem(
+                "process.mill_axis",
+                process.get("mill_axis", raw_process["mill_axis"]),
+                "the finger mill's axis stays along the space's symmetry line (a turn would move its silhouette "
+                "along the face): it has no turned or fixed axis",
+                "remove process.mill_axis",
+            )
+        )
+    return out
+
+
+def _finger_problems(
+    gear: Gear, mill: dict[str, Any], modification: Modification | None
+) -> tuple[list[Problem], float | None]:
+    """A finger mill the space cannot give (a clearance that leaves no tip, an undercut section), and else the
+    fitted finger's largest diameter [mm] (seed 003, eq. 9: fitted to the designed space at mid face)."""
+    from cutting.form_milling.finger import fit_finger_mill
+
+    try:
+        fitted = fit_finger_mill(gear, mill["clearance"], modification, mill["teeth"])
+    except ValueError as exc:
+        return [Problem("mill.clearance", mill["clearance"], str(exc), "use a smaller clearance (e.g. 0.2 mm)")], None
+    return [], 2 * fitted.radius
 
 
 def _mill_problems(gear: Gear, mill: dict[str, Any]) -> list[Problem]:

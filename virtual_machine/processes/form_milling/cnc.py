@@ -1,13 +1,14 @@
 """The CNC of the form-milling machine (seed 003, the copying method) and its simulation loop.
 
-A pass mills one tooth space k with the profiled disc mill: retract X to the safe radius, rapid Z to the
-pass start, index the **indexing work axis** A to ``-2 pi k / z`` (space k then faces +x, where the mill
-is) and swivel the head B to the pass's start, approach X/Y to the path, settle, feed along z at the feed
-rate with X and Y following the path (the mill centre in the **profiling plane** z = const), retract X. A pass
-whose mill is turned with the path (seed 003's transfer angles, eq. 6) gives the mill's axis per face position:
-B tilts it towards the gear axis and A turns the work by the small angle that puts the axis's radial component
-into the head's plane, X Y Z following the centre turned with the work (five axes at once). The spindle runs at
-the commanded speed all the time (velocity loop, half-cosine run-up).
+A pass mills one tooth space k with the profiled disc mill (or the finger mill, whose axis the right-angle head
+keeps along the space's symmetry line: its passes give no axis, B stays at 0, X Y Z carry its tip centre): retract X
+to the safe radius, rapid Z to the pass start, index the **indexing work axis** A to ``-2 pi k / z`` (space k then
+faces +x, where the mill is) and swivel the head B to the pass's start, approach X/Y to the path, settle, feed along
+z at the feed rate with X and Y following the path (the mill centre in the **profiling plane** z = const), retract
+X. A pass whose mill is turned with the path (seed 003's transfer angles, eq. 6) gives the mill's axis per face
+position: B tilts it towards the gear axis and A turns the work by the small angle that puts the axis's radial
+component into the head's plane, X Y Z following the centre turned with the work (five axes at once). The spindle
+runs at the commanded speed all the time (velocity loop, half-cosine run-up).
 
 Per axis (A, X, Y, Z, B) the servo is the usual cascade on the **motor encoder** (semi-closed loop, as a machine
 with rotary encoders): position loop (gain Kv) with velocity feed-forward -> PI velocity loop -> torque,
@@ -342,7 +343,8 @@ def simulate_form_milling(
     when the integration blows up or a servo runs away (the message names what to change). ``load(pass index, z)``
     gives the cutting force on the mill [N] (n, 3) in the space's frame (tangential, radial out, axial) at the
     commanded mill-centre face positions z [mm] of the pass's feed; it acts at the mill's lowest point on the mill
-    and, reversed, on the table (none: the passes cut air)."""
+    and, reversed, on the table (none: the passes cut air); a finger mill's (``layout.finger``) mid-way along its
+    cutting length, and (n, 6) adds a torque [N m] on the mill (same frame; reversed on the table)."""
     params = params or FormMillParams()
     tuning = tuning or CncTuning()
     if not passes:
@@ -433,17 +435,23 @@ def simulate_form_milling(
         n = len(seg.pos)
         if seg.kind == "feed":
             rec = np.empty((n, 7 + POSITIONED))
-            forces = None
+            forces = torques = None
             if load is not None:  # space frame (tangential, radial, axial) -> machine frame (x radial, y tangential)
                 f = np.asarray(load(seg.index, seg.pos[:, _Z] * 1e3), dtype=float)
                 forces = np.column_stack([f[:, 1], f[:, 0], f[:, 2]])
+                if f.shape[1] == 6:  # a torque on the mill too (the finger's cutting torque about its axis)
+                    torques = np.column_stack([f[:, 4], f[:, 3], f[:, 5]])
             for k in range(n):
                 pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[k], seg.vel[k], seg.acc[k]
                 if forces is not None:
                     data.qfrc_applied[:] = 0.0
-                    point = xpos[site_m] - np.array([r_mill, 0.0, 0.0])
-                    mujoco.mj_applyFT(model, data, forces[k], zero3, point, body_m, data.qfrc_applied)
-                    mujoco.mj_applyFT(model, data, -forces[k], zero3, point, body_b, data.qfrc_applied)
+                    if layout.finger:  # mid-way along the finger's cutting length
+                        point = xpos[site_m] + xmat[site_m].reshape(3, 3)[:, 2] * (layout.mill_width / 2)
+                    else:  # the disc mill's lowest point
+                        point = xpos[site_m] - np.array([r_mill, 0.0, 0.0])
+                    tq = zero3 if torques is None else torques[k]
+                    mujoco.mj_applyFT(model, data, forces[k], tq, point, body_m, data.qfrc_applied)
+                    mujoco.mj_applyFT(model, data, -forces[k], -tq, point, body_b, data.qfrc_applied)
                 # the state at this tick's time (site poses left by mj_step are one sub-step old)
                 mujoco.mj_kinematics(model, data)
                 rb = xmat[site_b].reshape(3, 3)

@@ -33,7 +33,8 @@ from cutting.form_milling.copying_path import (
     correction_from_residual,
     plan_copying,
 )
-from cutting.form_milling.forces import RADIAL_RATIO, MillLoad
+from cutting.form_milling.finger import FingerPlan, finger_check, pass_length, path_point, plan_finger
+from cutting.form_milling.forces import RADIAL_RATIO, FingerLoad, MillLoad
 from cutting.form_milling.helical import set_over
 from cutting.form_milling.mill import to_space
 from cutting.form_milling.removal import cut_gear
@@ -54,9 +55,31 @@ Stage = Callable[[str], None]
 CHECK_POINTS = 11
 
 
-def plan_job(job: Job, checks: int = 3) -> CopyingPlan:
-    """The seed's 15 steps for the job (``checks`` rounds of the accuracy check on the ideal machine)."""
+def is_finger(job: Job) -> bool:
+    """Whether the job's mill is the finger mill (``mill.type = "finger"``)."""
+    return (job.mill or {}).get("type", "disc") == "finger"
+
+
+def plan_job(job: Job, checks: int = 3) -> CopyingPlan | FingerPlan:
+    """The seed's 15 steps for the job (``checks`` rounds of the accuracy check on the ideal machine): the disc
+    mill's (:func:`plan_copying`) or the finger mill's (:func:`cutting.form_milling.finger.plan_finger`)."""
     m, p = job.mill, job.process
+    if is_finger(job):
+        try:
+            return plan_finger(
+                job.gear,
+                job.modification,
+                m["clearance"],
+                p["path_points"],
+                m["teeth"],
+                checks=checks,
+                check_points=CHECK_POINTS,
+                path_form=p["path_form"],
+            )
+        except ValueError as exc:
+            raise InputError(
+                Problem("mill", m, str(exc), "change mill.clearance or the [modification]"), job.source
+            ) from exc
     try:
         return plan_copying(
             job.gear,
@@ -76,8 +99,43 @@ def plan_job(job: Job, checks: int = 3) -> CopyingPlan:
         ) from exc
 
 
-def format_plan(plan: CopyingPlan) -> str:
+def format_finger_plan(plan: FingerPlan) -> str:
+    """The setting sheet of the copying method with the finger mill: mill, path points, corrections, iterations."""
+    s = plan.summary()
+    mill = s["mill"]
+    half = pass_length(plan.gear, plan.mill)
+    lines = [
+        "COPYING METHOD (seed 003): profiled finger mill, one pass per flank",
+        f"  mill: diameter {mill['diameter_mm']:.3f} mm (tip {mill['tip_diameter_mm']:.3f} mm), {mill['teeth']} teeth, "
+        f"length {mill['length_mm']:.3f} mm, radius of {len(mill['radius_bezier'])} cubic Bezier segments; clearance "
+        f"{plan.clearance:.3f} mm; passes from z = -{half:.2f} to +{half:.2f} mm",
+        "  axis along the space's symmetry line ("
+        + ("towards the gear axis" if not plan.gear.internal else "out of the ring's bore")
+        + "); path: "
+        + ("the seed's single cubic Bezier over the face (eq. 17)" if s["path_form"] == "bezier" else "C2 cubic spline")
+        + " of the tip centre",
+        "  path point   z [mm]   left: x [um]  y [um]   right: x [um]  y [um]   (from the nominal path point)",
+    ]
+    z = plan.paths["left"].z
+    for i in range(len(z)):
+        row = f"  {i - len(z) // 2:+10d} {z[i]:8.3f}"
+        for side in SIDES:
+            x0, y0 = path_point(plan.gear, side, plan.clearance)
+            xy = plan.paths[side].at(z[i : i + 1])[0]
+            row += f"   {(xy[0] - x0) * 1e3:10.3f} {(xy[1] - y0) * 1e3:7.3f}"
+        lines.append(row)
+    for it in s["iterations"]:
+        if it["step"] == "path":
+            lines.append(f"  steps 11-14, iteration {it['iteration']}: path moved {it['path_change_um']:.4f} um")
+        else:
+            lines.append(f"  step 15, accuracy check {it['round']}: largest residual {it['max_residual_um']:.3f} um")
+    return "\n".join(lines)
+
+
+def format_plan(plan: CopyingPlan | FingerPlan) -> str:
     """The setting sheet of the copying method: mill, path points, corrections, iterations."""
+    if isinstance(plan, FingerPlan):
+        return format_finger_plan(plan)
     s = plan.summary()
     mill = s["mill"]
     lines = [
@@ -125,6 +183,15 @@ def format_copying(doc: dict[str, Any]) -> str:
     """What the copying method did: the mill, the accuracy checks and the modification it made."""
     c = doc["copying"]
     mill = c["mill"]
+    if mill.get("type") == "finger":
+        lines = [
+            "",
+            "COPYING METHOD (seed 003)  profiled finger mill, one pass per flank",
+            f"  mill {mill['diameter_mm']:.3f} mm (tip {mill['tip_diameter_mm']:.3f} mm), length "
+            f"{mill['length_mm']:.3f} mm, radius of {len(mill['radius_bezier'])} cubic Bezier segments; "
+            f"{len(c['path_points_z_mm'])} path points per pass",
+        ]
+        return "\n".join(lines + _copying_results(doc))
     lines = [
         "",
         "COPYING METHOD (seed 003)  profiled disc mill, one pass per flank",
@@ -132,6 +199,13 @@ def format_copying(doc: dict[str, Any]) -> str:
         f"{len(mill['edge_bezier']['left'])} + {len(mill['edge_bezier']['right'])} cubic Bezier segments; "
         f"{len(c['path_points_z_mm'])} path points per pass",
     ]
+    return "\n".join(lines + _copying_results(doc))
+
+
+def _copying_results(doc: dict[str, Any]) -> list[str]:
+    """The accuracy checks and the modification made (either mill)."""
+    c = doc["copying"]
+    lines = []
     for it in c["iterations"]:
         if it["step"] != "path":
             lines.append(
@@ -149,7 +223,7 @@ def format_copying(doc: dict[str, Any]) -> str:
     worst = [float(np.nanmax(np.abs(np.asarray(topo[s]["against_design_um"], float)))) for s in SIDES if s in topo]
     if worst:
         lines.append(f"  topography against the design: largest {max(worst):.2f} um")
-    return "\n".join(lines)
+    return lines
 
 
 def _measure(job: Job, exact: MilledGear, stl, stl_path: Path, sweep_error: float) -> dict[str, Any]:
@@ -167,7 +241,7 @@ def _measure(job: Job, exact: MilledGear, stl, stl_path: Path, sweep_error: floa
 
 
 def _cut_and_measure(
-    job: Job, plan: CopyingPlan, passes: list[MillPassPoses], out: Path, stage: Stage, name: str
+    job: Job, plan: CopyingPlan | FingerPlan, passes: list[MillPassPoses], out: Path, stage: Stage, name: str
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """gear.stl by manifold3d (space after space) and the measurement of the exact swept surface."""
     stage("removal: the mill's swept volumes, space after space (manifold3d)")
@@ -220,6 +294,10 @@ def machine_layout(job: Job, plan: CopyingPlan):
     from machine_models.parts import MM
 
     g = job.gear
+    if isinstance(plan, FingerPlan):
+        return FormMillLayout.for_finger(
+            g.tip_radius * MM, g.face_width * MM, g.teeth, plan.mill.radius * MM, plan.mill.width * MM, g.internal
+        )
     return FormMillLayout.for_gear(
         g.tip_radius * MM, g.face_width * MM, g.teeth, plan.mill.radius * MM, plan.mill.width * MM
     )
@@ -237,6 +315,8 @@ def cnc_passes(plan: CopyingPlan) -> list:
     plan's mill also gives its centre's axial position and its axis (:func:`mill_pose_in_cnc_frame`)."""
     from virtual_machine.processes.form_milling.cnc import MillPass
 
+    if isinstance(plan, FingerPlan):
+        return finger_cnc_passes(plan)
     half = plan.gear.face_width / 2 + plan.approach
     out = []
     for k in range(plan.gear.teeth):
@@ -261,6 +341,24 @@ def cnc_passes(plan: CopyingPlan) -> list:
     return out
 
 
+def finger_cnc_passes(plan: FingerPlan) -> list:
+    """The finger's passes for the CNC (as :func:`cnc_passes`): the tip centre (radial, tangential) in the frame
+    where space k faces +x, from the planned path; no axis (the head keeps it along the symmetry line)."""
+    from virtual_machine.processes.form_milling.cnc import MillPass
+
+    half = pass_length(plan.gear, plan.mill)
+    out = []
+    for k in range(plan.gear.teeth):
+        for side, (z0, z1) in zip(SIDES, ((half, -half), (-half, half)), strict=True):
+
+            def tip(z: np.ndarray, path: FlankPath = plan.paths[side]) -> np.ndarray:
+                xy = path.at(np.asarray(z, dtype=float))
+                return np.column_stack([xy[:, 1], xy[:, 0]])
+
+            out.append(MillPass(k, z0, z1, tip))
+    return out
+
+
 def mill_pose_in_cnc_frame(plan: CopyingPlan, side: str, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The mill's centre [mm] and unit axis, (N, 3) each, in the CNC's space frame (radial, tangential, axial) at
     path positions ``z`` [mm]: the plan's poses of space 0 (turned by the path, set over on a helical space) in the
@@ -272,13 +370,15 @@ def mill_pose_in_cnc_frame(plan: CopyingPlan, side: str, z: np.ndarray) -> tuple
     return to_space(plan.gear, 0, poses.centre)[:, swap], to_space(plan.gear, 0, poses.axis)[:, swap]
 
 
-def mill_load(job: Job, plan: CopyingPlan) -> MillLoad:
+def mill_load(job: Job, plan: CopyingPlan | FingerPlan) -> MillLoad | FingerLoad:
     """The steady cutting force of each pass (:mod:`cutting.form_milling.forces`) for the job's material and process."""
     p = job.process
+    if isinstance(plan, FingerPlan):
+        return FingerLoad(job.gear, plan.mill, material(p["material"]), p["feed"], p["mill_speed"], plan.clearance)
     return MillLoad(job.gear, plan.mill, material(p["material"]), p["feed"], p["mill_speed"], plan.clearance)
 
 
-def load_of(ml: MillLoad):
+def load_of(ml: MillLoad | FingerLoad):
     """The CNC's load callback: pass i of :func:`cnc_passes` is the left pass (fed down) for even i."""
 
     def load(index: int, z: np.ndarray) -> np.ndarray:
@@ -306,6 +406,8 @@ def machine_check(plan: CopyingPlan, poses: list[MillPassPoses]) -> tuple[float,
     z = plan.gear.teeth
     near = [p for p in poses if p.space in (z - 1, 0, 1)]
     lc = np.linspace(form_roll_length(plan.gear), roll(plan.gear, plan.gear.tip_diameter_value), CHECK_POINTS)
+    if isinstance(plan, FingerPlan):
+        return finger_check(plan, lc, passes=near)
     return accuracy_check(plan, lc, passes=near)
 
 
@@ -328,6 +430,7 @@ def run_form_job(
     durations["plan"] = time.perf_counter() - t0
     layout, params = machine_layout(job, plan), machine_params(job)
     p = job.process
+    check_motors(job, layout, params, mill_load(job, plan))
     runs = []
     record = poses = None
     lc = np.linspace(form_roll_length(job.gear), roll(job.gear, job.gear.tip_diameter_value), CHECK_POINTS)
@@ -352,16 +455,8 @@ def run_form_job(
     doc["copying"] = {**plan.summary(), "machine_checks": runs}
     doc["cut"] = {**facts["cut"], "motion": "the simulated form-milling machine"}
     doc["run"] = _run_facts(job, path, record, durations)
-    doc["run"]["forces"] = {
-        "material": ml.material.key,
-        "kc11": ml.material.kc11,
-        "mc": ml.material.mc,
-        "model": "steady force of each pass from the section it removes (cutting/form_milling/forces.py)",
-        "mean_chip_thickness_mm": ml.chip_thickness,
-        "removed_area_mm2": ml.areas,
-        "main_force_N": {s: ml.main_force(s) for s in SIDES},
-        "thrust_N": {s: RADIAL_RATIO * ml.main_force(s) for s in SIDES},
-    }
+    doc["run"]["forces"] = forces_doc(ml)
+    doc["run"]["motor_torque_Nm"] = motor_loads(layout, params, ml)  # the cutting force's share of each motor
     stage("report")
     charts = _write(doc, out)
     _report(out / "report.html", path, doc, charts, plan)
@@ -369,6 +464,74 @@ def run_form_job(
         stage("recording")
         _record(rrd, job, record, out / "gear.stl", doc, charts)
     return doc
+
+
+def forces_doc(ml: MillLoad | FingerLoad) -> dict[str, Any]:
+    """The cutting force model's figures for measurement.json."""
+    out = {
+        "material": ml.material.key,
+        "kc11": ml.material.kc11,
+        "mc": ml.material.mc,
+        "model": "steady force of each pass from the section it removes (cutting/form_milling/forces.py)",
+        "removed_area_mm2": ml.areas,
+        "main_force_N": {s: ml.main_force(s) for s in SIDES},
+    }
+    if isinstance(ml, FingerLoad):
+        out["mean_chip_thickness_mm"] = {s: ml.chip_thickness(s) for s in SIDES}
+        out["against_feed_N"] = {s: ml.components(s)[0] for s in SIDES}
+        out["normal_N"] = {s: ml.components(s)[1] for s in SIDES}
+        out["spindle_torque_Nm"] = {s: ml.torque(s) for s in SIDES}
+        return out
+    return {
+        **out,
+        "mean_chip_thickness_mm": ml.chip_thickness,
+        "thrust_N": {s: RADIAL_RATIO * ml.main_force(s) for s in SIDES},
+    }
+
+
+def motor_loads(layout, params, ml: MillLoad | FingerLoad) -> dict[str, float]:
+    """The largest steady torque [N m] each motor needs against the cutting force of a pass in full engagement
+    (friction and weight aside): a slide's F t / 2 pi through its coupling, the spindle's cutting torque through
+    its belt, the table's moment of the tangential force at the root radius through its worm."""
+    lead = layout.screw_pitch / (2 * math.pi)
+    out = dict.fromkeys(("a", "x", "y", "z", "s"), 0.0)
+    for side in SIDES:
+        if isinstance(ml, FingerLoad):
+            feed, tangential = ml.components(side)
+            radial, torque = 0.0, ml.torque(side)
+        else:
+            feed, tangential = ml.main_force(side), 0.0
+            radial, torque = RADIAL_RATIO * feed, feed * ml.mill.radius * 1e-3
+        r = ml.gear.root_radius * 1e-3
+        need = {
+            "x": radial * lead * params.x_drive.ratio,
+            "y": tangential * lead * params.y_drive.ratio,
+            "z": feed * lead * params.z_drive.ratio,
+            "s": torque * params.spindle_drive.ratio,
+            "a": tangential * r * params.work_drive.ratio,
+        }
+        out = {k: max(out[k], v) for k, v in need.items()}
+    return out
+
+
+def check_motors(job: Job, layout, params, ml: MillLoad | FingerLoad) -> None:
+    """Refuse the job before the run when a motor's peak torque cannot take the cutting force (InputError naming
+    the motor's key and the feed)."""
+    need = motor_loads(layout, params, ml)
+    problems = [
+        Problem(
+            f"machine.model.{k}_motor_torque",
+            getattr(params, f"{k}_motor_torque"),
+            f"the cutting force needs {v:.2f} N m of motor M{k.upper()} (peak "
+            f"{getattr(params, f'{k}_motor_torque'):.2f} N m)",
+            f"lower process.feed (now {job.process['feed']:g} mm/min) or give M{k.upper()} a peak torque above "
+            f"{v:.2f} N m",
+        )
+        for k, v in need.items()
+        if v > getattr(params, f"{k}_motor_torque")
+    ]
+    if problems:
+        raise InputError(problems, job.source)
 
 
 def _run_facts(job: Job, path: Path, record, durations: dict[str, float]) -> dict[str, Any]:
@@ -396,7 +559,7 @@ def _write(doc: dict[str, Any], out: Path) -> list[Path]:
     return charts
 
 
-def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], plan: CopyingPlan) -> None:
+def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], plan: CopyingPlan | FingerPlan) -> None:
     from virtual_machine.output.formatting import class_table
     from virtual_machine.output.report import html_table, image_tag, write_page
 
@@ -418,7 +581,8 @@ def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], pla
     body = [
         f"<h1>skive run: {html.escape(Path(path).name)}</h1>",
         f'<p class="verdict">ISO 1328-1:2013 class of the gear: {cls}</p>',
-        "<p>Form milling by the copying method (seed 003): a profiled disc mill on the planned spatial path, one pass "
+        f"<p>Form milling by the copying method (seed 003): a profiled {plan.mill.summary().get('type', 'disc')} mill "
+        "on the planned spatial path, one pass "
         "per flank, on the simulated form-milling machine. Measured: the exact swept surface of the passes the "
         "machine made, against the design.</p>",
         "<h2>ISO 1328-1 deviations against the design [um]</h2>",
