@@ -247,10 +247,11 @@ class FaceMachineLayout:
 
 def head_angle_joints(model: mujoco.MjModel) -> tuple[str, ...]:
     """The joints whose sum is the head's absolute angle phi: (H, E) with the eccentric, (H,) without."""
-    return ("H", "E") if _has(model, "E") else ("H",)
+    return ("H", "E") if has_joint(model, "E") else ("H",)
 
 
-def _has(model: mujoco.MjModel, joint: str) -> bool:
+def has_joint(model: mujoco.MjModel, joint: str) -> bool:
+    """Whether the model has the joint (the optional axes E and Y)."""
     try:
         model.joint(joint)
     except KeyError:

@@ -25,3 +25,25 @@ axial_feed = {axial_feed}
 passes = [2.25]
 sweep_error = {sweep_error}
 """
+
+
+def turning_job(
+    vibration: str = "", revolutions: int = 30, sync: str = "master-slave", process: str = "", machine: str = ""
+) -> str:
+    """The vibration-turning job the tests run (40 mm, S0 0.2 mm, r_eps 0.8 mm, a_p 0.3 mm, 25 m/min): ``vibration``
+    a [vibration] section or "", extra ``process`` and ``machine`` lines."""
+    return f"""
+[turning]
+diameter = 40.0
+feed = 0.2
+nose_radius = 0.8
+depth = 0.3
+{vibration}
+[process]
+cutting_speed = 25.0
+revolutions = {revolutions}
+{process}
+[machine]
+synchronization = "{sync}"
+{machine}
+"""

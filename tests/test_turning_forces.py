@@ -15,6 +15,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from small_jobs import turning_job
 
 from cutting.errors import InputError
 from cutting.materials import material
@@ -40,27 +41,11 @@ HARD = dataclasses.replace(PLAIN, vibration=FeedVibration(0.2, 2.25, 3.0, "hard"
 NOSE = NoseGeometry(R0, R_EPS, DEPTH)
 STEEL = material("16MnCr5")
 
-JOB = """
-[turning]
-diameter = 40.0
-feed = 0.2
-nose_radius = 0.8
-depth = 0.3
-{vibration}
-[process]
-cutting_speed = 25.0
-revolutions = {revs}
-material = "{material}"
-
-[machine]
-synchronization = "master-slave"
-{model}
-"""
 VIBRATION = '[vibration]\namplitude = 0.2\ncycles_per_rev = 2.25\nxi = 3.0\nform = "hard"\n'
 
 
 def job(vibration: str = "", revs: int = 8, model: str = "", material: str = "16MnCr5"):
-    text = JOB.format(vibration=vibration, revs=revs, model=model, material=material)
+    text = turning_job(vibration, revs, process=f'material = "{material}"', machine=model)
     return parse_job(tomllib.loads(text), "turning.toml")
 
 

@@ -10,6 +10,7 @@ import tomllib
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from small_jobs import turning_job
 
 from cutting.errors import InputError
 from cutting.turning.vibration import crest_height
@@ -18,26 +19,12 @@ from virtual_machine.cli import main
 from virtual_machine.job import parse_job
 from virtual_machine.processes.turning.stages import ideal_setup, simulate_summary
 
-JOB = """
-[turning]
-diameter = 40.0
-feed = 0.2
-nose_radius = 0.8
-depth = 0.3
-{vibration}
-[process]
-cutting_speed = 25.0
-revolutions = 30
-
-[machine]
-synchronization = "{sync}"
-"""
 SYMMETRIC = "[vibration]\namplitude = 0.2\ncycles_per_rev = 2.25\n"
 HARD = SYMMETRIC + 'xi = 3.0\nform = "hard"\n'
 
 
 def job(vibration: str = "", sync: str = "master-slave"):
-    return parse_job(tomllib.loads(JOB.format(vibration=vibration, sync=sync)), "turning.toml")
+    return parse_job(tomllib.loads(turning_job(vibration, sync=sync)), "turning.toml")
 
 
 @pytest.fixture(scope="module")
@@ -136,7 +123,7 @@ def test_setup_predicts_from_the_command():
     ],
 )
 def test_bad_turning_jobs_name_the_key(vibration, sync, key):
-    text = JOB.format(vibration=vibration, sync=sync)
+    text = turning_job(vibration, sync=sync)
     if key == "turning.depth":
         text = text.replace("depth = 0.3", "depth = 0.9")
     with pytest.raises(InputError) as info:
@@ -147,7 +134,7 @@ def test_bad_turning_jobs_name_the_key(vibration, sync, key):
 @pytest.mark.slow
 def test_cli_setup_simulate_and_run(tmp_path):
     path = tmp_path / "job.toml"
-    path.write_text(JOB.format(vibration=HARD, sync="master-slave"))
+    path.write_text(turning_job(HARD))
     res = CliRunner().invoke(main, ["setup", str(path)])
     assert res.exit_code == 0 and "VIBRATION TURNING" in res.output and "chip breaks" in res.output
     res = CliRunner().invoke(main, ["simulate", str(path), "--out", str(tmp_path / "sim")])

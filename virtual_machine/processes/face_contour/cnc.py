@@ -59,6 +59,7 @@ from machine_models.face_contour_machine import (
     FaceMachineLayout,
     FaceMachineParams,
     build_face_machine_spec,
+    has_joint,
     head_angle_joints,
     relaxed_qpos,
     stage_omega_h,
@@ -251,7 +252,7 @@ class FaceServo(CascadeServo):
         self.tuning = tuning
         self.eccentric = "E" in head_angle_joints(model)
         idx = [_A, _H, _E, _Z] if self.eccentric else [_A, _H, _Z]
-        if _has_joint(model, "Y"):
+        if has_joint(model, "Y"):
             idx.append(_Y)
         lead = params.screw_pitch / (2 * math.pi)
         g = [
@@ -272,14 +273,6 @@ class FaceServo(CascadeServo):
             ServoAxis(MOTORS[i], g[i], chains[i], tuning.velocity_bandwidth[i], tuning.position_gain[i]) for i in idx
         ]
         super().__init__(model, data, axes, np.asarray(axis0)[idx], index=idx, size=5)
-
-
-def _has_joint(model: mujoco.MjModel, name: str) -> bool:
-    try:
-        model.joint(name)
-    except KeyError:
-        return False
-    return True
 
 
 def _diagnose(layout: FaceMachineLayout, params: FaceMachineParams, t: float) -> str:

@@ -124,12 +124,18 @@ def format_finger_plan(plan: FingerPlan) -> str:
             xy = plan.paths[side].at(z[i : i + 1])[0]
             row += f"   {(xy[0] - x0) * 1e3:10.3f} {(xy[1] - y0) * 1e3:7.3f}"
         lines.append(row)
-    for it in s["iterations"]:
-        if it["step"] == "path":
-            lines.append(f"  steps 11-14, iteration {it['iteration']}: path moved {it['path_change_um']:.4f} um")
-        else:
-            lines.append(f"  step 15, accuracy check {it['round']}: largest residual {it['max_residual_um']:.3f} um")
+    lines += _iteration_lines(s["iterations"])
     return "\n".join(lines)
+
+
+def _iteration_lines(iterations: list[dict[str, Any]]) -> list[str]:
+    """Steps 11-14 (the path's moves) and step 15 (the accuracy checks) of a plan's summary, a line each."""
+    return [
+        f"  steps 11-14, iteration {it['iteration']}: path moved {it['path_change_um']:.4f} um"
+        if it["step"] == "path"
+        else f"  step 15, accuracy check {it['round']}: largest residual {it['max_residual_um']:.3f} um"
+        for it in iterations
+    ]
 
 
 def format_plan(plan: CopyingPlan | FingerPlan) -> str:
@@ -171,11 +177,7 @@ def format_plan(plan: CopyingPlan | FingerPlan) -> str:
         for side in SIDES:
             row += f"   {(at[side][i, 0] - xn[side]) * 1e3:10.3f} {(at[side][i, 1] - plan.gear.root_radius) * 1e3:7.3f}"
         lines.append(row)
-    for it in s["iterations"]:
-        if it["step"] == "path":
-            lines.append(f"  steps 11-14, iteration {it['iteration']}: path moved {it['path_change_um']:.4f} um")
-        else:
-            lines.append(f"  step 15, accuracy check {it['round']}: largest residual {it['max_residual_um']:.3f} um")
+    lines += _iteration_lines(s["iterations"])
     return "\n".join(lines)
 
 
