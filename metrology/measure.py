@@ -22,7 +22,7 @@ from metrology import thickness_nominal as nominal
 from metrology import tolerances as iso
 from metrology.datum import Datum, establish_datum, measuring_radius
 from metrology.flank_lines import evaluate_many
-from metrology.modification import chart_teeth, crowning, crowning_many, topography
+from metrology.modification import chart_teeth, crowning, crowning_many, topography, twist
 from metrology.probe import ball_seats
 from metrology.span import measure_span
 from metrology.traces import helix_trace, profile_trace
@@ -179,6 +179,8 @@ def topography_block(
             "design_um": design.tolist(),
             "against_design_um": (mean - design).tolist(),
             "per_tooth_um": e.tolist(),
+            "twist_um": twist(L, z, mean, gear.face_width),
+            "twist_design_um": twist(L, z, np.broadcast_to(design, mean.shape), gear.face_width),
         }
     return out
 

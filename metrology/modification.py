@@ -6,6 +6,15 @@ than the middle (material taken from the ends, as a crowning does):
 
     e ~ a + b t + c t^2,  t = (x - x_m) / h,  x_m = (x0 + x1) / 2,  h = (x1 - x0) / 2   ->   C = -c
 
+Twist S_beta of a topography e(L, z): the helix slope at the top of the profile evaluation range minus that at
+its bottom, as a gear measuring machine reports it (ISO 21771's flank twist over the evaluation range; the design's
+cutting.modification.FlankDesign.twist is the same over the whole active profile L_F..L_a, so it reads as
+S_beta (L1 - L0) / (L_a - L_F) here), from the least-squares quadric over the grid
+
+    e ~ a + b z + c L + d z^2 + f L^2 + g z L   ->   S_beta = g b_face (L1 - L0)
+
+(the other terms take up crowning and helix and profile slope).
+
 The topography is the deviation over a grid of roll lengths x face positions on a few teeth round the gear, as a
 gear measuring machine scans it; with a design it is shown beside the design's own topography.
 """
@@ -37,6 +46,19 @@ def crowning(x: np.ndarray, e: np.ndarray) -> float:
     xm, h = (x[0] + x[-1]) / 2, (x[-1] - x[0]) / 2
     c = np.polyfit((x[ok] - xm) / h, e[ok], 2)[0]
     return float(-c)
+
+
+def twist(L: np.ndarray, z: np.ndarray, e: np.ndarray, face_width: float) -> float:
+    """S_beta [unit of e] of the topography ``e`` (len(L) x len(z), NaN samples skipped) over roll lengths ``L``
+    and face positions ``z`` [mm]: the helix slope's change over the face width from L[0] to L[-1]."""
+    LL, zz = np.meshgrid(np.asarray(L, float), np.asarray(z, float), indexing="ij")
+    ok = np.isfinite(e)
+    if ok.sum() < 8:
+        return float("nan")
+    lc, zc = LL[ok] - LL[ok].mean(), zz[ok] - zz[ok].mean()
+    basis = np.stack([np.ones_like(lc), zc, lc, zc**2, lc**2, zc * lc], axis=1)
+    coef = np.linalg.lstsq(basis, np.asarray(e, float)[ok], rcond=None)[0]
+    return float(coef[5] * face_width * (L[-1] - L[0]))
 
 
 def crowning_many(x: np.ndarray, e: np.ndarray) -> np.ndarray:

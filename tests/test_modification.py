@@ -175,6 +175,33 @@ def test_measured_crowning_and_topography_are_the_designs(modified) -> None:
     for side in ("left", "right"):
         assert np.abs(np.asarray(topo[side]["against_design_um"])).max() < 0.3
         assert np.abs(np.asarray(topo[side]["design_um"])).max() > 5.0
+    # the twist S_beta over the profile evaluation range read from the topography: the design's 4 um over the active
+    # profile on the right flank (its end relief, a function of z alone, does not leak into the z L term on the
+    # grid), none on the left; measured within 0.2 um
+    assert topo["right"]["twist_design_um"] == pytest.approx(4.0 * (L1 - L0) / (la - lf), abs=1e-9)
+    assert topo["left"]["twist_design_um"] == pytest.approx(0.0, abs=1e-9)
+    for side in ("left", "right"):
+        assert topo[side]["twist_um"] == pytest.approx(topo[side]["twist_design_um"], abs=0.2)
+
+
+def test_the_twist_of_a_topography() -> None:
+    """S_beta from a topography with crowning, slopes and twist (a known quadric): exact over the grid's roll
+    lengths, whatever the other terms; a grid with holes (NaN) reads the same."""
+    from metrology.modification import twist
+
+    L, z = np.linspace(5.0, 12.0, 15), np.linspace(-4.0, 4.0, 11)
+    LL, zz = np.meshgrid(L, z, indexing="ij")
+    b, span, S = 10.0, 8.0, 6.0  # S over the roll lengths 4..12 (span), read over 5..12
+    e = (
+        3.0
+        - 10.0 * (2 * zz / b) ** 2
+        + S * (zz / b) * (LL - 8.0) / span
+        + 2.0 * zz / b
+        - 4.0 * ((LL - 8.0) / span) ** 2
+    )
+    assert twist(L, z, e, b) == pytest.approx(S * 7.0 / span, abs=1e-9)
+    e[3, 4] = e[10, 0] = np.nan
+    assert twist(L, z, e, b) == pytest.approx(S * 7.0 / span, abs=1e-9)
 
 
 # ---- the design in a job file ----------------------------------------------------------------------------------
