@@ -280,7 +280,6 @@ def test_the_single_bezier_path_makes_a_cubic_design_and_misses_an_end_relief():
     ("kwargs", "key", "words"),
     [
         ({"gear": "internal = true"}, "gear", "internal"),
-        ({"gear": "helix_angle = 15.0"}, "gear.helix_angle", "helical"),
         ({"diameter": 20.0}, "mill.diameter", "hub"),
         ({"clearance": 1.5}, "mill.clearance", "periphery"),
         ({"modification": "tip_relief = 0.9\ntip_relief_diameter = 41.0"}, "modification", "tip"),

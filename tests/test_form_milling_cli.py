@@ -46,6 +46,18 @@ def test_setup_prints_the_mill_and_the_path():
     assert len(doc["path_bezier"]["left"]) == 20  # cubic Bezier segments between the 21 path points
 
 
+def test_setup_of_the_helical_job_sets_the_mill_over_and_runs_the_path_past_the_faces():
+    """The shipped helical pinion (beta 20 deg): the mill set over at the helix angle, its path points in the seed's
+    steps (b / 2n) going on past each end face as far as the mill's contact reaches (2.6 mm: six more each side)."""
+    helical = ASSET.parent / "form_milled_helical.toml"
+    res = CliRunner().invoke(main, ["setup", str(helical)])
+    assert res.exit_code == 0, res.output
+    assert "set over at the helix angle (20.0 deg" in res.output
+    doc = json.loads(CliRunner().invoke(main, ["setup", str(helical), "--json"]).output)
+    z = np.asarray(doc["path_points_z_mm"])
+    assert np.allclose(np.diff(z), 0.5) and z[-1] == -z[0] == 8.0
+
+
 def test_simulate_refuses_a_form_job_with_the_command_to_use(tmp_path):
     res = CliRunner().invoke(main, ["simulate", str(ASSET), "--out", str(tmp_path)])
     assert res.exit_code == 2 and "skive run" in res.output

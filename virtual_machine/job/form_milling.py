@@ -148,15 +148,15 @@ def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
                     )
                 else:
                     problems.append(Problem("gear", f"helix_angle = {g['helix_angle']}", why, ""))
-        if gear.helix_angle != 0.0:
+        if gear.helix_angle != 0.0 and kind == "finger":
             problems.append(
                 Problem(
                     "gear.helix_angle",
                     g["helix_angle"],
-                    "a form-milling job makes spur gears for now: the 15 steps plan a helical pinion with the set-over "
-                    "mill on the ideal machine (cutting.form_milling.copying_path.plan_copying, tested), but the job's "
-                    "machine run, forces and report are not yet proven on a helical space",
-                    "set helix_angle = 0, or plan it from Python with plan_copying",
+                    "the finger mill's 15 steps (cutting.form_milling.finger.plan_finger) plan spur gears for now: a "
+                    "helical space's finger is the envelope of its helicoid (cutting.form_milling.finger, proven on "
+                    "the ideal path), but its path corrections for a design are not built",
+                    'set helix_angle = 0, or cut an external helical gear with mill.type = "disc"',
                 )
             )
         sound = not problems  # the mill and the design are checked on a gear the copying method can make

@@ -165,7 +165,12 @@ def format_plan(plan: CopyingPlan | FingerPlan) -> str:
             )
             + " mrad"
             if plan.turned
-            else "fixed (tangential)"
+            else (
+                f"set over at the helix angle ({math.degrees(plan.gear.helix_angle):.1f} deg: head B), its edge the "
+                "envelope for the helical space, fixed along the path"
+                if plan.gear.helix_angle
+                else "fixed (tangential)"
+            )
         )
     )
     lines.append("  path point   z [mm]   left: x [um]  y [um]   right: x [um]  y [um]   (from the nominal path point)")
@@ -215,13 +220,15 @@ def _copying_results(doc: dict[str, Any]) -> list[str]:
             )
     for r in c.get("machine_checks", []):
         lines.append(f"  simulated machine, run {r['run']}: largest residual {r['max_residual_um']:.3f} um")
+    topo = doc.get("topography") or {}
     for side in SIDES:
         p, h = doc["profile"][side], doc["helix"][side]
+        t = topo.get(side, {})
+        twist = f", twist {t['twist_um']:.2f} um (design {t['twist_design_um']:.2f})" if "twist_um" in t else ""
         lines.append(
             f"  {side}: C_alpha {p['C_alpha']:.2f} um (design {p['C_alpha_design']:.2f}), C_beta {h['C_beta']:.2f} um "
-            f"(design {h['C_beta_design']:.2f})"
+            f"(design {h['C_beta_design']:.2f}){twist}"
         )
-    topo = doc.get("topography") or {}
     worst = [float(np.nanmax(np.abs(np.asarray(topo[s]["against_design_um"], float)))) for s in SIDES if s in topo]
     if worst:
         lines.append(f"  topography against the design: largest {max(worst):.2f} um")
