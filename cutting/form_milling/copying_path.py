@@ -37,6 +37,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -51,11 +52,15 @@ from cutting.form_milling.mill import (
     from_space,
     section_normals,
     section_rolls,
+    space_tooth,
     tip_index,
 )
 from cutting.form_milling.sweep import MilledGear, MillPassPoses
 from cutting.gear import Gear, form_roll_length
 from cutting.modification import Modification, roll
+
+if TYPE_CHECKING:
+    from cutting.form_milling.finger import FingerPlan
 
 #: the geometric iteration (steps 11-14) stops when no path point moves more than this [mm]
 PATH_TOLERANCE = 1e-7
@@ -155,8 +160,23 @@ class FlankPath:
         return out
 
 
+class ContactCurves:
+    """A plan's contact curves: on a helical space, per side the roll lengths and the face positions (from the mill's
+    reference plane: the disc's centre plane, the finger's axis) where the mill touches the flank (``contact``;
+    empty on a spur gear: the profiling plane itself)."""
+
+    contact: dict[str, tuple[np.ndarray, np.ndarray]]
+
+    def contact_offset(self, side: Side, L: np.ndarray) -> np.ndarray:
+        """Where, from the mill's reference plane, the mill cuts the ``side`` flank at roll lengths L [mm] (0: spur)."""
+        if side not in self.contact:
+            return np.zeros_like(np.asarray(L, dtype=float))
+        grid, offset = self.contact[side]
+        return np.interp(L, grid, offset)
+
+
 @dataclass
-class CopyingPlan:
+class CopyingPlan(ContactCurves):
     """What the 15 steps give: the mill, the two passes' paths, the corrections and the iterations."""
 
     gear: Gear
@@ -175,13 +195,6 @@ class CopyingPlan:
     #: set-over mill touches the flank (empty on a spur gear: the profiling plane itself)
     contact: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
-    def contact_offset(self, side: Side, L: np.ndarray) -> np.ndarray:
-        """Where, from the mill's centre plane, the mill cuts the ``side`` flank at roll lengths L [mm] (0: spur)."""
-        if side not in self.contact:
-            return np.zeros_like(np.asarray(L, dtype=float))
-        grid, offset = self.contact[side]
-        return np.interp(L, grid, offset)
-
     def pass_poses(self, space: int, side: Side, step: float = POSE_STEP, turned: bool | None = None) -> MillPassPoses:
         """The ideal machine's poses of the ``side`` pass of ``space`` (the planned path, exactly); ``turned``: the
         mill's axis turned by the path's transfer angles (:func:`poses_on_path`), else fixed along x (default: the
@@ -199,6 +212,10 @@ class CopyingPlan:
 
     def all_passes(self, step: float = POSE_STEP) -> list[MillPassPoses]:
         return [self.pass_poses(k, s, step) for k in range(self.gear.teeth) for s in SIDES]
+
+    def check_passes(self, space: int) -> list[MillPassPoses]:
+        """The passes that shape the flanks of ``space``: its own and its neighbours'."""
+        return [self.pass_poses(k % self.gear.teeth, s) for k in (space - 1, space, space + 1) for s in SIDES]
 
     def summary(self) -> dict:
         """The plan for measurement.json."""
@@ -361,15 +378,33 @@ def helical_sections(
     z = path.z
     psi = transfer_angles(path.tangent(z)) if turned else np.zeros((len(z), 2))
     centre, axis = mill_in_space(radius, z, path.at(z), psi + np.array([0.0, set_over(gear)]))
+    u, rho = axial_sections(gear, design, path.side, z, L, contact, centre, axis)
+    return np.stack([u, radius - rho], axis=-1), psi
+
+
+def axial_sections(
+    gear: Gear,
+    design: Modification | None,
+    side: Side,
+    z: np.ndarray,
+    L: np.ndarray,
+    contact: np.ndarray,
+    centre: np.ndarray,
+    axis: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The designed ``side`` flank where a mill of revolution touches it on a helical space, in the mill's axial
+    coordinates: per path point z_i (n) the flank points at roll lengths ``L`` (m) and face positions z_i + contact
+    (m), against the mill's reference point ``centre`` and unit ``axis`` (n, 3, each in the space frame of its z_i):
+    the axial coordinate u and the distance rho from the axis, (n, m) each."""
     centre, axis = from_space(gear, 0, centre, z), from_space(gear, 0, axis, z)
-    out = np.empty((len(z), len(L), 2))
+    u = np.empty((len(z), len(L)))
+    rho = np.empty((len(z), len(L)))
     for i in range(len(z)):
         zz = z[i] + contact
-        p = from_space(gear, 0, designed_section(gear, design, path.side, L, zz), zz) - centre[i]
-        u = p @ axis[i]
-        rho = np.linalg.norm(p - u[:, None] * axis[i], axis=1)
-        out[i] = np.column_stack([u, radius - rho])
-    return out, psi
+        p = from_space(gear, 0, designed_section(gear, design, side, L, zz), zz) - centre[i]
+        u[i] = p @ axis[i]
+        rho[i] = np.linalg.norm(p - u[i][:, None] * axis[i], axis=1)
+    return u, rho
 
 
 def mean_section(sections: np.ndarray) -> tuple[np.ndarray, float]:
@@ -492,14 +527,15 @@ def approach_length(gear: Gear, radius: float) -> float:
 
 
 def accuracy_check(
-    plan: CopyingPlan, L: np.ndarray, space: int = 0, passes: list[MillPassPoses] | None = None
+    plan: CopyingPlan | FingerPlan, L: np.ndarray, space: int = 0, passes: list[MillPassPoses] | None = None
 ) -> tuple[float, dict[str, np.ndarray]]:
-    """Step 15: the flanks of ``space`` that the mill cuts on the planned path (its exact swept surface; no
-    deflections), or by ``passes`` (e.g. what a machine made), against the design at every path point and roll
-    length ``L``: residual [mm] per side (n, m), excess material positive, and the largest |residual|."""
+    """Step 15: the flanks of ``space`` that the mill (disc or finger: ``plan`` a CopyingPlan or a FingerPlan) cuts
+    on the planned path (its exact swept surface; no deflections), or by ``passes`` (e.g. what a machine made),
+    against the design at every path point and roll length ``L``: residual [mm] per side (n, m), excess material
+    positive, and the largest |residual|."""
     gear = plan.gear
     if passes is None:
-        passes = [plan.pass_poses(k % gear.teeth, s) for k in (space - 1, space, space + 1) for s in SIDES]
+        passes = plan.check_passes(space)
     cut = MilledGear(gear, plan.mill, passes, "accuracy check")
     res = {}
     worst = 0.0
@@ -509,7 +545,7 @@ def accuracy_check(
         # a helical contact beyond the face: that path point cuts no flank there (no residual to correct it by)
         beyond = np.abs(zz) > gear.face_width / 2 + 1e-9 if plan.contact else np.zeros(zz.shape, bool)
         zz = np.clip(zz, -gear.face_width / 2 + 1e-3, gear.face_width / 2 - 1e-3)
-        tooth = space if s == "left" else space + 1
+        tooth = space_tooth(gear, space, s)
         p = flank_points(gear, s, LL / gear.base_radius, zz, tooth)
         nrm = flank_normals(gear, s, LL / gear.base_radius, zz, tooth)
         d = cut.probe(p.reshape(-1, 3), nrm.reshape(-1, 3), 0.05).reshape(p.shape[:-1])

@@ -35,10 +35,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from cutting.flank import SIDES, Side, flank_normals, flank_points
+from cutting.flank import SIDES, Side
 from cutting.form_milling.copying_path import (
     PATH_TOLERANCE,
+    ContactCurves,
     FlankPath,
+    accuracy_check,
+    axial_sections,
     correction_from_residual,
     corrections,
     mean_section,
@@ -53,9 +56,8 @@ from cutting.form_milling.mill import (
     flank_sign,
     from_space,
     section_rolls,
-    space_tooth,
 )
-from cutting.form_milling.sweep import MilledGear, MillPassPoses
+from cutting.form_milling.sweep import MillPassPoses
 from cutting.gear import Gear, form_roll_length
 from cutting.modification import Modification, roll
 
@@ -240,7 +242,7 @@ def fit_finger_mill(
     if gear.helix_angle != 0.0 and design is not None:
         raise ValueError(
             "a helical gear's finger mill is the envelope of its nominal helicoid: fit it without a design (the "
-            "design is the path's, plan_finger, which plans spur gears only)"
+            "design is the path's: plan_finger)"
         )
     L = finger_rolls(gear, points)
     sec = np.mean([finger_profile(gear, design, s, clearance, L, z) for s in SIDES], axis=0)
@@ -333,9 +335,10 @@ class FingerEdge:
 
 
 @dataclass
-class FingerPlan:
+class FingerPlan(ContactCurves):
     """The finger mill's copying plan: the mill, both passes' paths (tip centre in the space frame), the last
-    corrections and the log of the iterations and accuracy checks."""
+    corrections and the log of the iterations and accuracy checks; on a helical space the contact curves (face
+    positions from the finger's axis where it touches each flank)."""
 
     gear: Gear
     design: Modification | None
@@ -345,6 +348,7 @@ class FingerPlan:
     k_r: dict[str, np.ndarray] = field(default_factory=dict)  # last radial corrections per path point [mm]
     k_t: dict[str, np.ndarray] = field(default_factory=dict)
     iterations: list[dict] = field(default_factory=list)
+    contact: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     def summary(self) -> dict:
         """The plan for measurement.json: the mill, the clearance, the path points and the corrections."""
@@ -370,6 +374,10 @@ class FingerPlan:
         spaces = list(range(self.gear.teeth)) if spaces is None else spaces
         return [self.pass_poses(k % self.gear.teeth, s, step) for k in spaces for s in SIDES]
 
+    def check_passes(self, space: int) -> list[MillPassPoses]:
+        """The passes that shape the flanks of ``space``: its own and its neighbours'."""
+        return self.all_passes(spaces=[space - 1, space, space + 1])
+
 
 def plan_finger(
     gear: Gear,
@@ -382,20 +390,31 @@ def plan_finger(
     check_points: int = 11,
     path_form: str = "spline",
 ) -> FingerPlan:
-    """Seed 003's steps with the finger mill on a spur gear (external or internal). Its axis stays along the space's
-    symmetry line (it is not turned with the path: a turn would move a silhouette that lies along the face), so
-    the profiling plane is the transverse section at each path point z_i = i b / (2n) (steps 3-6). Step 2 (eq. 1)
-    moves the nominal path point (+-c/2, r_f) by the design's shift of the pitch point; steps 7-8 fit the finger's
-    radius to the mean section (eqs. 7, 9) and solve k_r, k_t per section (eqs. 10-15) with its edge
+    """Seed 003's steps with the finger mill (external or internal, spur or helical). Its axis stays along the
+    space's symmetry line (it is not turned with the path: a turn would move a silhouette that lies along the face),
+    so on a spur gear the profiling plane is the transverse section at each path point z_i = i b / (2n) (steps 3-6).
+    Step 2 (eq. 1) moves the nominal path point (+-c/2, r_f) by the design's shift of the pitch point; steps 7-8 fit
+    the finger's radius to the mean section (eqs. 7, 9) and solve k_r, k_t per section (eqs. 10-15) with its edge
     (:class:`FingerEdge`); step 9 (eq. 16) moves the path, step 10 fits it (spline or the single Bezier, eq. 17),
     11-14 repeat until it stands, and step 15 checks the exact swept surface (:class:`MilledGear`) against the
-    design at every path point, correcting the path by the residual's level and slope."""
-    if gear.helix_angle != 0.0:
-        raise ValueError("plan_finger plans a spur gear's finger passes: set helix_angle = 0")
-    fit_finger_mill(gear, clearance, design, teeth)  # the checks of the mill (clearance, tip) on the nominal space
-    z = path_points(gear, n)
+    design at every path point, correcting the path by the residual's level and slope.
+
+    On a helical space the finger follows the screw motion and touches each flank along a curve up to rho tan(beta)
+    off its axis (:func:`finger_profile`): the sections are the designed flank at those points in the finger's
+    axial coordinates (as the set-over disc's, :func:`cutting.form_milling.copying_path.helical_sections`), the path
+    points go on past the end faces as far as that reach, and step 15 reads each path point along its contact
+    curve."""
+    fit_finger_mill(gear, clearance, None if gear.helix_angle else design, teeth)  # the mill's checks, nominal space
     L = finger_rolls(gear)
     top = tip_point(gear, L)
+    contact = {}
+    if gear.helix_angle != 0.0:  # where the finger touches the nominal helicoid, from its axis (finger_profile's)
+        for s in SIDES:
+            x0, y0 = path_point(gear, s, clearance)
+            contact[s] = contact_profile(gear, s, L, np.array([x0, y0, 0.0]), axis_in_space(gear))[2]
+            if not np.all(np.isfinite(contact[s])):
+                raise ValueError(f"the {s} flank has profile points whose normal never meets the finger's axis")
+    z = path_points(gear, n, max((float(np.abs(c).max()) for c in contact.values()), default=0.0))
     paths = {}
     for s in SIDES:
         shift = np.zeros((len(z), 2))
@@ -408,9 +427,8 @@ def plan_finger(
     k_t: dict[str, np.ndarray] = {}
     log: list[dict] = []
     for it in range(max_iterations):
-        for s in SIDES:  # steps 3-6: the transverse sections relative to the path points
-            p = designed_section(gear, design, s, L[None, :], z[:, None])[..., :2]
-            sections[s] = p - paths[s].at(z)[:, None, :]
+        for s in SIDES:  # steps 3-6: the sections relative to the path points (x across the space, y along it)
+            sections[s] = finger_sections(gear, design, paths[s], L, contact.get(s))
         mean = [mean_section(sections[s])[0] for s in SIDES]  # eq. 7; the finger's radius from both flanks' mean
         sec = np.mean([np.column_stack([gear.sense * m[:, 1], np.abs(m[:, 0])]) for m in mean], axis=0)
         mill = FingerMill(BezierChain.fit(sec, through=(top,)), teeth, MIN_TIP_RADIUS * gear.mn)
@@ -424,7 +442,7 @@ def plan_finger(
         log.append({"step": "path", "iteration": it + 1, "path_change_um": round(moved * 1e3, 5)})
         if moved < PATH_TOLERANCE:
             break
-    plan = FingerPlan(gear, design, mill, paths, clearance, k_r, k_t, log)
+    plan = FingerPlan(gear, design, mill, paths, clearance, k_r, k_t, log, {s: (L, c) for s, c in contact.items()})
     lc = np.linspace(form_roll_length(gear), roll(gear, gear.tip_diameter_value), check_points)
     for c in range(checks):  # step 15
         worst, res = finger_check(plan, lc)
@@ -437,23 +455,28 @@ def plan_finger(
     return plan
 
 
+def finger_sections(
+    gear: Gear, design: Modification | None, path: FlankPath, L: np.ndarray, contact: np.ndarray | None = None
+) -> np.ndarray:
+    """Steps 3-6 for the finger: per path point the designed ``path.side`` flank at roll lengths ``L`` relative to
+    the path point, (n, m, 2): x across the space (the flank's side of the axis: +-rho) and y along the symmetry
+    line (sense v). Spur: the transverse section at z_i. Helical: the flank points the finger touches (face
+    positions z_i + ``contact``) in its axial coordinates (v along the axis, rho from it)."""
+    z = path.z
+    xy = path.at(z)
+    if contact is None:
+        p = designed_section(gear, design, path.side, L[None, :], z[:, None])[..., :2]
+        return p - xy[:, None, :]
+    tip = np.column_stack([xy, z])
+    axis = np.broadcast_to(axis_in_space(gear), tip.shape)
+    v, rho = axial_sections(gear, design, path.side, z, L, contact, tip, axis)
+    return np.stack([flank_sign(gear, path.side) * rho, gear.sense * v], axis=-1)
+
+
 def finger_check(
     plan: FingerPlan, L: np.ndarray, space: int = 0, passes: list[MillPassPoses] | None = None
 ) -> tuple[float, dict[str, np.ndarray]]:
-    """Step 15: the flanks of ``space`` the finger cuts on the planned paths (exact swept surface of the passes of
-    it and its neighbours; or of ``passes``, e.g. those a machine made) against the design at every path point and
-    roll length ``L``: residual [mm] per side (n, m), excess material positive, and the largest |residual|."""
-    gear = plan.gear
-    passes = plan.all_passes(spaces=[space - 1, space, space + 1]) if passes is None else passes
-    cut = MilledGear(gear, plan.mill, passes, "accuracy check")
-    res, worst = {}, 0.0
-    for s in SIDES:
-        zz, LL = np.meshgrid(plan.paths[s].z, L, indexing="ij")
-        zz = np.clip(zz, -gear.face_width / 2 + 1e-3, gear.face_width / 2 - 1e-3)
-        tooth = space_tooth(gear, space, s)
-        p = flank_points(gear, s, LL / gear.base_radius, zz, tooth)
-        nrm = flank_normals(gear, s, LL / gear.base_radius, zz, tooth)
-        d = cut.probe(p.reshape(-1, 3), nrm.reshape(-1, 3), 0.05).reshape(p.shape[:-1])
-        res[s] = d - (0.0 if plan.design is None else plan.design.deviation(gear, s, LL, zz))
-        worst = max(worst, float(np.nanmax(np.abs(res[s]))))
-    return worst, res
+    """Step 15 with the finger (:func:`cutting.form_milling.copying_path.accuracy_check`): the flanks of ``space``
+    its passes and its neighbours' cut on the planned paths (or ``passes``, e.g. those a machine made) against the
+    design at every path point (along its contact curve on a helical space) and roll length ``L``."""
+    return accuracy_check(plan, L, space, passes)

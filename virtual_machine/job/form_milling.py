@@ -148,17 +148,6 @@ def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
                     )
                 else:
                     problems.append(Problem("gear", f"helix_angle = {g['helix_angle']}", why, ""))
-        if gear.helix_angle != 0.0 and kind == "finger":
-            problems.append(
-                Problem(
-                    "gear.helix_angle",
-                    g["helix_angle"],
-                    "the finger mill's 15 steps (cutting.form_milling.finger.plan_finger) plan spur gears for now: a "
-                    "helical space's finger is the envelope of its helicoid (cutting.form_milling.finger, proven on "
-                    "the ideal path), but its path corrections for a design are not built",
-                    'set helix_angle = 0, or cut an external helical gear with mill.type = "disc"',
-                )
-            )
         sound = not problems  # the mill and the design are checked on a gear the copying method can make
         if sound and set(MILL_KEYS) <= set(mill) and kind == "disc" and mill["diameter"] is not None:
             problems += _mill_problems(gear, mill)
@@ -214,11 +203,13 @@ def _finger_problems(
     gear: Gear, mill: dict[str, Any], modification: Modification | None
 ) -> tuple[list[Problem], float | None]:
     """A finger mill the space cannot give (a clearance that leaves no tip, an undercut section), and else the
-    fitted finger's largest diameter [mm] (seed 003, eq. 9: fitted to the designed space at mid face)."""
+    fitted finger's largest diameter [mm] (seed 003, eq. 9: fitted to the designed space at mid face; on a helical
+    gear the envelope of the nominal helicoid, the design being the path's)."""
     from cutting.form_milling.finger import fit_finger_mill
 
+    design = None if gear.helix_angle else modification
     try:
-        fitted = fit_finger_mill(gear, mill["clearance"], modification, mill["teeth"])
+        fitted = fit_finger_mill(gear, mill["clearance"], design, mill["teeth"])
     except ValueError as exc:
         return [Problem("mill.clearance", mill["clearance"], str(exc), "use a smaller clearance (e.g. 0.2 mm)")], None
     return [], 2 * fitted.radius

@@ -57,13 +57,16 @@ class MillPass:
     frame]; ``path(z)`` maps z [mm, array (N,)] to the commanded mill centre [x radial, y tangential] [mm,
     (N, 2)] in the space's frame (the gear frame turned by 2 pi k / z; for space 0 the gear frame itself), or
     (N, 3) with the centre's axial position third (a turned mill's centre is off the profiling plane's z).
-    ``axis(z)`` (optional): the mill's unit axis (N, 3) in that frame; none: tangential (0, 1, 0)."""
+    ``axis(z)`` (optional): the mill's unit axis (N, 3) in that frame; none: tangential (0, 1, 0). ``turn(z)``
+    (optional, with no axis): the work's turn [rad] at z on top of the index, ``path`` then in the space's frame
+    turned by it (a finger on a helical space: its axis stays along the head's spindle, the work follows the helix)."""
 
     space: int
     z_start: float
     z_end: float
     path: Callable[[np.ndarray], np.ndarray]
     axis: Callable[[np.ndarray], np.ndarray] | None = None
+    turn: Callable[[np.ndarray], np.ndarray] | None = None
 
 
 @dataclass(frozen=True)
@@ -242,7 +245,8 @@ def _axes_on_path(p: MillPass, z: np.ndarray, a_index: float) -> tuple[np.ndarra
     head's plane), the centre turned with it."""
     centre = _path(p, z)
     if p.axis is None:
-        q = np.column_stack((np.full(len(z), a_index), centre * 1e-3, np.zeros(len(z))))
+        a = a_index + (np.asarray(p.turn(z), dtype=float) if p.turn is not None else 0.0)
+        q = np.column_stack((np.broadcast_to(a, len(z)), centre * 1e-3, np.zeros(len(z))))
         return q, centre
     axis = np.asarray(p.axis(z), dtype=float)
     if axis.shape != (len(z), 3) or not np.isfinite(axis).all():

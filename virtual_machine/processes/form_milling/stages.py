@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from cutting.errors import InputError, Problem
-from cutting.flank import SIDES
+from cutting.flank import SIDES, twist_rate
 from cutting.form_milling.copying_path import (
     CHECK_TOLERANCE,
     CopyingPlan,
@@ -352,10 +352,13 @@ def cnc_passes(plan: CopyingPlan) -> list:
 
 def finger_cnc_passes(plan: FingerPlan) -> list:
     """The finger's passes for the CNC (as :func:`cnc_passes`): the tip centre (radial, tangential) in the frame
-    where space k faces +x, from the planned path; no axis (the head keeps it along the symmetry line)."""
+    where space k faces +x, from the planned path; no axis (the head keeps it along the symmetry line). On a helical
+    space the work turns with the helix as the finger feeds (the space's frame at each face position faces +x)."""
     from virtual_machine.processes.form_milling.cnc import MillPass
 
     half = pass_length(plan.gear, plan.mill)
+    rate = twist_rate(plan.gear)
+    turn = (lambda z: HELIX_TURN * rate * np.asarray(z, dtype=float)) if rate else None
     out = []
     for k in range(plan.gear.teeth):
         for side, (z0, z1) in zip(SIDES, ((half, -half), (-half, half)), strict=True):
@@ -364,8 +367,12 @@ def finger_cnc_passes(plan: FingerPlan) -> list:
                 xy = path.at(np.asarray(z, dtype=float))
                 return np.column_stack([xy[:, 1], xy[:, 0]])
 
-            out.append(MillPass(k, z0, z1, tip))
+            out.append(MillPass(k, z0, z1, tip, turn=turn))
     return out
+
+
+#: the work's turn per unit of the space frame's turn along the face (the CNC's A against cutting's space frame)
+HELIX_TURN = -1.0
 
 
 def mill_pose_in_cnc_frame(plan: CopyingPlan, side: str, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
