@@ -2,6 +2,7 @@
 
     python benchmarks/bench_form_milling.py                 # assets/jobs/form_milled_crowned.toml
     python benchmarks/bench_form_milling.py --job JOB --no-run
+    python benchmarks/bench_form_milling.py --job assets/jobs/form_milled_helical.toml   # the set-over mill
 
 Prints, for `skive cut` (ideal machine): the 15 steps' plan, the manifold removal (hulls, triangles) and the
 measurement of the exact swept surface with gear.stl beside it; for `skive run`: each machine run (simulated
