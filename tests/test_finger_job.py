@@ -176,7 +176,7 @@ EXTERNAL = SMALL.replace("teeth = 40", "teeth = 14\nprofile_shift = 0.2").replac
 
 @pytest.mark.slow
 def test_run_of_a_small_finger_job_under_its_cutting_force(tmp_path):
-    """`skive run` of an external finger job (28 passes, one machine run, ~30 s): every file written, the run's
+    """`skive run` of an external finger job (28 passes, one machine run, ~10 s): every file written, the run's
     forces the model's, and the machine's accuracy check (the cut of what the machine did, against the design)
     worse than the ideal machine's but within the static yield of the slotting's normal force F_n: the Y drive
     F_n (1/k_nut + (t/2pi)^2/k_screw) plus the table's worm F_n r_f^2/k_A and half the nut's and the worm's play,

@@ -14,7 +14,8 @@ from virtual_machine.cli import main
 
 ASSET = Path(__file__).resolve().parent.parent / "assets" / "jobs" / "form_milled_crowned.toml"
 
-#: a small job for the suite: 14 teeth, 6 mm face, fast feed, one machine run
+#: a small job for the suite: 14 teeth, 6 mm face, fast feed; the solid at 30 um (the measurement is on the exact
+#: swept surface: the solid's tolerance changes none of it, and at 10 um its removal took 18 of the run's 63 s)
 SMALL = """
 [gear]
 teeth = 14
@@ -29,7 +30,7 @@ diameter = 50.0
 feed = 1500.0
 path_points = 6
 machine_iterations = {iterations}
-sweep_error = 0.01
+sweep_error = 0.03
 
 [modification]
 lead_crowning = 0.008
@@ -104,7 +105,7 @@ def test_cut_of_the_small_job_on_the_ideal_machine(tmp_path):
     """The topography is measured on the exact swept surface, so the solid's tolerance (30 um here, a third of the
     manifold's work of 10 um) changes none of it."""
     job = tmp_path / "job.toml"
-    job.write_text(SMALL.format(iterations=1).replace("sweep_error = 0.01", "sweep_error = 0.03"))
+    job.write_text(SMALL.format(iterations=1))
     res = CliRunner().invoke(main, ["cut", str(job), "--out", str(tmp_path / "out")])
     assert res.exit_code == 0, res.output
     doc = json.loads((tmp_path / "out" / "measurement.json").read_text())

@@ -26,6 +26,7 @@ import numpy as np
 
 from cutting.flank import twist_rate
 from cutting.form_milling.mill import Mill
+from cutting.form_milling.sweep_kernels import FAR, interp_guide, milled_margins
 from cutting.gear import Gear
 
 GOLDEN = (math.sqrt(5) - 1) / 2
@@ -35,7 +36,6 @@ GOLDEN_STEPS = 24
 #: the surface on a probe line is found to this [mm], in at most ROOT_STEPS Illinois steps
 ROOT_TOLERANCE = 1e-8
 ROOT_STEPS = 40
-FAR = 1e3
 #: the scan for a pass's least margin: coarse samples about this far apart along the feed [mm], the path's slope
 #: taken over this much feed [mm]
 SCAN_STEP = 0.05
@@ -79,6 +79,7 @@ class MilledGear:
             self._by_space.setdefault(p.space % gear.teeth, []).append(i)
         self._u, self._h = mill.profile
         self._scans: dict[int, tuple[int, int]] = {}
+        self._pack: tuple | None = None
         lean = max((float(np.max(np.abs(p.axis[:, 2]))) for p in self.passes), default=0.0)
         self._cos_lean = math.sqrt(max(1.0 - lean**2, 0.25))
 
@@ -181,7 +182,44 @@ class MilledGear:
     def margin(self, q: np.ndarray, sign_only: bool = False) -> np.ndarray:
         """The least margin [mm] over the passes of the point's tooth space and of the nearer neighbouring one.
         ``sign_only``: a pass is asked only where the passes before it left the point (the sign is exact, a
-        negative value may be above the least)."""
+        negative value may be above the least). Compiled (:mod:`cutting.form_milling.sweep_kernels`): as
+        :meth:`_margin_numpy` to rounding."""
+        q = np.asarray(q, dtype=float).reshape(-1, 3)
+        return milled_margins(q, sign_only, self.gear.teeth, twist_rate(self.gear), self._reach(), self._packed())
+
+    def _reach(self) -> tuple[float, float]:
+        """The span across a space's symmetry line [mm] in which its passes are asked: the mill's axial span plus
+        REACH_PAD (a leaning axis spans 1 / cos(lean) as much across it)."""
+        lo, hi = self.mill.tangential_span
+        return (lo - REACH_PAD) / self._cos_lean, (hi + REACH_PAD) / self._cos_lean
+
+    def _packed(self) -> tuple:
+        """The passes as the kernel reads them (made once): centres and unit axes of all poses (N, 3) with the
+        offsets ``ptr`` of each pass's rows, the passes' scan parameters (k, stride), the passes of each space
+        (``space_ptr``, ``space_pass``), the mill's profile table with its guide (interp_guide) and radius."""
+        if self._pack is None:
+            sizes = [len(p.t) for p in self.passes]
+            ptr = np.zeros(len(self.passes) + 1, np.int64)
+            ptr[1:] = np.cumsum(sizes)
+            centre = np.zeros((int(ptr[-1]), 3))
+            axis = np.zeros((int(ptr[-1]), 3))
+            scan = np.zeros((len(self.passes), 2), np.int64)
+            for i, p in enumerate(self.passes):
+                centre[ptr[i] : ptr[i + 1]], axis[ptr[i] : ptr[i + 1]] = p.centre, p.axis
+                scan[i] = self._scan(i) if sizes[i] >= 3 else (0, 1)  # a pass of < 3 poses is FAR
+            z = self.gear.teeth
+            space_ptr = np.zeros(z + 1, np.int64)
+            space_ptr[1:] = np.cumsum([len(self._by_space.get(k, [])) for k in range(z)])
+            space_pass = np.array([i for k in range(z) for i in self._by_space.get(k, [])], np.int64)
+            u, h = (np.ascontiguousarray(a, dtype=np.float64) for a in (self._u, self._h))
+            guide, scale = interp_guide(u)
+            self._pack = (centre, axis, ptr, scan, space_ptr, space_pass, u, h, guide, scale, float(self.mill.radius))
+        return self._pack
+
+    def _margin_numpy(self, q: np.ndarray, sign_only: bool = False) -> np.ndarray:
+        """The numpy reference of :meth:`margin`: the least margin [mm] over the passes of the point's tooth space
+        and of the nearer neighbouring one. ``sign_only``: a pass is asked only where the passes before it left the
+        point (the sign is exact, a negative value may be above the least)."""
         q = np.asarray(q, dtype=float).reshape(-1, 3)
         z = self.gear.teeth
         twist = twist_rate(self.gear) * q[:, 2]  # a helical space turns along the face
