@@ -271,6 +271,25 @@ def poses_on_path(
 
 
 # ---- the steps ----------------------------------------------------------------------------------------------
+def contact_curves(
+    gear: Gear, L: np.ndarray, centres: dict[str, np.ndarray], axis: np.ndarray, mill: str, fix: str
+) -> dict[str, np.ndarray]:
+    """On a helical space, per side the face positions [mm] from a mill's reference point ``centres[side]`` (space
+    frame, on its nominal pass) where the mill of revolution about ``axis`` touches the nominal helicoid at roll
+    lengths ``L`` (:func:`cutting.form_milling.helical.contact_profile`); empty on a spur gear (the profiling plane
+    itself). A profile point whose normal misses the axis is refused, naming the ``mill`` and the ``fix``."""
+    contact: dict[str, np.ndarray] = {}
+    if gear.helix_angle == 0.0:
+        return contact
+    for s in SIDES:
+        contact[s] = contact_profile(gear, s, L, centres[s], axis)[2]
+        if not np.all(np.isfinite(contact[s])):
+            raise ValueError(
+                f"{mill} cannot touch the {s} flank's whole profile (its normals miss the mill's axis): use {fix}"
+            )
+    return contact
+
+
 def path_points(gear: Gear, n: int, reach: float = 0.0) -> np.ndarray:
     """z_i = i b / (2 n), i = -n..n (step 2) [mm]; with ``reach`` > 0 [mm] (a helical space: the set-over mill cuts
     up to that far from its centre plane) the same steps go on beyond each end face until they cover it, so that
@@ -463,17 +482,9 @@ def plan_copying(
     # envelope changes at first order with the turn, and step 15's corrections (which turn it) diverge (measured
     # 0.8 -> 1.8 -> 20 um at beta = 20 deg, where the set-over mill converges to 0.9 um)
     turned = turned and gear.helix_angle == 0.0
-    contact = {}
-    if gear.helix_angle != 0.0:  # where the set-over mill touches the nominal helicoid (from its centre plane)
-        for s in SIDES:
-            xn, yn = nominal_path_point(gear, s, clearance)
-            centre = np.array([xn, yn + radius, 0.0])
-            contact[s] = contact_profile(gear, s, L, centre, mill_axis(gear))[2]
-            if not np.all(np.isfinite(contact[s])):
-                raise ValueError(
-                    f"the set-over mill of radius {radius} mm cannot touch the {s} flank's whole profile (its normals "
-                    "miss the mill's axis): use a larger mill"
-                )
+    centres = {s: np.array([nominal_path_point(gear, s, clearance)[0], gear.root_radius + radius, 0.0]) for s in SIDES}
+    mill_name = f"the set-over mill of radius {radius} mm"
+    contact = contact_curves(gear, L, centres, mill_axis(gear), mill_name, "a larger mill")
     reach = max((float(np.abs(c).max()) for c in contact.values()), default=0.0)
     z = path_points(gear, n, reach)
     paths = {s: initial_path(gear, design, s, z, clearance, path_form) for s in SIDES}
@@ -555,6 +566,10 @@ def accuracy_check(
     return worst, res
 
 
+#: flank points a path point's residual needs for its (dx, dy) correction
+LEAST_CHECK_POINTS = 4
+
+
 def correction_from_residual(gear: Gear, side: Side, L: np.ndarray, res: np.ndarray) -> tuple[np.ndarray, ...]:
     """Path corrections (dx, dy) [mm] per path point that cancel the residual's level and slope over the profile
     (least squares; the seed's k_t, k_r match the bottom and top points only, which leaves a bow's whole height at
@@ -572,7 +587,3 @@ def correction_from_residual(gear: Gear, side: Side, L: np.ndarray, res: np.ndar
     # takes its nearest determined neighbour's correction: fitted to one or two points it would run away
     nearest = known[np.abs(np.arange(len(res))[:, None] - known[None, :]).argmin(axis=1)]
     return dx[nearest], dy[nearest]
-
-
-#: flank points a path point's residual needs for its (dx, dy) correction
-LEAST_CHECK_POINTS = 4

@@ -42,6 +42,7 @@ from cutting.form_milling.copying_path import (
     FlankPath,
     accuracy_check,
     axial_sections,
+    contact_curves,
     correction_from_residual,
     corrections,
     mean_section,
@@ -407,13 +408,8 @@ def plan_finger(
     fit_finger_mill(gear, clearance, None if gear.helix_angle else design, teeth)  # the mill's checks, nominal space
     L = finger_rolls(gear)
     top = tip_point(gear, L)
-    contact = {}
-    if gear.helix_angle != 0.0:  # where the finger touches the nominal helicoid, from its axis (finger_profile's)
-        for s in SIDES:
-            x0, y0 = path_point(gear, s, clearance)
-            contact[s] = contact_profile(gear, s, L, np.array([x0, y0, 0.0]), axis_in_space(gear))[2]
-            if not np.all(np.isfinite(contact[s])):
-                raise ValueError(f"the {s} flank has profile points whose normal never meets the finger's axis")
+    centres = {s: np.array([*path_point(gear, s, clearance), 0.0]) for s in SIDES}  # where finger_profile looks
+    contact = contact_curves(gear, L, centres, axis_in_space(gear), "the finger on the symmetry line", "the disc mill")
     z = path_points(gear, n, max((float(np.abs(c).max()) for c in contact.values()), default=0.0))
     paths = {}
     for s in SIDES:

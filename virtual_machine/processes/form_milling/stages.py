@@ -64,23 +64,10 @@ def plan_job(job: Job, checks: int = 3) -> CopyingPlan | FingerPlan:
     """The seed's 15 steps for the job (``checks`` rounds of the accuracy check on the ideal machine): the disc
     mill's (:func:`plan_copying`) or the finger mill's (:func:`cutting.form_milling.finger.plan_finger`)."""
     m, p = job.mill, job.process
-    if is_finger(job):
-        try:
-            return plan_finger(
-                job.gear,
-                job.modification,
-                m["clearance"],
-                p["path_points"],
-                m["teeth"],
-                checks=checks,
-                check_points=CHECK_POINTS,
-                path_form=p["path_form"],
-            )
-        except ValueError as exc:
-            raise InputError(
-                Problem("mill", m, str(exc), "change mill.clearance or the [modification]"), job.source
-            ) from exc
+    common = {"checks": checks, "check_points": CHECK_POINTS, "path_form": p["path_form"]}
     try:
+        if is_finger(job):
+            return plan_finger(job.gear, job.modification, m["clearance"], p["path_points"], m["teeth"], **common)
         return plan_copying(
             job.gear,
             job.modification,
@@ -88,12 +75,10 @@ def plan_job(job: Job, checks: int = 3) -> CopyingPlan | FingerPlan:
             m["clearance"],
             p["path_points"],
             m["teeth"],
-            checks=checks,
-            check_points=CHECK_POINTS,
-            path_form=p["path_form"],
             turned=p["mill_axis"] == "turned",
+            **common,
         )
-    except ValueError as exc:  # the mill the design asks for cannot be made (no periphery, an undercut edge)
+    except ValueError as exc:  # the mill the design asks for cannot be made (no periphery, no tip, an undercut edge)
         raise InputError(
             Problem("mill", m, str(exc), "change mill.clearance or the [modification]"), job.source
         ) from exc
