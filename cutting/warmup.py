@@ -41,7 +41,8 @@ def warm() -> float:
     angle = np.linspace(0.0, 2 * math.pi, 8, endpoint=False)
     r = setup.gear.reference_radius
     points = np.column_stack([r * np.cos(angle), r * np.sin(angle), np.zeros(8)])
-    sv.probe(points, np.column_stack([-np.sin(angle), np.cos(angle), np.zeros(8)]), 0.3)
+    # lines a pitch long cross a flank: the measurement's item solve (exact_margins, exact_roots) compiles too
+    sv.probe(points, np.column_stack([-np.sin(angle), np.cos(angle), np.zeros(8)]), 2.0)
     # the co-simulation's load of a servo tick (cutting/forces.py)
     t = np.linspace(0.0, 1e-3, 5)
     load = EngagementLoad(t, np.ones((5, 3)), np.ones((5, 3)), np.zeros((5, 3)), 1.0, 0.05, 3000.0)

@@ -221,6 +221,8 @@ class MeshTree:
         """Every (line, face, d, entering) where a live segment o + d D, d in [lo, hi], crosses a triangle; lines
         ascending, each (line, face) once."""
         rows = np.nonzero(live)[0].astype(np.int64)
+        # writable C copies: a read-only or strided operand is another signature, compiled on the first run
+        o, D, lo, hi = (np.array(a, dtype=float, order="C") for a in (o, D, lo, hi))
         n = len(rows)
         face = np.empty((n, FIRST_CAP), np.int64)
         t = np.empty((n, FIRST_CAP))
