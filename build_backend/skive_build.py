@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 from setuptools import build_meta as _setuptools
@@ -22,6 +23,15 @@ ROOT = Path(__file__).resolve().parents[1]
 WARMUP_REQUIRES = ["numpy>=1.26", "scipy>=1.11", "numba>=0.61", "manifold3d>=3.0"]
 
 
+def warmup_env(environ: Mapping[str, str]) -> dict[str, str]:
+    """The warm-up's environment: the project put before pip's own PYTHONPATH, not instead of it. pip's entry there
+    makes the build environment's packages (WARMUP_REQUIRES) importable; without it a fresh machine, whose numpy and
+    numba pip installs only after this build, failed the warm-up (ModuleNotFoundError: numpy) and its first run
+    compiled for a minute."""
+    path = environ.get("PYTHONPATH")
+    return {**environ, "PYTHONPATH": os.pathsep.join([str(ROOT), path]) if path else str(ROOT)}
+
+
 def get_requires_for_build_editable(config_settings=None):
     return [*_setuptools.get_requires_for_build_editable(config_settings), *WARMUP_REQUIRES]
 
@@ -30,7 +40,7 @@ def build_editable(wheel_directory, config_settings=None, metadata_directory=Non
     name = _setuptools.build_editable(wheel_directory, config_settings, metadata_directory)
     if not os.environ.get("SKIVE_NO_WARMUP"):
         print("skive: compiling the numba kernels into the package (about a minute, once)", file=sys.stderr)
-        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        env = warmup_env(os.environ)
         # the cut's kernels, then the measuring machine's (metrology does not import cutting's warm-up)
         done = subprocess.run([sys.executable, "-m", "cutting.warmup"], cwd=ROOT, env=env, check=False)
         if done.returncode == 0:
