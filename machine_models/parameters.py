@@ -57,6 +57,9 @@ class SkivingMachineParams:
     work_friction: float = 1.5  # N m: two preloaded angular-contact bearings at speed
     work_motor_inertia: float = 4.0e-3  # kg m^2: 10 N m class AC servo motor rotor
     work_motor_torque: float = 60.0  # N m: peak torque of M2 (current limit of power amplifier 11)
+    #: rad/s: the table's top speed, 3000 rpm: its bearings at a speed factor n dm of 0.6e6 mm/min (grease-lubricated
+    #: precision bearings) on a 200 mm pitch diameter; a job that needs more is refused before the run
+    work_speed_limit: float = 314.0
     #: M2 -> table: 1:2 precision spur stage, 1e6 N m/rad (table bearing + stage, referred to the table),
     #: 20 arcsec backlash (a precision stage, DIN 3967 "reduced" class)
     work_drive: DriveStage = field(default_factory=lambda: DriveStage(0.5, 1.0e6, 20 * ARCSEC, 60.0))
@@ -70,6 +73,8 @@ class SkivingMachineParams:
     tool_friction: float = 0.5  # N m: spindle bearings
     tool_motor_inertia: float = 3.0e-3  # kg m^2
     tool_motor_torque: float = 40.0  # N m: M1 peak (amplifier 3)
+    #: rad/s: the tool spindle's top speed, 6000 rpm: its bearings at n dm = 0.6e6 mm/min on a 100 mm pitch diameter
+    tool_speed_limit: float = 628.0
     #: M1 -> spindle: 1:1 toothed belt, 2e4 N m/rad torsional (belt span stiffness at the pulley radius)
     tool_drive: DriveStage = field(default_factory=lambda: DriveStage(1.0, 2.0e4, 0.0, 8.0))
 
@@ -79,6 +84,9 @@ class SkivingMachineParams:
     #: share of the carriage weight carried by the hydraulic counterbalance; the rest keeps the nut on one flank
     counterbalance: float = 0.85
     screw_inertia: float = 1.5e-3  # kg m^2: 40 mm ball screw, 1.2 m long
+    #: m: the carriage's travel along the work axis on that screw (its length less the nut and the end bearings); a
+    #: pass's stroke (the face, the cutter's run-in and run-out) must fit in it
+    carriage_travel: float = 1.0
     feed_motor_inertia: float = 1.5e-3  # kg m^2
     feed_motor_torque: float = 20.0  # N m: M3 peak (amplifier 18)
     #: M3 -> screw: rigid coupling, 3e3 N m/rad torsional (the screw shaft, referred to the screw)
@@ -133,6 +141,9 @@ class SkivingMachineParams:
         out = common_problems(self_, ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"))
         if not (math.isfinite(error) and abs(error) < 0.05):
             out.append(f"lead_screw_pitch_error = {error}: must be a relative error within +-0.05 (e.g. 8e-5)")
+        for name in ("tool_speed_limit", "work_speed_limit", "carriage_travel"):
+            if not getattr(self, name) > 0:
+                out.append(f"{name} = {getattr(self, name)}: must be > 0 (a top speed in rad/s, a travel in m)")
         if not self.work_acceleration > 0:
             out.append(f"work_acceleration = {self.work_acceleration}: must be > 0 rad/s^2 (the table's run-up)")
         return out

@@ -26,6 +26,10 @@ maker's figure is claimed. Everything else is derived, and says so:
   stiffness of nut, screw and slide ~ k (E A / l), damping so that every stage keeps its damping ratio
   (c ~ sqrt(k J): k^4 torsional, k^2 linear), backlash and lead errors unchanged (the same precision class), the
   hydraulic motors' leakage ~ k^-3 (the same slip at their own torque limit);
+- top speeds of the tool spindle and the table ~ 1/k (their bearings' pitch diameter grows with k at the same speed
+  factor n dm = 0.6e6 mm/min: small 6000 / 3000 rpm, medium 4500 / 2250, large 2860 / 1430) and the carriage's
+  travel ~ k (small 1.0 m on its 1.2 m screw, medium 1.33, large 2.1 m): a job beyond them is refused before the
+  run (virtual_machine/processes/skiving/machine_reach.py);
 - motors from power and base speed: peak torque = 1.5 x the rated torque P / omega_base (the amplifier's current
   limit), rotor inertia ~ (peak torque)^(5/3) (geometrically similar motors, T ~ L^3, J ~ L^5): medium tool
   spindle 20 kW at 1500 rpm (127 N m rated, 191 N m peak), work axis 150 N m peak through its 1:2 stage, feed
@@ -73,6 +77,9 @@ _MOTOR_INERTIAS = {  # rotor inertia -> the motor's peak torque it follows
 _MASSES = ("carriage_mass", "radial_mass")
 _WEIGHT_LIKE = ("work_friction", "tool_friction", "ways_friction", "traverse_motor_torque", "hydraulic_torque_limit")
 _LINEAR = {"nut_stiffness": 1, "radial_stiffness": 1, "nut_damping": 2, "radial_damping": 2}
+#: top speeds ~ 1/k (the bearings' pitch diameter grows with k at the same speed factor n dm), travel ~ k
+_SPEED_LIMITS = ("tool_speed_limit", "work_speed_limit")
+_LENGTHS = ("carriage_travel",)
 
 
 @dataclass(frozen=True)
@@ -106,6 +113,10 @@ def scaled(base: SkivingMachineParams, k: float, **motors: float) -> SkivingMach
             values[f.name] = v * k**5
         elif f.name in _MASSES or f.name in _WEIGHT_LIKE:
             values[f.name] = v * k**3
+        elif f.name in _SPEED_LIMITS:
+            values[f.name] = v / k
+        elif f.name in _LENGTHS:
+            values[f.name] = v * k
         elif f.name in _LINEAR:
             values[f.name] = None if v is None else v * k ** _LINEAR[f.name]
         elif f.name == "hydraulic_stiffness":

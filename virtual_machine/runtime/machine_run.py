@@ -271,8 +271,10 @@ class MachineRun:
         self.plan = plan = plan_of(job, plan)
         if params is None:  # the job's own machine: refused before the run if its motors cannot hold the cut
             from virtual_machine.processes.skiving.cutting_load import check_machine_holds
+            from virtual_machine.processes.skiving.machine_reach import check_machine_reach
 
             params = machine_params(job)
+            check_machine_reach(job, params, machine_size(job))
             check_machine_holds(job, params)
         self.params = params
         self.setup = setup = plan.setup
