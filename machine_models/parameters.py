@@ -52,6 +52,12 @@ class DriveStage:
 class SkivingMachineParams:
     """Masses, inertias, drives and friction of the skiving machine (see the module docstring for units)."""
 
+    # ---- what the machine takes (the size's class, machine_models/sizes.py) ------------------------------
+    #: m: the largest workpiece (external: its tip circle; ring gear: the outside of its rim)
+    workpiece_diameter_limit: float = 0.08
+    #: m: the largest normal module its cutters and spindles are built for
+    module_limit: float = 1.5e-3
+
     # ---- work spindle (B2/B4): table, fixture and blank on a gear stage from servo motor M2 -------------
     work_inertia: float = 0.15  # kg m^2: table 300 mm x 60 mm steel (0.12) + fixture (blank: from its geometry)
     work_friction: float = 1.5  # N m: two preloaded angular-contact bearings at speed
@@ -141,9 +147,15 @@ class SkivingMachineParams:
         out = common_problems(self_, ("work_inertia", "tool_inertia", "carriage_mass", "screw_inertia", "radial_mass"))
         if not (math.isfinite(error) and abs(error) < 0.05):
             out.append(f"lead_screw_pitch_error = {error}: must be a relative error within +-0.05 (e.g. 8e-5)")
-        for name in ("tool_speed_limit", "work_speed_limit", "carriage_travel"):
+        for name in (
+            "tool_speed_limit",
+            "work_speed_limit",
+            "carriage_travel",
+            "workpiece_diameter_limit",
+            "module_limit",
+        ):
             if not getattr(self, name) > 0:
-                out.append(f"{name} = {getattr(self, name)}: must be > 0 (a top speed in rad/s, a travel in m)")
+                out.append(f"{name} = {getattr(self, name)}: must be > 0 (a top speed in rad/s, a length in m)")
         if not self.work_acceleration > 0:
             out.append(f"work_acceleration = {self.work_acceleration}: must be > 0 rad/s^2 (the table's run-up)")
         return out

@@ -29,7 +29,7 @@ maker's figure is claimed. Everything else is derived, and says so:
 - top speeds of the tool spindle and the table ~ 1/k (their bearings' pitch diameter grows with k at the same speed
   factor n dm = 0.6e6 mm/min: small 6000 / 3000 rpm, medium 4500 / 2250, large 2860 / 1430) and the carriage's
   travel ~ k (small 1.0 m on its 1.2 m screw, medium 1.33, large 2.1 m): a job beyond them is refused before the
-  run (virtual_machine/processes/skiving/machine_reach.py);
+  run (virtual_machine/processes/skiving/machine_reach.py), as is a workpiece or module beyond the size's class;
 - motors from power and base speed: peak torque = 1.5 x the rated torque P / omega_base (the amplifier's current
   limit), rotor inertia ~ (peak torque)^(5/3) (geometrically similar motors, T ~ L^3, J ~ L^5): medium tool
   spindle 20 kW at 1500 rpm (127 N m rated, 191 N m peak), work axis 150 N m peak through its 1:2 stage, feed
@@ -87,8 +87,6 @@ class MachineSize:
     """One size: the largest workpiece it takes, its parameters, and what it stands for."""
 
     name: str
-    workpiece_diameter: float  # mm: largest blank diameter (external: tip; ring gear: outside of the rim)
-    module: float  # mm: largest normal module
     table_diameter: float  # mm: the scale of the machine (k = table / 300 mm)
     params: SkivingMachineParams
     like: str  # the class of real machines it stands for
@@ -96,6 +94,16 @@ class MachineSize:
     @property
     def scale(self) -> float:
         return self.table_diameter / SMALL_TABLE
+
+    @property
+    def workpiece_diameter(self) -> float:
+        """Largest blank diameter [mm] (external: tip; ring gear: outside of the rim)."""
+        return self.params.workpiece_diameter_limit * 1e3
+
+    @property
+    def module(self) -> float:
+        """Largest normal module [mm]."""
+        return self.params.module_limit * 1e3
 
     def holds(self, workpiece_diameter: float, module: float) -> bool:
         """Whether a workpiece of ``workpiece_diameter`` [mm] and normal ``module`` [mm] is within this size."""
@@ -163,14 +171,20 @@ def _run_up(params: SkivingMachineParams) -> float:
 
 
 def _size(name: str, workpiece: float, module: float, table: float, like: str, **motors: float) -> MachineSize:
+    """Size ``name`` for workpieces up to ``workpiece`` [mm] and ``module`` [mm] on a ``table`` [mm]."""
     params = scaled(SkivingMachineParams(), table / SMALL_TABLE, **motors)
-    params = replace(params, work_acceleration=_round(_run_up(params)))
-    return MachineSize(name, workpiece, module, table, params, like)
+    params = replace(
+        params,
+        work_acceleration=_round(_run_up(params)),
+        workpiece_diameter_limit=workpiece * 1e-3,
+        module_limit=module * 1e-3,
+    )
+    return MachineSize(name, table, params, like)
 
 
 SIZES: dict[str, MachineSize] = {
     "small": MachineSize(
-        "small", 80.0, 1.5, SMALL_TABLE, SkivingMachineParams(), "the original defaults (machine_models/parameters.py)"
+        "small", SMALL_TABLE, SkivingMachineParams(), "the original defaults (machine_models/parameters.py)"
     ),
     "medium": _size(
         "medium",

@@ -72,6 +72,11 @@ class ThreadLatheParams:
     #: M1 -> spindle: 1:1 poly-V belt, 2e4 N m/rad referred to the spindle (belt spans at the pulley radius);
     #: the mechanical form uses its stiffness for the gearbox 8 -> R2 -> iv -> 5 with the ratio c3 iv
     spindle_drive: DriveStage = field(default_factory=lambda: DriveStage(1.0, 2.0e4, 0.0, 8.0))
+    #: rad/s: the spindle's top speed, 5000 rpm: its bearings at a speed factor n dm of 0.6e6 mm/min (grease-
+    #: lubricated precision bearings) on a 120 mm pitch diameter, within what a 160 mm chuck is rated for
+    spindle_speed_limit: float = 524.0
+    #: m: the largest workpiece diameter over the bed (the lathe's swing)
+    swing_diameter: float = 0.32
 
     # ---- mechanical form: internal link 5 -> ix -> R1 -> 6 -> TV (ratio hand ix i01 from the sheet) -------
     #: referred to the screw: 2e3 N m/rad (six gear meshes and the long shaft 6 twist), 60 arcsec of play
@@ -80,6 +85,8 @@ class ThreadLatheParams:
 
     # ---- lead screw TV and its motor M2 (electronic forms) ----------------------------------------------
     screw_inertia: float = 3.0e-4  # kg m^2: 25 mm steel screw 1 m long (3.9 kg)
+    #: m: the carriage's travel on that screw (less the nut and the end bearings)
+    carriage_travel: float = 0.8
     screw_friction: float = 0.1  # N m: screw support bearings
     screw_motor_inertia: float = 1.2e-3  # kg m^2: 10 N m class AC servo motor rotor
     screw_motor_torque: float = 20.0  # N m: M2 peak (current limit of power amplifier 11 / 28)
@@ -116,6 +123,9 @@ class ThreadLatheParams:
                 "screw_motor_inertia",
                 "spindle_motor_torque",
                 "screw_motor_torque",
+                "spindle_speed_limit",
+                "swing_diameter",
+                "carriage_travel",
             ),
         )
 

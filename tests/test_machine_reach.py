@@ -50,7 +50,8 @@ def test_the_limits_of_each_size() -> None:
 def test_what_the_default_job_needs_by_hand() -> None:
     # tool 3000 rpm; spur table at z0 / z2 = 17 / 20 of it: 2550 rpm; the stroke is the setup's pass travel
     job = load_job(JOBS / "default.toml")
-    tool, work, stroke = machine_reach(job, machine_params(job))
+    workpiece, module, tool, work, stroke = machine_reach(job, machine_params(job))
+    assert workpiece.need == pytest.approx(0.022, rel=1e-12) and module.need == pytest.approx(1e-3, rel=1e-12)  # d_a2
     assert tool.need == pytest.approx(3000 * RPM, rel=1e-12)
     assert work.need == pytest.approx(2550 * RPM, rel=1e-9)
     assert stroke.need == pytest.approx(max(job.skiving.pass_travel) / 1e3, rel=1e-12)
@@ -114,3 +115,22 @@ def test_a_limit_must_be_positive(tmp_path: Path) -> None:
     with pytest.raises(InputError) as err:
         check_machine_reach(job, machine_params(job), "small")
     assert "(no larger machine size reaches it)" in err.value.problems[0].hint
+
+
+def test_a_gear_beyond_its_machines_class_is_refused_naming_the_size_that_takes_it(tmp_path: Path) -> None:
+    # spur_external (d_a2 84 mm, mn 2) put on the small machine (80 mm, mn 1.5): the medium machine takes it
+    text = (JOBS / "spur_external.toml").read_text()
+    job = _job(tmp_path, text.replace('structure = "mechatronic"', 'structure = "mechatronic"\nsize = "small"'))
+    with pytest.raises(InputError) as err:
+        check_machine_reach(job, machine_params(job), "small")
+    workpiece, module = err.value.problems
+    assert "workpiece's 84 mm diameter exceeds what it takes, 80 mm" in workpiece.reason, workpiece.reason
+    assert "module 2 mm exceeds what it is built for, 1.5 mm" in module.reason, module.reason
+    assert workpiece.hint.startswith('use machine.size = "medium", or a smaller gear')
+    # a gear beyond the largest size: no size takes it, and the real machine's own class may be given
+    large = text.replace("normal_module = 2.0", "normal_module = 9.0")
+    job = _job(tmp_path, large)
+    with pytest.raises(InputError) as err:
+        check_machine_reach(job, machine_params(job), machine_size(job))
+    modules = [p for p in err.value.problems if "module 9 mm" in p.reason]
+    assert modules and "(no larger machine size reaches it)" in modules[0].hint

@@ -237,6 +237,12 @@ class TurningSetup:
             raise ValueError(f"depth must be less than nose_radius ({self.nose_radius} mm), got {self.depth}")
         if self.depth >= self.radius:
             raise ValueError(f"depth must be less than radius ({self.radius} mm), got {self.depth}")
+        width = 2 * math.sqrt(self.depth * (2 * self.nose_radius - self.depth))  # the nose's chord at the blank
+        if self.feed >= width:  # the turns' grooves would not meet: ridges of the blank stay between them
+            raise ValueError(
+                f"feed must be less than the nose's width at the depth of cut, 2 sqrt(a_p (2 r_eps - a_p)) = "
+                f"{width:.4g} mm (else ridges of the blank stay between the turns), got {self.feed}"
+            )
         if self.vibration is not None and not isinstance(self.vibration, FeedVibration):
             raise ValueError(f"vibration must be a FeedVibration or None, got {type(self.vibration).__name__}")
 

@@ -94,7 +94,8 @@ def parse_turning_job(data: dict[str, Any], source: str) -> Job:
         except ValueError as exc:
             field = str(exc).split()[0]
             section = "vibration" if field in VIBRATION_KEYS else "turning"
-            problems.append(Problem(f"{section}.{field}", "", str(exc), "see docs/face-contours-and-turning.md"))
+            value = (vib_values if section == "vibration" else t).get(field, "")
+            problems.append(Problem(f"{section}.{field}", value, str(exc), "see docs/face-contours-and-turning.md"))
         if vibration is not None and (machine["structure"], machine["synchronization"]) != (
             "mechatronic",
             "master-slave",

@@ -27,6 +27,7 @@ from machine_models.skiving_machine import MM
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
 from virtual_machine.job import Job, flatten_model
 from virtual_machine.runtime.integrator import Integrator
+from virtual_machine.runtime.lathe_reach import check_lathe_reach
 from virtual_machine.runtime.machine_run import error_stats
 from virtual_machine.setting.sheet import thread_sheet
 from virtual_machine.setting.thread_layout import thread_layout
@@ -177,6 +178,10 @@ def simulate_thread(
     accelerations."""
     params = params or override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
     lay = thread_layout(job, params)
+    feed = lay.lead * lay.spindle_speed / (2 * math.pi)  # m/s
+    runup = params.runup_time
+    t_end = duration if duration is not None else runup + (lay.approach - feed * runup / 2 + lay.length) / feed
+    check_lathe_reach(job, params, lay, t_end)  # before the model: a stroke beyond the lathe is an input error
     model = build_thread_lathe_spec(lay, params).compile()
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
@@ -195,9 +200,6 @@ def simulate_thread(
     b1_0, p2_0 = float(qpos[i_b1]), float(qpos[i_p2])
     structure = build_thread_structure(job, params, (b1_0, float(qpos[i_tv])), vibration=vibration)
     dt = model.opt.timestep * servo_substeps
-    feed = lay.lead * lay.spindle_speed / (2 * math.pi)  # m/s
-    runup = params.runup_time
-    t_end = duration if duration is not None else runup + (lay.approach - feed * runup / 2 + lay.length) / feed
     n = round(t_end / dt)
     rows = np.empty((n, 8))
     cnc = ThreadCnc()

@@ -172,13 +172,13 @@ def cosimulate(
     kind = edge_kind or job.cutter_options["edge"]
     edge = make_edge(setup, kind)
     plans = plan.passes
-    check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
     n_pass = len(setup.passes)
     tols = [
         job.process["sweep_error"] if i == n_pass - 1 else job.process["roughing_sweep_error"] for i in range(n_pass)
     ]
     mat = material(job.process["material"])
-    run = MachineRun(job, params, servo_substeps, correction=correction, plan=plan)
+    run = MachineRun(job, params, servo_substeps, correction=correction, plan=plan)  # refuses what the machine can't
+    check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
     lag = max_lag(workers, removal)
     predictor = ForcePredictor(lag)
     run.load = predictor if forces else (lambda t, dt: ())  # no force, but the work accounting runs alike

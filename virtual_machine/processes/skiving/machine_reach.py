@@ -1,6 +1,7 @@
-"""Whether a skiving job is within its machine's reach: the tool spindle's and the table's top speeds and the
-carriage's travel (machine_models/parameters.py: ``tool_speed_limit``, ``work_speed_limit``, ``carriage_travel``;
-each size scales them, machine_models/sizes.py). A real CNC refuses a spindle speed above its limit and a stroke
+"""Whether a skiving job is within its machine's reach: the workpiece and the module it takes, the tool spindle's
+and the table's top speeds and the carriage's travel (machine_models/parameters.py: ``workpiece_diameter_limit``,
+``module_limit``, ``tool_speed_limit``, ``work_speed_limit``, ``carriage_travel``; each size has its own,
+machine_models/sizes.py). A real CNC refuses a spindle speed above its limit and a stroke
 beyond its travel; so does skive, before the run, naming the limit, what the job needs, and what would hold it.
 The motors' torque is the other check (cutting_load.py)."""
 
@@ -14,6 +15,7 @@ from cutting.errors import InputError, Problem
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.setting.machine_layout import workpiece_diameter
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
 
@@ -47,8 +49,12 @@ def _mm(v: float) -> str:
     return f"{_three(v * 1e3)} mm"
 
 
+def _module(v: float) -> str:
+    return f"{v * 1e3:.3g} mm"
+
+
 def machine_reach(job: Job, params: SkivingMachineParams) -> list[Reach]:
-    """What the job needs of the tool spindle, the table and the carriage, against ``params``' limits."""
+    """What the job needs of the machine (workpiece, module, spindle speeds, travel), against ``params``' limits."""
     setup = job.skiving
     tool = setup.tool_speed * RPM
     feed = setup.axial_feed * setup.work_speed / 60.0  # mm/s of the carriage
@@ -56,6 +62,15 @@ def machine_reach(job: Job, params: SkivingMachineParams) -> list[Reach]:
     work = abs(setup.speed_ratio) * tool + abs(setup.differential_rotation_per_mm) * feed
     stroke = max(setup.pass_travel) * 1e-3
     return [
+        Reach(
+            "workpiece_diameter_limit",
+            "work spindle B2",
+            workpiece_diameter(job.gear) * 1e-3,
+            params.workpiece_diameter_limit,
+            _mm,
+            "m",
+        ),
+        Reach("module_limit", "tool spindle B1", job.gear.mn * 1e-3, params.module_limit, _module, "m"),
         Reach("tool_speed_limit", "tool spindle B1", tool, params.tool_speed_limit, _rpm, "rad/s"),
         Reach("work_speed_limit", "table (work spindle B2)", work, params.work_speed_limit, _rpm, "rad/s"),
         Reach("carriage_travel", "carriage P3", stroke, params.carriage_travel, _mm, "m"),
@@ -82,7 +97,13 @@ def check_machine_reach(job: Job, params: SkivingMachineParams, size: str) -> li
         None,
     )
     for r in bad:
-        if r.key == "carriage_travel":
+        if r.key == "workpiece_diameter_limit":
+            what = f"the workpiece's {r.show(r.need)} diameter exceeds what it takes, {r.show(r.limit)}"
+            less = "a smaller gear"
+        elif r.key == "module_limit":
+            what = f"the gear's module {r.show(r.need)} exceeds what it is built for, {r.show(r.limit)}"
+            less = "a smaller gear.normal_module"
+        elif r.key == "carriage_travel":
             what = (
                 f"a pass's stroke (the face, the cutter's run-in and run-out) of {r.show(r.need)} exceeds the "
                 f"travel {r.show(r.limit)}"

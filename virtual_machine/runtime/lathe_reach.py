@@ -1,0 +1,69 @@
+"""Whether a thread or turning job is within the lathe's reach (machine_models/thread_lathe.py:
+``spindle_speed_limit``, ``swing_diameter``, ``carriage_travel``): as the lathe's CNC refuses a spindle speed above
+its limit and a stroke beyond its travel, and a workpiece over its swing does not fit, skive refuses such a job
+before the stroke, naming the limit, what the job needs and what would hold it."""
+
+from __future__ import annotations
+
+import math
+
+from cutting.errors import InputError, Problem
+from machine_models.thread_lathe import ThreadLatheParams, ThreadLayout
+from virtual_machine.job import Job
+
+RPM = 2 * math.pi / 60  # rad/s per rpm
+
+
+def _figure(x: float) -> str:
+    """Three significant figures, written out: the limits are orders of magnitude."""
+    return f"{float(f'{x:.3g}'):,.0f}"
+
+
+def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_end: float) -> None:
+    """Refuse (InputError) a stroke of ``t_end`` [s] laid out by ``lay`` that needs more than the lathe ``params``
+    gives: its spindle speed, its workpiece diameter, the carriage's travel over the stroke."""
+    section = "turning" if job.kind == "turning" else "thread"
+    speed_key = "process.cutting_speed" if "cutting_speed" in job.process else "the spindle speed"
+    feed = lay.lead * lay.spindle_speed / (2 * math.pi)  # m/s of the carriage
+    travel = max(lay.length + 2 * lay.approach, lay.approach + feed * t_end)
+    checks = (
+        (
+            "spindle_speed_limit",
+            lay.spindle_speed,
+            params.spindle_speed_limit,
+            f"the spindle B1 turns at {_figure(lay.spindle_speed / RPM)} rpm, above its top speed "
+            f"{_figure(params.spindle_speed_limit / RPM)} rpm",
+            f"a lower {speed_key}",
+            "rad/s",
+        ),
+        (
+            "swing_diameter",
+            lay.diameter,
+            params.swing_diameter,
+            f"the workpiece's {_figure(lay.diameter * 1e3)} mm diameter exceeds its swing "
+            f"{_figure(params.swing_diameter * 1e3)} mm",
+            f"a smaller {section}.diameter",
+            "m",
+        ),
+        (
+            "carriage_travel",
+            travel,
+            params.carriage_travel,
+            f"the stroke (the {section}'s length, the run-up's travel and the clearance) of {_figure(travel * 1e3)} mm "
+            f"exceeds the carriage's travel {_figure(params.carriage_travel * 1e3)} mm",
+            f"a shorter {section}.length" + (" or fewer process.revolutions" if section == "turning" else ""),
+            "m",
+        ),
+    )
+    problems = [
+        Problem(
+            f"machine.model.{key}",
+            limit,
+            f"the lathe cannot do it: {what}",
+            f"use {less}, or machine.model.{key} >= {need:.3g} ({unit}) if the real lathe has it",
+        )
+        for key, need, limit, what, less, unit in checks
+        if not need <= limit
+    ]
+    if problems:
+        raise InputError(problems, job.source)
