@@ -71,6 +71,14 @@ class FormMillParams:
     The three nuts are alike (same screw size), so they share ``nut_*``.
     """
 
+    # ---- what the machine takes ------------------------------------------------------------------------------
+    #: m: the largest workpiece (external: its tip circle; ring gear: the outside of its rim): gears of 50-300 mm
+    workpiece_diameter_limit: float = 0.3
+    #: m: the Z slide's travel on its 1 m screw (less the nut and the end bearings): a pass's stroke must fit in it
+    z_travel: float = 0.8
+    #: m: the largest mill the spindle carries (its arbor and guard)
+    mill_diameter_limit: float = 0.25
+
     # ---- indexing work axis A: rotary table on a worm gear stage from servo motor MA ---------------------
     table_inertia: float = 1.5  # kg m^2: 400 mm face plate + worm wheel (1.2) + fixture (0.3); blank added
     table_mass: float = 120.0  # kg: rotating parts (on the table bearing: only the inertia about z matters)
@@ -158,6 +166,9 @@ class FormMillParams:
                 "spindle_mass",
                 "s_motor_inertia",
                 "s_motor_torque",
+                "workpiece_diameter_limit",
+                "z_travel",
+                "mill_diameter_limit",
             ),
         )
         return out

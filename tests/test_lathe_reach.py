@@ -92,3 +92,25 @@ def test_a_lathe_limit_must_be_positive(tmp_path: Path) -> None:
     with pytest.raises(InputError) as err:
         _job(tmp_path, THREAD + "\n[machine.model]\nswing_diameter = 0.0\n")
     assert any("swing_diameter" in p.reason or "swing_diameter" in p.key for p in err.value.problems), err.value
+
+
+def test_the_turning_report_says_when_the_solid_shows_no_crest() -> None:
+    # a nose far wider than the feed leaves a surface without crests: the report said nothing and raised
+    from virtual_machine.processes.turning.stages import solid_line
+
+    solid = {"revolutions": 24, "sweep_error_um": 1.0, "Rt_max_um": 0.0}
+    solid["largest_crest_difference_to_envelope_um"] = None
+    assert solid_line(solid).endswith("Rt max 0.00 um, no crests to compare")
+    solid["largest_crest_difference_to_envelope_um"] = 0.25
+    assert solid_line(solid).endswith("crests within 0.25 um of the exact envelope")
+
+
+def test_a_vibration_faster_than_the_servo_can_sample_is_refused(tmp_path: Path) -> None:
+    # 40 mm at 25 m/min: 199 rpm, 3.32 rev/s; the 4 kHz servo samples 20 times a cycle up to 200 Hz: 60.3 per rev
+    from virtual_machine.processes.turning.stages import simulate_turning
+
+    job = _job(tmp_path, TURNING.replace("cycles_per_rev = 2.25", "cycles_per_rev = 80.25"))
+    with pytest.raises(InputError) as err:
+        simulate_turning(job)
+    (problem,) = err.value.problems
+    assert problem.key == "vibration.cycles_per_rev" and "(at most 60.3 here)" in problem.hint, problem

@@ -12,6 +12,10 @@ from machine_models.thread_lathe import ThreadLatheParams, ThreadLayout
 from virtual_machine.job import Job
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
+#: the servo tick's physics sub-steps (virtual_machine/runtime/thread_run.py: simulate_thread's default)
+SERVO_SUBSTEPS = 2
+#: the fewest servo ticks per cycle of a feed vibration
+MIN_SAMPLES = 20
 
 
 def _figure(x: float) -> str:
@@ -55,6 +59,24 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
             "m",
         ),
     )
+    vibration = getattr(job, "vibration", None) if job.kind == "turning" else None
+    if vibration is not None:
+        # the feed servo follows tens of Hz (docs/face-contours-and-turning.md); a command sampled fewer than
+        # MIN_SAMPLES times per cycle by the servo tick is no vibration at all
+        tick = 1.0 / (params.timestep * SERVO_SUBSTEPS)
+        frequency = vibration.cycles_per_rev * lay.spindle_speed / (2 * math.pi)
+        most = tick / MIN_SAMPLES / frequency * vibration.cycles_per_rev
+        if frequency > tick / MIN_SAMPLES:
+            raise InputError(
+                Problem(
+                    "vibration.cycles_per_rev",
+                    vibration.cycles_per_rev,
+                    f"the vibration at {_figure(frequency)} Hz is sampled fewer than {MIN_SAMPLES} times a cycle by "
+                    f"the lathe's {_figure(tick)} Hz servo (its feed axis follows tens of Hz)",
+                    f"use fewer vibration.cycles_per_rev (at most {most:.3g} here) or a lower process.cutting_speed",
+                ),
+                job.source,
+            )
     problems = [
         Problem(
             f"machine.model.{key}",

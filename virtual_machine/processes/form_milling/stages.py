@@ -63,6 +63,9 @@ def is_finger(job: Job) -> bool:
 def plan_job(job: Job, checks: int = 3) -> CopyingPlan | FingerPlan:
     """The seed's 15 steps for the job (``checks`` rounds of the accuracy check on the ideal machine): the disc
     mill's (:func:`plan_copying`) or the finger mill's (:func:`cutting.form_milling.finger.plan_finger`)."""
+    from virtual_machine.processes.form_milling.reach import check_form_reach
+
+    check_form_reach(job, machine_params(job))  # before a path of that size is planned
     m, p = job.mill, job.process
     common = {"checks": checks, "check_points": CHECK_POINTS, "path_form": p["path_form"]}
     try:

@@ -159,11 +159,14 @@ def simulate_turning(
     run-up on. The simulated path is there in the loop (every earlier turn is recorded before it is needed), so
     the carriage's own deflections feed back into the chips it cuts. Refused (InputError) before the run if the
     spindle motor cannot hold the cut (:func:`check_spindle_holds`)."""
+    from virtual_machine.runtime.lathe_reach import check_lathe_reach
     from virtual_machine.runtime.thread_run import CuttingLoad, simulate_thread
+    from virtual_machine.setting.thread_layout import thread_layout
 
     n = job.process["revolutions"]
     params = params or lathe_params(job)
     duration = params.runup_time + SETTLE + (n + 1) / spindle_speed(job)
+    check_lathe_reach(job, params, thread_layout(job, params), duration)  # before the path is sampled
     cut = None
     if forces:
         check_spindle_holds(job, params)
@@ -348,13 +351,18 @@ def format_run(doc: dict[str, Any]) -> str:
     if "forces" in doc:
         lines += _force_lines(doc["forces"])
     if "solid" in doc:
-        s = doc["solid"]
-        lines.append(
-            f"  manifold solid ({s['revolutions']} revs, sweep error {s['sweep_error_um']:.1f} um): Rt max "
-            f"{s['Rt_max_um']:.2f} um, crests within {s['largest_crest_difference_to_envelope_um']:.2f} um of "
-            "the exact envelope"
-        )
+        lines.append(solid_line(doc["solid"]))
     return "\n".join(lines)
+
+
+def solid_line(s: dict[str, Any]) -> str:
+    """The report's line of the manifold solid's crests (None: the surface shows no crest to compare)."""
+    diff = s["largest_crest_difference_to_envelope_um"]
+    return (
+        f"  manifold solid ({s['revolutions']} revs, sweep error {s['sweep_error_um']:.1f} um): Rt max "
+        f"{s['Rt_max_um']:.2f} um, "
+        + (f"crests within {diff:.2f} um of the exact envelope" if diff is not None else "no crests to compare")
+    )
 
 
 def _force_lines(f: dict[str, Any]) -> list[str]:

@@ -1,0 +1,75 @@
+"""Whether a form-milling job is within its machine's reach (machine_models/form_mill.py:
+``workpiece_diameter_limit``, ``z_travel``, ``mill_diameter_limit``) and whether its mill fits
+the space at all (``mill.clearance``): checked before the plan, so that `skive cut` and `skive run` refuse such a job
+with what is wrong and what would hold it, instead of planning a path of that size."""
+
+from __future__ import annotations
+
+import math
+
+from cutting.errors import InputError, Problem
+from virtual_machine.job import Job
+from virtual_machine.setting.machine_layout import workpiece_diameter
+
+
+def _figure(x: float) -> str:
+    """Three significant figures, written out: the limits are orders of magnitude."""
+    return f"{float(f'{x:.3g}'):,.0f}"
+
+
+def check_form_reach(job: Job, params) -> None:
+    """Refuse (InputError) a form-milling job beyond the machine ``params`` (FormMillParams) or whose clearance
+    leaves no mill in the space."""
+    g, m = job.gear, job.mill
+    problems = []
+    space = math.pi * g.mn / math.cos(g.helix_angle) / 2  # the space's width on the reference circle [mm]
+    if m["clearance"] >= space:
+        problems.append(
+            Problem(
+                "mill.clearance",
+                m["clearance"],
+                f"a clearance of at least the space's width on the reference circle (pi m_t / 2 = {space:.3f} mm) "
+                "leaves no mill in the space",
+                f"give mill.clearance well below {space:.3f} mm (a few tenths of a millimetre is usual)",
+            )
+        )
+    d = m.get("diameter") or 0.0  # the finger's is fitted to the space (its largest diameter)
+    stroke = g.face_width / math.cos(g.helix_angle) + d  # the face and the mill's reach past both ends [mm]
+    checks = (
+        (
+            "workpiece_diameter_limit",
+            workpiece_diameter(g) * 1e-3,
+            f"the workpiece's {_figure(workpiece_diameter(g))} mm diameter exceeds what the table takes, "
+            f"{_figure(params.workpiece_diameter_limit * 1e3)} mm",
+            "a smaller gear",
+            "m",
+        ),
+        (
+            "z_travel",
+            stroke * 1e-3,
+            f"a pass's stroke (the face and the mill's reach past its ends) of about {_figure(stroke)} mm exceeds the "
+            f"Z slide's travel {_figure(params.z_travel * 1e3)} mm",
+            "a narrower gear.face_width or a smaller mill",
+            "m",
+        ),
+        (
+            "mill_diameter_limit",
+            d * 1e-3,
+            f"a mill of {_figure(d)} mm exceeds what the spindle carries, "
+            f"{_figure(params.mill_diameter_limit * 1e3)} mm",
+            "a smaller mill.diameter",
+            "m",
+        ),
+    )
+    problems += [
+        Problem(
+            f"machine.model.{key}",
+            getattr(params, key),
+            f"the form-milling machine cannot do it: {what}",
+            f"use {less}, or machine.model.{key} >= {need:.3g} ({unit}) if the real machine has it",
+        )
+        for key, need, what, less, unit in checks
+        if not need <= getattr(params, key)
+    ]
+    if problems:
+        raise InputError(problems, job.source)
