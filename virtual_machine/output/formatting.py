@@ -5,6 +5,12 @@ from __future__ import annotations
 from virtual_machine.setting.sheet import SetupSheet
 
 
+def three_figures(x: float) -> str:
+    """``x`` to three significant figures, written out (6,000, not 6e+03): a machine's limits are orders of
+    magnitude, and so is how far a job is beyond them."""
+    return f"{float(f'{x:.3g}'):,.0f}"
+
+
 def format_sheet(sheet: SetupSheet, source: str) -> str:
     """The setting sheet as a setter reads it."""
     lines = [f"SETTING SHEET  {source}", f"structure: {sheet.structure}", ""]

@@ -10,17 +10,13 @@ import math
 from cutting.errors import InputError, Problem
 from machine_models.thread_lathe import ThreadLatheParams, ThreadLayout
 from virtual_machine.job import Job
+from virtual_machine.output.formatting import three_figures
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
 #: the servo tick's physics sub-steps (virtual_machine/runtime/thread_run.py: simulate_thread's default)
 SERVO_SUBSTEPS = 2
 #: the fewest servo ticks per cycle of a feed vibration
 MIN_SAMPLES = 20
-
-
-def _figure(x: float) -> str:
-    """Three significant figures, written out: the limits are orders of magnitude."""
-    return f"{float(f'{x:.3g}'):,.0f}"
 
 
 def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_end: float) -> None:
@@ -35,8 +31,8 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
             "spindle_speed_limit",
             lay.spindle_speed,
             params.spindle_speed_limit,
-            f"the spindle B1 turns at {_figure(lay.spindle_speed / RPM)} rpm, above its top speed "
-            f"{_figure(params.spindle_speed_limit / RPM)} rpm",
+            f"the spindle B1 turns at {three_figures(lay.spindle_speed / RPM)} rpm, above its top speed "
+            f"{three_figures(params.spindle_speed_limit / RPM)} rpm",
             f"a lower {speed_key}",
             "rad/s",
         ),
@@ -44,8 +40,8 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
             "swing_diameter",
             lay.diameter,
             params.swing_diameter,
-            f"the workpiece's {_figure(lay.diameter * 1e3)} mm diameter exceeds its swing "
-            f"{_figure(params.swing_diameter * 1e3)} mm",
+            f"the workpiece's {three_figures(lay.diameter * 1e3)} mm diameter exceeds its swing "
+            f"{three_figures(params.swing_diameter * 1e3)} mm",
             f"a smaller {section}.diameter",
             "m",
         ),
@@ -53,8 +49,9 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
             "carriage_travel",
             travel,
             params.carriage_travel,
-            f"the stroke (the {section}'s length, the run-up's travel and the clearance) of {_figure(travel * 1e3)} mm "
-            f"exceeds the carriage's travel {_figure(params.carriage_travel * 1e3)} mm",
+            f"the stroke (the {section}'s length, the run-up's travel and the clearance) of "
+            f"{three_figures(travel * 1e3)} mm exceeds the carriage's travel "
+            f"{three_figures(params.carriage_travel * 1e3)} mm",
             f"a shorter {section}.length" + (" or fewer process.revolutions" if section == "turning" else ""),
             "m",
         ),
@@ -71,8 +68,8 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
                 Problem(
                     "vibration.cycles_per_rev",
                     vibration.cycles_per_rev,
-                    f"the vibration at {_figure(frequency)} Hz is sampled fewer than {MIN_SAMPLES} times a cycle by "
-                    f"the lathe's {_figure(tick)} Hz servo (its feed axis follows tens of Hz)",
+                    f"the vibration at {three_figures(frequency)} Hz is sampled fewer than {MIN_SAMPLES} times a "
+                    f"cycle by the lathe's {three_figures(tick)} Hz servo (its feed axis follows tens of Hz)",
                     f"use fewer vibration.cycles_per_rev (at most {most:.3g} here) or a lower process.cutting_speed",
                 ),
                 job.source,

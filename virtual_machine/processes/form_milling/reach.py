@@ -9,12 +9,8 @@ import math
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
+from virtual_machine.output.formatting import three_figures
 from virtual_machine.setting.machine_layout import workpiece_diameter
-
-
-def _figure(x: float) -> str:
-    """Three significant figures, written out: the limits are orders of magnitude."""
-    return f"{float(f'{x:.3g}'):,.0f}"
 
 
 def check_form_reach(job: Job, params) -> None:
@@ -39,24 +35,24 @@ def check_form_reach(job: Job, params) -> None:
         (
             "workpiece_diameter_limit",
             workpiece_diameter(g) * 1e-3,
-            f"the workpiece's {_figure(workpiece_diameter(g))} mm diameter exceeds what the table takes, "
-            f"{_figure(params.workpiece_diameter_limit * 1e3)} mm",
+            f"the workpiece's {three_figures(workpiece_diameter(g))} mm diameter exceeds what the table takes, "
+            f"{three_figures(params.workpiece_diameter_limit * 1e3)} mm",
             "a smaller gear",
             "m",
         ),
         (
             "z_travel",
             stroke * 1e-3,
-            f"a pass's stroke (the face and the mill's reach past its ends) of about {_figure(stroke)} mm exceeds the "
-            f"Z slide's travel {_figure(params.z_travel * 1e3)} mm",
+            f"a pass's stroke (the face and the mill's reach past its ends) of about {three_figures(stroke)} mm "
+            f"exceeds the Z slide's travel {three_figures(params.z_travel * 1e3)} mm",
             "a narrower gear.face_width or a smaller mill",
             "m",
         ),
         (
             "mill_diameter_limit",
             d * 1e-3,
-            f"a mill of {_figure(d)} mm exceeds what the spindle carries, "
-            f"{_figure(params.mill_diameter_limit * 1e3)} mm",
+            f"a mill of {three_figures(d)} mm exceeds what the spindle carries, "
+            f"{three_figures(params.mill_diameter_limit * 1e3)} mm",
             "a smaller mill.diameter",
             "m",
         ),

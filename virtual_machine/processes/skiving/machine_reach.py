@@ -15,6 +15,7 @@ from cutting.errors import InputError, Problem
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.output.formatting import three_figures
 from virtual_machine.setting.machine_layout import workpiece_diameter
 
 RPM = 2 * math.pi / 60  # rad/s per rpm
@@ -36,17 +37,12 @@ class Reach:
         return self.need <= self.limit
 
 
-def _three(x: float) -> str:
-    """Three significant figures, written out (6,000, not 6e+03): the limits are orders of magnitude."""
-    return f"{float(f'{x:.3g}'):,.0f}"
-
-
 def _rpm(v: float) -> str:
-    return f"{_three(v / RPM)} rpm"
+    return f"{three_figures(v / RPM)} rpm"
 
 
 def _mm(v: float) -> str:
-    return f"{_three(v * 1e3)} mm"
+    return f"{three_figures(v * 1e3)} mm"
 
 
 def _module(v: float) -> str:
