@@ -100,6 +100,10 @@ class FaceMachineParams:
     #: MH -> head: 1:6 spur stage and Oldham coupling, 3e4 N m/rad at the head (gear mesh, shafts, coupling),
     #: 10 arcsec backlash (precision ground gears), 8 N m s/rad (oil film; zeta ~ 0.1)
     head_drive: DriveStage = field(default_factory=lambda: DriveStage(1 / 6, 3.0e4, 10 * ARCSEC, 8.0))
+    #: rad/s: the head's top speed, 500 rpm: the 15 N m class servo MH's 3000 rpm through the 1:6 stage
+    head_speed_limit: float = 52.4
+    #: m: the largest coupling the 320 mm table takes (couplings of 80-200 mm)
+    workpiece_diameter_limit: float = 0.2
 
     # ---- eccentric E (control "eccentric"): the sleeve carrying the head spindle, gear stage from ME ----------
     eccentric_inertia: float = 0.08  # kg m^2: 160 mm steel sleeve with its counterweight, about its centre of mass
@@ -158,6 +162,8 @@ class FaceMachineParams:
                 "head_mass",
                 "h_motor_inertia",
                 "h_motor_torque",
+                "head_speed_limit",
+                "workpiece_diameter_limit",
                 "eccentric_inertia",
                 "eccentric_mass",
                 "e_motor_inertia",

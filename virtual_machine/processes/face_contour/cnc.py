@@ -69,6 +69,7 @@ from machine_models.parts import tendon_coefs
 from metrology.face_slots import SlotMeasure, bottom_form, measuring_radii, side_lines
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.controllers.face_gearbox import ElectronicGearbox
+from virtual_machine.output.formatting import three_figures
 from virtual_machine.runtime.integrator import (
     BAD_ACCELERATION_OR_SPEED,
     Integrator,
@@ -323,6 +324,38 @@ def _check_held_speed(c: FaceCoupling, servo: FaceServo, omega: float, tool_rpm:
             )
 
 
+def check_face_reach(c: FaceCoupling, params: FaceMachineParams, tool_rpm: float) -> None:
+    """Refuse (InputError) a coupling the machine cannot cut: a head speed above its top speed, a coupling larger
+    than its table takes (``head_speed_limit``, ``workpiece_diameter_limit``), naming both figures."""
+    omega = tool_rpm * 2 * math.pi / 60
+    problems = []
+    if omega > params.head_speed_limit:
+        top = params.head_speed_limit * 60 / (2 * math.pi)
+        problems.append(
+            Problem(
+                "process.tool_speed",
+                tool_rpm,
+                f"the head H turns at {three_figures(tool_rpm)} rpm, above its top speed {three_figures(top)} rpm "
+                f"(machine.model.head_speed_limit = {params.head_speed_limit:g} rad/s)",
+                f"use a lower process.tool_speed, or machine.model.head_speed_limit >= {omega:.3g} (rad/s) if the "
+                "real machine has it",
+            )
+        )
+    if 2 * c.outer_radius * 1e-3 > params.workpiece_diameter_limit:
+        problems.append(
+            Problem(
+                "coupling.outer_radius",
+                c.outer_radius,
+                f"a coupling of {three_figures(2 * c.outer_radius)} mm exceeds what the table takes, "
+                f"{three_figures(params.workpiece_diameter_limit * 1e3)} mm",
+                "use a smaller coupling, or machine.model.workpiece_diameter_limit >= "
+                f"{2 * c.outer_radius * 1e-3:.3g} (m) if the real machine takes it",
+            )
+        )
+    if problems:
+        raise InputError(problems)
+
+
 #: share of a motor's peak torque the cutting load may take (the rest: the servo's acceleration, friction)
 CUT_TORQUE_SHARE = 0.8
 
@@ -433,6 +466,7 @@ def simulate_face_contour(
     tuning = tuning or FaceTuning()
     if not (math.isfinite(tool_rpm) and tool_rpm > 0):
         raise ValueError(f"tool_rpm = {tool_rpm}: must be > 0")
+    check_face_reach(coupling, params, tool_rpm)
     slots = tuple(slots)
     if not slots or any(not isinstance(k, int | np.integer) or not 0 <= k < coupling.m for k in slots):
         raise ValueError(f"slots = {slots}: must be slot numbers in [0, {coupling.m})")

@@ -1,0 +1,46 @@
+"""The face-contour machine's reach (virtual_machine/processes/face_contour/cnc.py: check_face_reach): the shipped
+coupling job is within it; a head speed above the head's top speed and a coupling larger than the table takes are
+refused before the run, naming both figures and the [machine.model] key for a real machine's own."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import pytest
+
+from cutting.errors import InputError
+from cutting.face_contour.slots import FaceCoupling
+from machine_models.face_contour_machine import FaceMachineParams
+from virtual_machine.job import load_job
+from virtual_machine.processes.face_contour.cnc import check_face_reach, simulate_face_contour
+
+JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
+
+
+def test_the_shipped_coupling_is_within_reach() -> None:
+    job = load_job(JOBS / "face_coupling.toml")
+    check_face_reach(job.coupling, FaceMachineParams(), job.process["tool_speed"])  # no error
+    assert FaceMachineParams().head_speed_limit == pytest.approx(500 * 2 * math.pi / 60, rel=1e-3)
+
+
+def test_a_head_speed_above_the_top_speed_is_refused_before_the_run() -> None:
+    with pytest.raises(InputError) as err:
+        simulate_face_contour(FaceCoupling(), tool_rpm=600.0)  # before any model is built
+    (problem,) = err.value.problems
+    assert problem.key == "process.tool_speed" and problem.value == 600.0
+    assert "turns at 600 rpm, above its top speed 500 rpm" in problem.reason
+    assert f"machine.model.head_speed_limit >= {600 * 2 * math.pi / 60:.3g} (rad/s)" in problem.hint
+    faster = dataclasses.replace(FaceMachineParams(), head_speed_limit=70.0)
+    check_face_reach(FaceCoupling(), faster, 600.0)  # the real machine's own limit holds it
+
+
+def test_a_coupling_larger_than_the_table_takes_is_refused() -> None:
+    # the default coupling (outer radius 60 mm: 120 mm) on a machine whose table takes 100 mm
+    small = dataclasses.replace(FaceMachineParams(), workpiece_diameter_limit=0.1)
+    with pytest.raises(InputError) as err:
+        check_face_reach(FaceCoupling(), small, 150.0)
+    (problem,) = err.value.problems
+    assert problem.key == "coupling.outer_radius" and "120 mm exceeds what the table takes, 100 mm" in problem.reason
+    assert "machine.model.workpiece_diameter_limit >= 0.12 (m)" in problem.hint
