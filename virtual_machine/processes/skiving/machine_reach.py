@@ -1,9 +1,9 @@
 """Whether a skiving job is within its machine's reach: the workpiece and the module it takes, the tool spindle's
 and the table's top speeds and the carriage's travel (machine_models/parameters.py: ``workpiece_diameter_limit``,
 ``module_limit``, ``tool_speed_limit``, ``work_speed_limit``, ``carriage_travel``; each size has its own,
-machine_models/sizes.py). A real CNC refuses a spindle speed above its limit and a stroke
-beyond its travel; so does skive, before the run, naming the limit, what the job needs, and what would hold it.
-The motors' torque is the other check (cutting_load.py)."""
+machine_models/sizes.py). A machine's data sheet bounds the workpiece and module it takes, and its CNC refuses a
+spindle speed above its limit and a stroke beyond its travel; so does skive, before the run, naming the limit, what
+the job needs, and what would hold it. The motors' torque is the other check (cutting_load.py)."""
 
 from __future__ import annotations
 
