@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 ARCSEC = math.pi / 180 / 3600
+RPM = 2 * math.pi / 60  # rad/s per rpm
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 
 def small_job(
     edge: str | None = "involute", sweep_error: float = 0.004, face_width: float = 2.0, axial_feed: float = 0.2
@@ -47,3 +49,12 @@ revolutions = {revolutions}
 synchronization = "{sync}"
 {machine}
 """
+
+
+def job_from_text(tmp_path: Path, text: str, name: str = "job.toml"):
+    """The job of ``text``, written to ``tmp_path / name`` and loaded as `skive` loads a job file."""
+    from virtual_machine.job import load_job
+
+    path = tmp_path / name
+    path.write_text(text)
+    return load_job(path)

@@ -1,4 +1,4 @@
-"""The face-contour machine's reach (virtual_machine/processes/face_contour/cnc.py: check_face_reach): the shipped
+"""The face-contour machine's reach (virtual_machine/processes/face_contour/reach.py): the shipped
 coupling job is within it; a head speed above the head's top speed and a coupling larger than the table takes are
 refused before the run, naming both figures and the [machine.model] key for a real machine's own."""
 
@@ -14,7 +14,8 @@ from cutting.errors import InputError
 from cutting.face_contour.slots import FaceCoupling
 from machine_models.face_contour_machine import FaceMachineParams
 from virtual_machine.job import load_job
-from virtual_machine.processes.face_contour.cnc import check_face_reach, simulate_face_contour
+from virtual_machine.processes.face_contour.cnc import simulate_face_contour
+from virtual_machine.processes.face_contour.reach import check_face_reach
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 

@@ -8,6 +8,7 @@ import math
 from pathlib import Path
 
 import pytest
+from small_jobs import job_from_text
 
 from cutting.errors import InputError
 from virtual_machine.job import load_job
@@ -16,12 +17,6 @@ from virtual_machine.processes.form_milling.stages import machine_params, plan_j
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 CROWNED = (JOBS / "form_milled_crowned.toml").read_text()
-
-
-def _job(tmp_path: Path, text: str):
-    path = tmp_path / "job.toml"
-    path.write_text(text)
-    return load_job(path)
 
 
 @pytest.mark.parametrize("name", ["form_milled_crowned", "form_milled_helical", "form_milled_internal"])
@@ -37,14 +32,14 @@ def test_a_finger_clearance_wider_than_the_space_is_refused(tmp_path: Path) -> N
     text = (JOBS / "form_milled_internal.toml").read_text()
     text = text.replace(f"clearance = {job.mill['clearance']:g}", f"clearance = {space + 0.1:.3f}")
     with pytest.raises(InputError) as err:
-        plan_job(_job(tmp_path, text))  # before any path is planned
+        plan_job(job_from_text(tmp_path, text))  # before any path is planned
     problem = err.value.problems[0]
     assert problem.key == "mill.clearance" and f"pi m_t / 2 = {space:.3f} mm" in problem.reason
 
 
 def test_a_stroke_beyond_the_z_travel_and_an_oversize_mill_are_refused(tmp_path: Path) -> None:
     text = CROWNED.replace("face_width = ", "face_width = 9").replace("diameter = 50.0", "diameter = 300.0")
-    job = _job(tmp_path, text)
+    job = job_from_text(tmp_path, text)
     with pytest.raises(InputError) as err:
         check_form_reach(job, machine_params(job))
     keys = {p.key: p for p in err.value.problems}
@@ -54,5 +49,5 @@ def test_a_stroke_beyond_the_z_travel_and_an_oversize_mill_are_refused(tmp_path:
         "a mill of 300 mm exceeds what the spindle carries, 250 mm" in keys["machine.model.mill_diameter_limit"].reason
     )
     # the real machine's own figures, in [machine.model], hold it
-    job = _job(tmp_path, text + "\n[machine.model]\nz_travel = 2.0\nmill_diameter_limit = 0.3\n")
+    job = job_from_text(tmp_path, text + "\n[machine.model]\nz_travel = 2.0\nmill_diameter_limit = 0.3\n")
     check_form_reach(job, machine_params(job))

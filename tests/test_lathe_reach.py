@@ -9,24 +9,20 @@ import math
 from pathlib import Path
 
 import pytest
+from small_jobs import job_from_text
 
 from cutting.errors import InputError
+from machine_models.parameters import RPM
 from machine_models.thread_lathe import ThreadLatheParams
 from virtual_machine.job import load_job
 from virtual_machine.processes.turning.stages import lathe_params
-from virtual_machine.runtime.lathe_reach import RPM, check_lathe_reach
+from virtual_machine.runtime.lathe_reach import check_lathe_reach
 from virtual_machine.runtime.thread_run import simulate_thread
 from virtual_machine.setting.thread_layout import thread_layout
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 THREAD = (JOBS / "thread_m12.toml").read_text()
 TURNING = (JOBS / "vibration_turning.toml").read_text()
-
-
-def _job(tmp_path: Path, text: str):
-    path = tmp_path / "job.toml"
-    path.write_text(text)
-    return load_job(path)
 
 
 def _refused(job) -> list:
@@ -47,14 +43,14 @@ def test_the_shipped_lathe_jobs_are_within_reach() -> None:
 
 def test_a_spindle_speed_above_the_top_speed_is_refused(tmp_path: Path) -> None:
     # M12 at 200 m/min: 200e3 / (pi 12) = 5305 rpm, above 5000 rpm
-    job = _job(tmp_path, THREAD.replace("cutting_speed = 90.0", "cutting_speed = 200.0"))
+    job = job_from_text(tmp_path, THREAD.replace("cutting_speed = 90.0", "cutting_speed = 200.0"))
     (problem,) = _refused(job)
     assert problem.key == "machine.model.spindle_speed_limit"
     assert f"turns at {float(f'{200e3 / (math.pi * 12):.3g}'):,.0f} rpm" in problem.reason, problem.reason
     assert "above its top speed 5,000 rpm" in problem.reason
     assert problem.hint.startswith("use a lower process.cutting_speed")
     # the real lathe's own limit, in [machine.model], lets it run up to its stroke
-    job = _job(
+    job = job_from_text(
         tmp_path,
         THREAD.replace("cutting_speed = 90.0", "cutting_speed = 200.0") + "\n[machine.model]\n"
         f"spindle_speed_limit = {6000 * RPM}\n",
@@ -64,13 +60,13 @@ def test_a_spindle_speed_above_the_top_speed_is_refused(tmp_path: Path) -> None:
 
 
 def test_a_workpiece_over_the_swing_and_a_stroke_beyond_the_travel_are_refused(tmp_path: Path) -> None:
-    (problem,) = _refused(_job(tmp_path, THREAD.replace("diameter = 12.0", "diameter = 400.0")))
+    (problem,) = _refused(job_from_text(tmp_path, THREAD.replace("diameter = 12.0", "diameter = 400.0")))
     assert problem.key == "machine.model.swing_diameter"
     assert "400 mm diameter exceeds its swing 320 mm" in problem.reason and "thread.diameter" in problem.hint
-    (problem,) = _refused(_job(tmp_path, THREAD.replace("length = 30.0", "length = 900.0")))
+    (problem,) = _refused(job_from_text(tmp_path, THREAD.replace("length = 30.0", "length = 900.0")))
     assert problem.key == "machine.model.carriage_travel"
     assert "exceeds the carriage's travel 800 mm" in problem.reason and "thread.length" in problem.hint
-    longer = _job(
+    longer = job_from_text(
         tmp_path, THREAD.replace("length = 30.0", "length = 900.0") + "\n[machine.model]\ncarriage_travel = 1.0\n"
     )
     params = lathe_params(longer)
@@ -82,7 +78,7 @@ def test_a_workpiece_over_the_swing_and_a_stroke_beyond_the_travel_are_refused(t
 def test_a_turning_feed_wider_than_the_nose_cut_is_refused_with_the_job(tmp_path: Path) -> None:
     # r_eps 0.8, a_p 0.3: the nose's chord at the blank 2 sqrt(0.3 x 1.3) = 1.249 mm
     with pytest.raises(InputError) as err:
-        _job(tmp_path, TURNING.replace("feed = 0.2 ", "feed = 1.3 "))
+        job_from_text(tmp_path, TURNING.replace("feed = 0.2 ", "feed = 1.3 "))
     (problem,) = err.value.problems
     assert problem.key == "turning.feed" and problem.value == 1.3
     assert f"{2 * math.sqrt(0.3 * 1.3):.4g} mm" in problem.reason
@@ -90,7 +86,7 @@ def test_a_turning_feed_wider_than_the_nose_cut_is_refused_with_the_job(tmp_path
 
 def test_a_lathe_limit_must_be_positive(tmp_path: Path) -> None:
     with pytest.raises(InputError) as err:
-        _job(tmp_path, THREAD + "\n[machine.model]\nswing_diameter = 0.0\n")
+        job_from_text(tmp_path, THREAD + "\n[machine.model]\nswing_diameter = 0.0\n")
     assert any("swing_diameter" in p.reason or "swing_diameter" in p.key for p in err.value.problems), err.value
 
 
@@ -109,7 +105,7 @@ def test_a_vibration_faster_than_the_servo_can_sample_is_refused(tmp_path: Path)
     # 40 mm at 25 m/min: 199 rpm, 3.32 rev/s; the 4 kHz servo samples 20 times a cycle up to 200 Hz: 60.3 per rev
     from virtual_machine.processes.turning.stages import simulate_turning
 
-    job = _job(tmp_path, TURNING.replace("cycles_per_rev = 2.25", "cycles_per_rev = 80.25"))
+    job = job_from_text(tmp_path, TURNING.replace("cycles_per_rev = 2.25", "cycles_per_rev = 80.25"))
     with pytest.raises(InputError) as err:
         simulate_turning(job)
     (problem,) = err.value.problems

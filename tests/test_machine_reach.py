@@ -7,22 +7,17 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from small_jobs import job_from_text
 
 from cutting.errors import InputError
-from machine_models.parameters import SkivingMachineParams
+from machine_models.parameters import RPM, SkivingMachineParams
 from machine_models.sizes import SIZES
 from virtual_machine.job import load_job
-from virtual_machine.processes.skiving.machine_reach import RPM, check_machine_reach, machine_reach
+from virtual_machine.processes.skiving.machine_reach import check_machine_reach, machine_reach
 from virtual_machine.runtime.machine_run import MachineRun, machine_params, machine_size
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 DEFAULT = (JOBS / "default.toml").read_text()
-
-
-def _job(tmp_path: Path, text: str):
-    path = tmp_path / "job.toml"
-    path.write_text(text)
-    return load_job(path)
 
 
 def _skiving_jobs() -> list[Path]:
@@ -68,7 +63,7 @@ def test_every_shipped_skiving_job_is_within_its_machine(path: Path) -> None:
 def test_a_tool_speed_above_the_spindles_top_speed_is_refused_before_the_run(tmp_path: Path) -> None:
     # 8000 rpm: above the small tool spindle's 6000 rpm, and the table's 6800 rpm above its 3000; a larger machine
     # turns slower, so the hint is a lower speed or the real machine's own limit
-    job = _job(tmp_path, DEFAULT.replace("tool_speed = 3000.0", "tool_speed = 8000.0"))
+    job = job_from_text(tmp_path, DEFAULT.replace("tool_speed = 3000.0", "tool_speed = 8000.0"))
     with pytest.raises(InputError) as err:
         MachineRun(job)
     tool, table = err.value.problems
@@ -82,7 +77,7 @@ def test_a_tool_speed_above_the_spindles_top_speed_is_refused_before_the_run(tmp
     faster = DEFAULT.replace("tool_speed = 3000.0", "tool_speed = 8000.0") + (
         f"\n[machine.model]\ntool_speed_limit = {9000 * RPM}\nwork_speed_limit = {7000 * RPM}\n"
     )
-    job = _job(tmp_path, faster)
+    job = job_from_text(tmp_path, faster)
     assert all(r.holds for r in check_machine_reach(job, machine_params(job), machine_size(job)))
 
 
@@ -94,7 +89,7 @@ def test_a_stroke_beyond_the_carriages_travel_is_refused_naming_the_size_that_ho
         .replace('structure = "mechatronic"', 'structure = "mechatronic"\nsize = "small"')
         .replace("tool_speed = 3000.0", "tool_speed = 2000.0")
     )
-    job = _job(tmp_path, text)
+    job = job_from_text(tmp_path, text)
     with pytest.raises(InputError) as err:
         MachineRun(job)
     (problem,) = err.value.problems
@@ -102,16 +97,16 @@ def test_a_stroke_beyond_the_carriages_travel_is_refused_naming_the_size_that_ho
     assert f"stroke (the face, the cutter's run-in and run-out) of {float(f'{stroke:.3g}'):,.0f} mm" in problem.reason
     assert "exceeds the travel 1,000 mm" in problem.reason and "carriage P3" in problem.reason
     assert problem.hint.startswith('use machine.size = "medium", or a narrower gear.face_width')
-    medium = _job(tmp_path, text.replace('size = "small"', 'size = "medium"'))
+    medium = job_from_text(tmp_path, text.replace('size = "small"', 'size = "medium"'))
     assert all(r.holds for r in check_machine_reach(medium, machine_params(medium), "medium"))
 
 
 def test_a_limit_must_be_positive(tmp_path: Path) -> None:
     with pytest.raises(InputError) as err:
-        _job(tmp_path, DEFAULT + "\n[machine.model]\ncarriage_travel = 0.0\n")
+        job_from_text(tmp_path, DEFAULT + "\n[machine.model]\ncarriage_travel = 0.0\n")
     assert any("carriage_travel = 0.0: must be > 0" in p.reason for p in err.value.problems), err.value
     # and at 3000 rpm the same face has no size: the hint says so
-    job = _job(tmp_path, DEFAULT.replace("face_width = 4.0", "face_width = 1200.0"))
+    job = job_from_text(tmp_path, DEFAULT.replace("face_width = 4.0", "face_width = 1200.0"))
     with pytest.raises(InputError) as err:
         check_machine_reach(job, machine_params(job), "small")
     assert "(no larger machine size reaches it)" in err.value.problems[0].hint
@@ -120,7 +115,9 @@ def test_a_limit_must_be_positive(tmp_path: Path) -> None:
 def test_a_gear_beyond_its_machines_class_is_refused_naming_the_size_that_takes_it(tmp_path: Path) -> None:
     # spur_external (d_a2 84 mm, mn 2) put on the small machine (80 mm, mn 1.5): the medium machine takes it
     text = (JOBS / "spur_external.toml").read_text()
-    job = _job(tmp_path, text.replace('structure = "mechatronic"', 'structure = "mechatronic"\nsize = "small"'))
+    job = job_from_text(
+        tmp_path, text.replace('structure = "mechatronic"', 'structure = "mechatronic"\nsize = "small"')
+    )
     with pytest.raises(InputError) as err:
         check_machine_reach(job, machine_params(job), "small")
     workpiece, module = err.value.problems
@@ -129,7 +126,7 @@ def test_a_gear_beyond_its_machines_class_is_refused_naming_the_size_that_takes_
     assert workpiece.hint.startswith('use machine.size = "medium", or a smaller gear')
     # a gear beyond the largest size: no size takes it, and the real machine's own class may be given
     large = text.replace("normal_module = 2.0", "normal_module = 9.0")
-    job = _job(tmp_path, large)
+    job = job_from_text(tmp_path, large)
     with pytest.raises(InputError) as err:
         check_machine_reach(job, machine_params(job), machine_size(job))
     modules = [p for p in err.value.problems if "module 9 mm" in p.reason]

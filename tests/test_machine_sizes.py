@@ -15,7 +15,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
-from small_jobs import small_job
+from small_jobs import job_from_text, small_job
 
 from cutting.errors import InputError
 from cutting.gear import Gear
@@ -52,12 +52,6 @@ tool_speed = 520.0
 axial_feed = 0.2
 passes = [4.0, 4.0, 3.0, 2.5, 1.5, 0.75]
 """
-
-
-def _text_job(tmp_path: Path, text: str, name: str = "job.toml"):
-    path = tmp_path / name
-    path.write_text(text)
-    return load_job(path)
 
 
 # ---- the size table ------------------------------------------------------------------------------------------
@@ -101,7 +95,7 @@ def test_every_size_compiles_and_steps_without_warnings(size: str, name: str) ->
 def test_the_default_size_follows_the_gear(tmp_path) -> None:
     # the default job, the scenario jobs and the tests' small job keep the original machine: nothing moves
     small = [load_job(JOBS / "default.toml"), *(load_job(p) for p in sorted((JOBS / "scenarios").glob("*.toml")))]
-    small.append(_text_job(tmp_path, small_job(face_width=4.0)))
+    small.append(job_from_text(tmp_path, small_job(face_width=4.0)))
     for job in small:
         assert machine_size(job) == "small", job.source
         assert machine_params(job) == SkivingMachineParams().with_overrides(flatten_model(job.machine.get("model")))
@@ -111,7 +105,7 @@ def test_the_default_size_follows_the_gear(tmp_path) -> None:
     assert workpiece_diameter(ring.gear) == pytest.approx(ring.gear.root_diameter_value + 12.0)
     assert machine_size(spur) == machine_size(ring) == "medium"
     assert machine_params(spur) == SIZES["medium"].params
-    assert machine_size(_text_job(tmp_path, LARGE_JOB)) == "large"
+    assert machine_size(job_from_text(tmp_path, LARGE_JOB)) == "large"
     # by the module alone: a 60 mm gear of mn 2 needs the medium machine; a gear beyond every size gets the largest
     for gear, size in (
         (Gear(28, 2.0, math.radians(20), 0.0, 10.0), "medium"),
@@ -127,7 +121,7 @@ def test_overrides_act_on_top_of_the_size(tmp_path) -> None:
         .replace('structure = "mechatronic"', 'structure = "mechatronic"\nsize = "large"')
     )
     text += "\n[machine.model]\ntool_motor_torque = 900.0\n[machine.model.work_drive]\nbacklash = 1e-4\n"
-    job = _text_job(tmp_path, text)
+    job = job_from_text(tmp_path, text)
     p, large = machine_params(job), SIZES["large"].params
     assert job.machine["size"] == "large" and machine_size(job) == "large"
     assert p.tool_motor_torque == 900.0 and p.work_drive.backlash == 1e-4
@@ -203,7 +197,7 @@ def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
     from virtual_machine.processes.skiving.cosim import cosimulate
     from virtual_machine.runtime.machine_run import SEGMENTS
 
-    job = _text_job(tmp_path, small_job(face_width=4.0, sweep_error=0.02))
+    job = job_from_text(tmp_path, small_job(face_width=4.0, sweep_error=0.02))
     (est,) = pass_loads(job.skiving, job.process["material"])
     m1 = next(m for m in motor_loads(job, machine_params(job), [est]) if m.motor == "M1")
     sim = cosimulate(job, workers=1)
@@ -284,7 +278,7 @@ def test_the_larger_sizes_servo_loops_reject_a_load_step(tmp_path, name, size, f
     text = (JOBS / f"{name}.toml").read_text() if name != "large" else LARGE_JOB
     if fine:  # one pulse of 10000 per turn is 132 um of arc on this gear: the discriminators' relay would cycle
         text += "\n[machine]\ncommand_pulses_per_rev = 100000\nencoder_lines = 50000\n"
-    job = _text_job(tmp_path, text)
+    job = job_from_text(tmp_path, text)
     assert machine_size(job) == size
     t_step = runup_time(job.skiving, ProgramSettings(runup_acceleration=machine_params(job).work_acceleration)) + 0.3
     for axis, ratio in zip(("B2", "B1"), least, strict=True):

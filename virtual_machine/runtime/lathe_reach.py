@@ -8,11 +8,12 @@ from __future__ import annotations
 import math
 
 from cutting.errors import InputError, Problem
+from machine_models.parameters import RPM
 from machine_models.thread_lathe import ThreadLatheParams, ThreadLayout
 from virtual_machine.job import Job
 from virtual_machine.output.formatting import three_figures
+from virtual_machine.output.limits import beyond_limit
 
-RPM = 2 * math.pi / 60  # rad/s per rpm
 #: the servo tick's physics sub-steps (virtual_machine/runtime/thread_run.py: simulate_thread's default)
 SERVO_SUBSTEPS = 2
 #: the fewest servo ticks per cycle of a feed vibration
@@ -23,7 +24,6 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
     """Refuse (InputError) a stroke of ``t_end`` [s] laid out by ``lay`` that needs more than the lathe ``params``
     gives: its spindle speed, its workpiece diameter, the carriage's travel over the stroke."""
     section = "turning" if job.kind == "turning" else "thread"
-    speed_key = "process.cutting_speed" if "cutting_speed" in job.process else "the spindle speed"
     feed = lay.lead * lay.spindle_speed / (2 * math.pi)  # m/s of the carriage
     travel = max(lay.length + 2 * lay.approach, lay.approach + feed * t_end)
     checks = (
@@ -33,7 +33,7 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
             params.spindle_speed_limit,
             f"the spindle B1 turns at {three_figures(lay.spindle_speed / RPM)} rpm, above its top speed "
             f"{three_figures(params.spindle_speed_limit / RPM)} rpm",
-            f"a lower {speed_key}",
+            "a lower process.cutting_speed",  # required of thread and turning jobs; it sets the spindle speed
             "rad/s",
         ),
         (
@@ -56,7 +56,7 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
             "m",
         ),
     )
-    vibration = getattr(job, "vibration", None) if job.kind == "turning" else None
+    vibration = job.vibration  # a turning job's feed vibration (None for a thread)
     if vibration is not None:
         # the feed servo follows tens of Hz (docs/face-contours-and-turning.md); a command sampled fewer than
         # MIN_SAMPLES times per cycle by the servo tick is no vibration at all
@@ -75,12 +75,7 @@ def check_lathe_reach(job: Job, params: ThreadLatheParams, lay: ThreadLayout, t_
                 job.source,
             )
     problems = [
-        Problem(
-            f"machine.model.{key}",
-            limit,
-            f"the lathe cannot do it: {what}",
-            f"use {less}, or machine.model.{key} >= {need:.3g} ({unit}) if the real lathe has it",
-        )
+        beyond_limit("lathe", key, limit, need, unit, what, less)
         for key, need, limit, what, less, unit in checks
         if not need <= limit
     ]

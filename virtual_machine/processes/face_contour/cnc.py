@@ -69,7 +69,7 @@ from machine_models.parts import tendon_coefs
 from metrology.face_slots import SlotMeasure, bottom_form, measuring_radii, side_lines
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.controllers.face_gearbox import ElectronicGearbox
-from virtual_machine.output.formatting import three_figures
+from virtual_machine.processes.face_contour.reach import check_face_reach
 from virtual_machine.runtime.integrator import (
     BAD_ACCELERATION_OR_SPEED,
     Integrator,
@@ -322,38 +322,6 @@ def _check_held_speed(c: FaceCoupling, servo: FaceServo, omega: float, tool_rpm:
                 f"{servo.peak[j]:g} N m peak; lower process.tool_speed to {math.floor(rpm)} rpm or below, raise "
                 f"machine.model's {MOTORS[axis][1].lower()}_motor_torque, or use head_speed = 'constant'"
             )
-
-
-def check_face_reach(c: FaceCoupling, params: FaceMachineParams, tool_rpm: float) -> None:
-    """Refuse (InputError) a coupling the machine cannot cut: a head speed above its top speed, a coupling larger
-    than its table takes (``head_speed_limit``, ``workpiece_diameter_limit``), naming both figures."""
-    omega = tool_rpm * 2 * math.pi / 60
-    problems = []
-    if omega > params.head_speed_limit:
-        top = params.head_speed_limit * 60 / (2 * math.pi)
-        problems.append(
-            Problem(
-                "process.tool_speed",
-                tool_rpm,
-                f"the head H turns at {three_figures(tool_rpm)} rpm, above its top speed {three_figures(top)} rpm "
-                f"(machine.model.head_speed_limit = {params.head_speed_limit:g} rad/s)",
-                f"use a lower process.tool_speed, or machine.model.head_speed_limit >= {omega:.3g} (rad/s) if the "
-                "real machine has it",
-            )
-        )
-    if 2 * c.outer_radius * 1e-3 > params.workpiece_diameter_limit:
-        problems.append(
-            Problem(
-                "coupling.outer_radius",
-                c.outer_radius,
-                f"a coupling of {three_figures(2 * c.outer_radius)} mm exceeds what the table takes, "
-                f"{three_figures(params.workpiece_diameter_limit * 1e3)} mm",
-                "use a smaller coupling, or machine.model.workpiece_diameter_limit >= "
-                f"{2 * c.outer_radius * 1e-3:.3g} (m) if the real machine takes it",
-            )
-        )
-    if problems:
-        raise InputError(problems)
 
 
 #: share of a motor's peak torque the cutting load may take (the rest: the servo's acceleration, friction)

@@ -10,6 +10,7 @@ import math
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
 from virtual_machine.output.formatting import three_figures
+from virtual_machine.output.limits import beyond_limit
 from virtual_machine.setting.machine_layout import workpiece_diameter
 
 
@@ -58,12 +59,7 @@ def check_form_reach(job: Job, params) -> None:
         ),
     )
     problems += [
-        Problem(
-            f"machine.model.{key}",
-            getattr(params, key),
-            f"the form-milling machine cannot do it: {what}",
-            f"use {less}, or machine.model.{key} >= {need:.3g} ({unit}) if the real machine has it",
-        )
+        beyond_limit("form-milling machine", key, getattr(params, key), need, unit, what, less)
         for key, need, what, less, unit in checks
         if not need <= getattr(params, key)
     ]

@@ -7,18 +7,15 @@ the job needs, and what would hold it. The motors' torque is the other check (cu
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from cutting.errors import InputError, Problem
-from machine_models.parameters import SkivingMachineParams, override
+from machine_models.parameters import RPM, SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from virtual_machine.job import Job, flatten_model
 from virtual_machine.output.formatting import three_figures
 from virtual_machine.setting.machine_layout import workpiece_diameter
-
-RPM = 2 * math.pi / 60  # rad/s per rpm
 
 
 @dataclass(frozen=True)
