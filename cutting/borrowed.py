@@ -3,7 +3,7 @@
 numba counts references to every array it passes around: a helper that takes an array (or a tuple of them)
 increments and decrements the array's count on entry and exit, with an atomic instruction. In the dexel and
 exact-surface kernels, whose helpers run tens of millions of times per cut, those atomics were over half of the
-kernel's time (perf, 2026-11-27: NRT_incref/NRT_decref 57 % of the samples on one thread, the same on two).
+kernel's time (measured with perf: NRT_incref/NRT_decref 57 % of the samples on one thread, the same on two).
 A kernel's entry point (which the caller's Python keeps its arrays alive through) takes :func:`borrowed` views
 of its arrays: the same data, shape and strides with no reference count (numba's own null-meminfo case, as for
 arrays made from a raw pointer), so the counting below the entry point does nothing.

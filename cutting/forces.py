@@ -190,7 +190,7 @@ def engagement_load(
     # one of these per engagement, so the sums below are compiled)
     placed = place_few(edge, *pose(np.concatenate([times, times - step, times + step])))
     ins = inside(placed[:samples]).astype(float)
-    swept, unit_force, point, unit_moment = _engagement_sums(placed, ins, times, step)
+    swept, unit_force, point, unit_moment = engagement_sums(placed, ins, times, step)
     if volume <= 0 or swept <= 0:
         zero = np.zeros((0, 3))
         return EngagementLoad(np.zeros(0), zero, zero, zero, max(volume, 0.0), 0.0, 0.0)
@@ -204,7 +204,7 @@ def engagement_load(
 
 
 @njit(cache=True, error_model="numpy")
-def _engagement_sums(placed, ins, times, step):
+def engagement_sums(placed, ins, times, step):
     """For :func:`engagement_load` (as :func:`engaged_speed` and the sums over its elements): the chip area the
     engaged edge sweeps [mm^2] (trapezoid rule over ``times``) and per time the sum of dl * (unit velocity), the
     engaged edge's centroid (length-weighted element midpoints) and the moment of the dl * unit velocity about it

@@ -157,11 +157,6 @@ class Gear:
         return self.transverse_pitch * math.cos(self.transverse_pressure_angle)
 
     @cached_property
-    def normal_base_pitch(self) -> float:
-        """p_bn = pi mn cos(alpha_n) [mm]."""
-        return self.normal_pitch * math.cos(self.alpha_n)
-
-    @cached_property
     def normal_tooth_thickness(self) -> float:
         """s_n = mn (pi/2 + 2 x tan(alpha_n)) at the reference circle [mm] (external and internal)."""
         return self.mn * (math.pi / 2 + 2 * self.x * math.tan(self.alpha_n))
@@ -260,15 +255,6 @@ class Gear:
             self.transverse_pressure_angle
         )
         return 2 * math.sqrt(self.base_radius**2 + max(roll, 0.0) ** 2)
-
-    # ---- pitch-point helpers ------------------------------------------------------------------
-    def helix_angle_at(self, diameter: float) -> float:
-        """beta_y with tan(beta_y) = tan(beta) d_y / d [rad]."""
-        return math.atan(math.tan(self.beta) * diameter / self.reference_diameter)
-
-    def pressure_angle_at(self, diameter: float) -> float:
-        """Transverse pressure angle alpha_yt at d_y: cos(alpha_yt) = d_b / d_y [rad]."""
-        return math.acos(self.base_diameter / diameter)
 
 
 def check_gear(gear: Gear, prefix: str = "gear") -> list[Problem]:

@@ -13,14 +13,14 @@ import time
 
 import numpy as np
 
-from cutting.forces import EngagementLoad, _engagement_sums, repeated_means
+from cutting.forces import EngagementLoad, engagement_sums, repeated_means
 from cutting.gear import Gear
 from cutting.skiving.dexel_cut import cut_dexel
 from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import make_edge
 from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.sampled_motion import ideal_samples
-from cutting.skiving.setup import SkivingSetup
 from cutting.skiving.sweep import place_few
 from cutting.skiving.trajectory import ideal_passes
 
@@ -48,7 +48,7 @@ def warm() -> float:
     load = EngagementLoad(t, np.ones((5, 3)), np.ones((5, 3)), np.zeros((5, 3)), 1.0, 0.05, 3000.0)
     repeated_means(load.t, load.rows, 2e-3, 2.25e-3, 1, 3, 0.8e-3, 10.0, 1.0, np.empty((3, 9)))
     # and an engagement's load from its chip (the edge at 3 x 5 instants, 4 points)
-    _engagement_sums(place_few(np.zeros((4, 3)), np.zeros((15, 3, 3)), np.zeros((15, 3))), np.ones((5, 4)), t, 1e-6)
+    engagement_sums(place_few(np.zeros((4, 3)), np.zeros((15, 3, 3)), np.zeros((15, 3))), np.ones((5, 4)), t, 1e-6)
     return time.perf_counter() - t0
 
 

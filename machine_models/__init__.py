@@ -1,1 +1,2 @@
-"""machine_models"""
+"""The MuJoCo machines, built with MjSpec from numeric layouts and physical parameters (each with its unit and
+source); they know no job and no cutting."""

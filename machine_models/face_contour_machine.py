@@ -69,6 +69,8 @@ from machine_models.parts import (
 )
 
 MOTOR_MASS = 8.0  # kg: what machine_models.parts.motor gives a motor body
+_BOX, _CYL = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
+_HINGE, _SLIDE = mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE
 
 
 @dataclass(frozen=True)
@@ -274,67 +276,102 @@ def build_face_machine_spec(layout: FaceMachineLayout, params: FaceMachineParams
     spec = machine_spec("face_contour_machine", params.timestep, params.integrator, (0.0, 0.0, -9.81))
     world = spec.worldbody
     world.add_light(pos=[0.2, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
-    box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
-    hinge, slide = mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE
-    r_in, r_out, thick, R, e = layout.inner_radius, layout.outer_radius, layout.blank_thickness, layout.R, layout.e
-    visual(world, box, (0.4, 0.3, 0.04), DARK, pos=(0.1, 0, -thick - 0.2))  # bed
-    visual(world, box, (0.12, 0.25, 0.5), GREY, pos=(layout.L + 0.45, 0, 0.3))  # column
+    thick = layout.blank_thickness
+    visual(world, _BOX, (0.4, 0.3, 0.04), DARK, pos=(0.1, 0, -thick - 0.2))  # bed
+    visual(world, _BOX, (0.12, 0.25, 0.5), GREY, pos=(layout.L + 0.45, 0, 0.3))  # column
+    _add_work_spindle(spec, layout, params)
+    zs, swivel = _add_infeed_slide(world, layout, params)
+    _add_tool_head(swivel, layout, params)
+    _add_head_drives(spec, swivel, layout, params)
+    _add_infeed_drive(spec, zs, layout, params)
+    if layout.work_setting:
+        y_motor = world.add_body(name="y_motor", pos=[-0.35, 0.3, -thick - 0.1])
+        motor(spec, y_motor, "MY", params.y_motor_inertia, params.y_motor_torque)
+        couple(spec, "y_drive", "Y", "MY", params.y_drive)
 
-    # ---- cross slide Y (work setting), work spindle A: table, fixture and blank (annulus) ---------------------
-    base = world
+    home = {"A": 0.0, "H": 0.0, "Z": layout.home_z} | ({"E": 0.0} if layout.eccentric else {})
+    home |= {"Y": 0.0} if layout.work_setting else {}
+    spec.add_key(name="home", qpos=relaxed_qpos(spec.compile(), home).tolist())
+    return spec
+
+
+def _head_mass(layout: FaceMachineLayout, params: FaceMachineParams) -> float:
+    """Mass of the tool head with its cutting elements [kg] (what the eccentric carries)."""
+    return params.head_mass + len(layout.element_phases) * params.element_mass
+
+
+def _add_work_spindle(spec: mujoco.MjSpec, layout: FaceMachineLayout, params: FaceMachineParams) -> None:
+    """The work spindle A with table, fixture and blank (site ``blank_frame``), on the cross slide Y with the work
+    setting, and its motor MA with the worm."""
+    r_in, r_out, thick = layout.inner_radius, layout.outer_radius, layout.blank_thickness
+    base = spec.worldbody
     if layout.work_setting:
         n_tool = [math.sin(layout.setting_angle), math.cos(layout.setting_angle), 0.0]  # the tool axis n
-        base = world.add_body(name="cross_slide")
+        base = base.add_body(name="cross_slide")
         inertial(base, params.cross_slide_mass, 8.0, 8.0)
-        base.add_joint(name="Y", type=slide, axis=n_tool, frictionloss=params.cross_ways_friction)
-        visual(base, box, (0.2, 0.2, 0.02), BLUE, pos=(0, 0, -thick - 0.1))
+        base.add_joint(name="Y", type=_SLIDE, axis=n_tool, frictionloss=params.cross_ways_friction)
+        visual(base, _BOX, (0.2, 0.2, 0.02), BLUE, pos=(0, 0, -thick - 0.1))
     table = base.add_body(name="work_spindle")
     blank_mass = STEEL * math.pi * (r_out**2 - r_in**2) * thick
     blank_inertia = blank_mass * (r_out**2 + r_in**2) / 2
     inertial(table, params.table_mass + blank_mass, params.table_inertia + blank_inertia)
-    table.add_joint(name="A", type=hinge, axis=[0, 0, -1], frictionloss=params.work_friction)
-    visual(table, cyl, (0.16, 0.03), GREY, pos=(0, 0, -thick - 0.05))  # table
-    visual(table, cyl, (r_out, thick / 2), STEELC, pos=(0, 0, -thick / 2))  # blank
-    visual(table, box, ((r_out - r_in) / 2, 0.001, 0.001), ORANGE, pos=((r_out + r_in) / 2, 0, 0))  # slot 0 mark
+    table.add_joint(name="A", type=_HINGE, axis=[0, 0, -1], frictionloss=params.work_friction)
+    visual(table, _CYL, (0.16, 0.03), GREY, pos=(0, 0, -thick - 0.05))  # table
+    visual(table, _CYL, (r_out, thick / 2), STEELC, pos=(0, 0, -thick / 2))  # blank
+    visual(table, _BOX, ((r_out - r_in) / 2, 0.001, 0.001), ORANGE, pos=((r_out + r_in) / 2, 0, 0))  # slot 0 mark
     table.add_site(name="blank_frame", size=[0.002, 0.002, 0.002])
     a_motor = base.add_body(name="a_motor", pos=[-0.25, -0.2, -thick - 0.05])
     motor(spec, a_motor, "MA", params.a_motor_inertia, params.a_motor_torque)
     couple(spec, "work_drive", "A", "MA", params.work_drive)
 
-    # ---- infeed slide Z, swivel (setting angle lambda), eccentric E, tool head H ------------------------------
+
+def _add_infeed_slide(
+    world: mujoco.MjsBody, layout: FaceMachineLayout, params: FaceMachineParams
+) -> tuple[mujoco.MjsBody, mujoco.MjsBody]:
+    """The infeed slide Z on the column and on it the swivel, turned by the setting angle: (slide, swivel)."""
     zs = world.add_body(name="infeed_slide", pos=[layout.L, 0.0, 0.0])
     inertial(zs, params.slide_mass, 15.0, 15.0)
-    zs.add_joint(name="Z", type=slide, axis=[0, 0, 1], frictionloss=params.ways_friction)
-    visual(zs, box, (0.06, 0.2, 0.15), BLUE, pos=(0.3, 0, R))
-    swivel = zs.add_body(name="swivel", pos=[0.0, 0.0, R - e], quat=quat_z(-layout.setting_angle))
+    zs.add_joint(name="Z", type=_SLIDE, axis=[0, 0, 1], frictionloss=params.ways_friction)
+    visual(zs, _BOX, (0.06, 0.2, 0.15), BLUE, pos=(0.3, 0, layout.R))
+    swivel = zs.add_body(name="swivel", pos=[0.0, 0.0, layout.R - layout.e], quat=quat_z(-layout.setting_angle))
     inertial(swivel, params.swivel_mass, 1.0, 1.0)
-    visual(swivel, box, (0.05, 0.06, 0.05), BLUE, pos=(0, -0.09, 0))  # the bearing seat behind the head
+    visual(swivel, _BOX, (0.05, 0.06, 0.05), BLUE, pos=(0, -0.09, 0))  # the bearing seat behind the head
+    return zs, swivel
+
+
+def _add_tool_head(swivel: mujoco.MjsBody, layout: FaceMachineLayout, params: FaceMachineParams) -> None:
+    """The tool head H with its cutting elements: on the eccentric E (with its counterweight) if the machine has
+    one, else on the swivel."""
+    R, e = layout.R, layout.e
     # local frame of the rotating parts: z = -n (their axis), x = u, y = up
     rotor_quat = quat_x(math.pi / 2)
-    phases = layout.element_phases
-    elements = len(phases)
-    head_parent = swivel
+    elements = len(layout.element_phases)
     if layout.eccentric:
         ecc = swivel.add_body(name="eccentric", quat=rotor_quat)
         inertial(ecc, params.eccentric_mass, params.eccentric_inertia)
-        carried = params.head_mass + elements * params.element_mass
+        carried = _head_mass(layout, params)
         ecc.ipos = [0.0, -params.eccentric_balance * carried * e / params.eccentric_mass, 0.0]  # the counterweight
-        ecc.add_joint(name="E", type=hinge, axis=[0, 0, 1], frictionloss=params.eccentric_friction)
-        visual(ecc, cyl, (0.08, 0.02), GREY, pos=(0, 0, 0.05))
-        visual(ecc, box, (0.004, 0.04, 0.021), ORANGE, pos=(0, 0.04, 0.05))  # the eccentric's angle mark
+        ecc.add_joint(name="E", type=_HINGE, axis=[0, 0, 1], frictionloss=params.eccentric_friction)
+        visual(ecc, _CYL, (0.08, 0.02), GREY, pos=(0, 0, 0.05))
+        visual(ecc, _BOX, (0.004, 0.04, 0.021), ORANGE, pos=(0, 0.04, 0.05))  # the eccentric's angle mark
         head = ecc.add_body(name="tool_head", pos=[0.0, e, 0.0])
     else:
-        head = head_parent.add_body(name="tool_head", quat=rotor_quat)
-    head_mass = params.head_mass + elements * params.element_mass
-    inertial(head, head_mass, params.head_inertia + elements * params.element_mass * R**2)
-    head.add_joint(name="H", type=hinge, axis=[0, 0, 1], frictionloss=params.head_friction)
-    visual(head, cyl, (R - layout.element_height, 0.02), ORANGE)  # head body
-    visual(head, cyl, (0.03, 0.06), STEELC, pos=(0, 0, 0.07))  # spindle nose
-    for j, beta in enumerate(phases):
+        head = swivel.add_body(name="tool_head", quat=rotor_quat)
+    inertial(head, _head_mass(layout, params), params.head_inertia + elements * params.element_mass * R**2)
+    head.add_joint(name="H", type=_HINGE, axis=[0, 0, 1], frictionloss=params.head_friction)
+    visual(head, _CYL, (R - layout.element_height, 0.02), ORANGE)  # head body
+    visual(head, _CYL, (0.03, 0.06), STEELC, pos=(0, 0, 0.07))  # spindle nose
+    _add_cutting_elements(head, layout)
+
+
+def _add_cutting_elements(head: mujoco.MjsBody, layout: FaceMachineLayout) -> None:
+    """Each cutting element on the head: its plate, and its tip's site ``element_frame`` (``element_frame_<j>``)."""
+    R = layout.R
+    for j, beta in enumerate(layout.element_phases):
         rho = np.array([math.sin(beta), -math.cos(beta), 0.0])  # from the centre to the tip at phi = 0
         mid = (R - layout.element_height / 2) * rho
         plate = (layout.element_height / 2, 0.004, layout.edge_width / 2)  # along rho, across, along the edge
-        visual(head, box, plate, DARK, pos=mid, quat=quat_z(beta - math.pi / 2))
+        visual(head, _BOX, plate, DARK, pos=mid, quat=quat_z(beta - math.pi / 2))
         # site frame: x = tool axis n (= -local z), z = rho, y = z x x
         x, z = np.array([0.0, 0.0, -1.0]), rho
         mat = np.column_stack((x, np.cross(z, x), z))
@@ -342,6 +379,13 @@ def build_face_machine_spec(layout: FaceMachineLayout, params: FaceMachineParams
         mujoco.mju_mat2Quat(quat, mat.ravel())
         name = "element_frame" if j == 0 else f"element_frame_{j}"
         head.add_site(name=name, pos=(R * rho).tolist(), quat=quat.tolist(), size=[0.002, 0.002, 0.002])
+
+
+def _add_head_drives(
+    spec: mujoco.MjSpec, swivel: mujoco.MjsBody, layout: FaceMachineLayout, params: FaceMachineParams
+) -> None:
+    """Motor MH and its stage to the head; with the eccentric, motor ME and its stage, MH then driving H + E."""
+    rotor_quat = quat_x(math.pi / 2)
     h_motor = swivel.add_body(name="h_motor", pos=[0.0, -0.25, 0.0], quat=rotor_quat)
     motor(spec, h_motor, "MH", params.h_motor_inertia, params.h_motor_torque)
     if layout.eccentric:
@@ -353,30 +397,26 @@ def build_face_machine_spec(layout: FaceMachineLayout, params: FaceMachineParams
     else:
         couple(spec, "head_drive", "H", "MH", params.head_drive)
 
-    # ---- ball screw and infeed motor on the column; the counterbalance on the slide ---------------------------
+
+def _add_infeed_drive(
+    spec: mujoco.MjSpec, zs: mujoco.MjsBody, layout: FaceMachineLayout, params: FaceMachineParams
+) -> None:
+    """The ball screw TZ and motor MZ on the column, the nut driving the slide ``zs``, and the counterbalance that
+    carries the slide's whole weight (a force on the slide, not on the rotors)."""
+    world, R = spec.worldbody, layout.R
     screw = world.add_body(name="z_screw", pos=[layout.L + 0.3, 0.15, R])
     inertial(screw, 6.0, params.screw_inertia, 0.5)
-    screw.add_joint(name="TZ", type=hinge, axis=[0, 0, 1])
-    visual(screw, cyl, (0.016, 0.3), STEELC)
+    screw.add_joint(name="TZ", type=_HINGE, axis=[0, 0, 1])
+    visual(screw, _CYL, (0.016, 0.3), STEELC)
     z_motor = world.add_body(name="z_motor", pos=[layout.L + 0.3, 0.15, R + 0.38])
     motor(spec, z_motor, "MZ", params.z_motor_inertia, params.z_motor_torque)
     couple(spec, "z_drive", "TZ", "MZ", params.z_drive)
     nut = DriveStage(params.screw_pitch / (2 * math.pi), params.nut_stiffness, params.nut_backlash, params.nut_damping)
     couple(spec, "z_nut", "Z", "TZ", nut)
-    riding = params.slide_mass + params.swivel_mass + head_mass + MOTOR_MASS
+    riding = params.slide_mass + params.swivel_mass + _head_mass(layout, params) + MOTOR_MASS
     if layout.eccentric:
         riding += params.eccentric_mass + MOTOR_MASS
-    zs.gravcomp = params.counterbalance * riding / params.slide_mass  # a force on the slide, not on the rotors
-
-    if layout.work_setting:
-        y_motor = world.add_body(name="y_motor", pos=[-0.35, 0.3, -thick - 0.1])
-        motor(spec, y_motor, "MY", params.y_motor_inertia, params.y_motor_torque)
-        couple(spec, "y_drive", "Y", "MY", params.y_drive)
-
-    home = {"A": 0.0, "H": 0.0, "Z": layout.home_z} | ({"E": 0.0} if layout.eccentric else {})
-    home |= {"Y": 0.0} if layout.work_setting else {}
-    spec.add_key(name="home", qpos=relaxed_qpos(spec.compile(), home).tolist())
-    return spec
+    zs.gravcomp = params.counterbalance * riding / params.slide_mass
 
 
 #: each drive's tendon and the joint it solves for when relaxed (in this order: the screw before its motor)

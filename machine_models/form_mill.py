@@ -14,7 +14,7 @@ and joints:
   turns the mill's axis out of the transverse plane (seed 003's psi_y: the mill turned with the path);
 - ``mill_spindle`` hinge ``S`` about the head's y axis (machine y at B = 0): arbor and disc mill; site
   ``mill_frame`` at the mill centre, its local z the mill axis (machine +y at B = 0). With a finger mill
-  (``FormMillLayout.head``, issue 28 item 2) the head is a right-angle head: ``S`` about machine +x (external
+  (``FormMillLayout.head``) the head is a right-angle head: ``S`` about machine +x (external
   gear: the finger's tip towards the gear axis) or -x (internal gear: the head reaches into the ring's bore, the
   tip outwards), ``mill_frame`` at the finger's tip centre, its local z the axis from the tip into the mill; B then
   turns the finger about its own axis and is held at 0 (the finger's axis stays along the symmetry line).
@@ -59,6 +59,8 @@ from machine_models.parts import (
 
 SLIDES = ("X", "Y", "Z")
 HEADS = ("disc", "finger_external", "finger_internal")
+_BOX, _CYL = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
+_HINGE, _SLIDE = mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE
 
 
 @dataclass(frozen=True)
@@ -290,52 +292,81 @@ def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None =
     spec = machine_spec("form_mill", params.timestep, params.integrator, (0.0, 0.0, -9.81))
     world = spec.worldbody
     world.add_light(pos=[0.2, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
-    box, cyl = mujoco.mjtGeom.mjGEOM_BOX, mujoco.mjtGeom.mjGEOM_CYLINDER
-    hinge, slide = mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE
-    b, r_tip, r_mill = layout.face_width, layout.tip_radius, layout.mill_radius
+    b = layout.face_width
     col_x = layout.safe_radius + 0.35  # the column's face
-    visual(world, box, (0.45, 0.35, 0.04), DARK, pos=(0.15, 0, -b / 2 - 0.2))  # bed
-    visual(world, box, (0.12, 0.25, 0.45), GREY, pos=(col_x + 0.2, 0, 0.2))  # column
+    visual(world, _BOX, (0.45, 0.35, 0.04), DARK, pos=(0.15, 0, -b / 2 - 0.2))  # bed
+    visual(world, _BOX, (0.12, 0.25, 0.45), GREY, pos=(col_x + 0.2, 0, 0.2))  # column
+    _add_work_table(spec, layout, params)
+    zs, xs, ys = _add_slides(world, layout, params, col_x)
+    head = _add_mill_head(spec, ys, layout, params)
+    _add_mill_spindle(spec, head, layout, params)
+    _add_ball_screws(spec, {"X": zs, "Y": xs, "Z": world}, layout, params, col_x)
+    spec.add_key(name="home", qpos=_home_qpos(spec, layout))
+    return spec
 
-    # ---- indexing work axis A: table, fixture and blank --------------------------------------------------
+
+def _add_work_table(spec: mujoco.MjSpec, layout: FormMillLayout, params: FormMillParams) -> None:
+    """The indexing work axis A (table, fixture and blank, site ``blank_frame``) and its motor MA with the worm."""
+    world = spec.worldbody
+    b, r_tip = layout.face_width, layout.tip_radius
     table = world.add_body(name="work_table")
     blank_mass = STEEL * math.pi * layout.blank_radius**2 * b
     inertial(table, params.table_mass + blank_mass, params.table_inertia + blank_mass * layout.blank_radius**2 / 2)
-    table.add_joint(name="A", type=hinge, axis=[0, 0, 1], frictionloss=params.table_friction)
-    visual(table, cyl, (0.2, 0.03), GREY, pos=(0, 0, -b / 2 - 0.11))  # table
-    visual(table, cyl, (0.04, 0.04), DARK, pos=(0, 0, -b / 2 - 0.04))  # fixture
-    visual(table, cyl, (r_tip, b / 2), STEELC)  # blank
-    visual(table, box, (r_tip * 0.5, 0.001, b / 2 + 0.001), ORANGE, pos=(r_tip * 0.5, 0, 0))  # space 0 mark
+    table.add_joint(name="A", type=_HINGE, axis=[0, 0, 1], frictionloss=params.table_friction)
+    visual(table, _CYL, (0.2, 0.03), GREY, pos=(0, 0, -b / 2 - 0.11))  # table
+    visual(table, _CYL, (0.04, 0.04), DARK, pos=(0, 0, -b / 2 - 0.04))  # fixture
+    visual(table, _CYL, (r_tip, b / 2), STEELC)  # blank
+    visual(table, _BOX, (r_tip * 0.5, 0.001, b / 2 + 0.001), ORANGE, pos=(r_tip * 0.5, 0, 0))  # space 0 mark
     table.add_site(name="blank_frame", size=[0.002, 0.002, 0.002])
     a_motor = world.add_body(name="a_motor", pos=[-0.3, -0.25, -b / 2 - 0.11])
     motor(spec, a_motor, "MA", params.a_motor_inertia, params.a_motor_torque)
     couple(spec, "work_drive", "A", "MA", params.work_drive)
 
-    # ---- slides Z, X, Y and the milling spindle S ------------------------------------------------------------
+
+def _add_slides(
+    world: mujoco.MjsBody, layout: FormMillLayout, params: FormMillParams, col_x: float
+) -> tuple[mujoco.MjsBody, mujoco.MjsBody, mujoco.MjsBody]:
+    """The slides Z (on the column), X on it and Y on that, all on the counterbalance: (Z, X, Y slide bodies)."""
     gc = params.counterbalance  # the counterbalance carries everything that rides on Z
     zs = world.add_body(name="z_slide")
     inertial(zs, params.z_mass, 20.0, 20.0)
     zs.gravcomp = gc
-    zs.add_joint(name="Z", type=slide, axis=[0, 0, 1], frictionloss=params.z_ways_friction)
-    visual(zs, box, (0.06, 0.2, 0.15), BLUE, pos=(col_x + 0.02, 0, 0))
+    zs.add_joint(name="Z", type=_SLIDE, axis=[0, 0, 1], frictionloss=params.z_ways_friction)
+    visual(zs, _BOX, (0.06, 0.2, 0.15), BLUE, pos=(col_x + 0.02, 0, 0))
     xs = zs.add_body(name="x_slide")
     inertial(xs, params.x_mass, 10.0, 10.0)
     xs.gravcomp = gc
-    xs.add_joint(name="X", type=slide, axis=[1, 0, 0], frictionloss=params.x_ways_friction)
-    visual(xs, box, (0.16, 0.08, 0.08), BLUE, pos=(r_mill + 0.2, 0, 0.1))  # ram
+    xs.add_joint(name="X", type=_SLIDE, axis=[1, 0, 0], frictionloss=params.x_ways_friction)
+    visual(xs, _BOX, (0.16, 0.08, 0.08), BLUE, pos=(layout.mill_radius + 0.2, 0, 0.1))  # ram
     ys = xs.add_body(name="y_slide")
     inertial(ys, params.y_mass, 5.0, 5.0)
     ys.gravcomp = gc
-    ys.add_joint(name="Y", type=slide, axis=[0, 1, 0], frictionloss=params.y_ways_friction)
-    head = ys.add_body(name="mill_head")  # the swivel head: B about machine x through the mill centre
+    ys.add_joint(name="Y", type=_SLIDE, axis=[0, 1, 0], frictionloss=params.y_ways_friction)
+    return zs, xs, ys
+
+
+def _add_mill_head(
+    spec: mujoco.MjSpec, ys: mujoco.MjsBody, layout: FormMillLayout, params: FormMillParams
+) -> mujoco.MjsBody:
+    """The swivel head B on the Y slide (about machine x through the mill centre) and its motor MB with the worm."""
+    gc, r_mill = params.counterbalance, layout.mill_radius
+    head = ys.add_body(name="mill_head")
     inertial(head, params.head_mass, params.head_inertia, params.head_inertia)
     head.gravcomp = gc
-    head.add_joint(name="B", type=hinge, axis=[1, 0, 0], frictionloss=params.head_friction)
-    visual(head, box, (0.04, 0.1, 0.06), BLUE, pos=(r_mill + 0.05, 0, 0.06))  # spindle housing
+    head.add_joint(name="B", type=_HINGE, axis=[1, 0, 0], frictionloss=params.head_friction)
+    visual(head, _BOX, (0.04, 0.1, 0.06), BLUE, pos=(r_mill + 0.05, 0, 0.06))  # spindle housing
     b_motor = ys.add_body(name="b_motor", pos=[r_mill + 0.12, -0.12, 0.0], quat=[0.5, 0.5, 0.5, 0.5])
     motor(spec, b_motor, "MB", params.b_motor_inertia, params.b_motor_torque)
     b_motor.gravcomp = gc
     couple(spec, "head_drive", "B", "MB", params.head_drive)
+    return head
+
+
+def _add_mill_spindle(
+    spec: mujoco.MjSpec, head: mujoco.MjsBody, layout: FormMillLayout, params: FormMillParams
+) -> None:
+    """The milling spindle S with its mill (site ``mill_frame``) on the head, and its motor MS with the belt."""
+    gc, r_mill = params.counterbalance, layout.mill_radius
     if layout.finger:  # right-angle head: local z = the finger's axis along machine +-x (B turns it about itself)
         turn = layout.axis_sign * math.pi / 4
         spindle = head.add_body(name="mill_spindle", quat=[math.cos(turn), 0.0, math.sin(turn), 0.0])
@@ -344,34 +375,47 @@ def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None =
     mill_mass = STEEL * math.pi * r_mill**2 * layout.mill_width
     inertial(spindle, params.spindle_mass + mill_mass, params.spindle_inertia + mill_mass * r_mill**2 / 2)
     spindle.gravcomp = gc
-    spindle.add_joint(name="S", type=hinge, axis=[0, 0, 1], frictionloss=params.spindle_friction)
-    if layout.finger:  # the finger from its tip (the site) along its axis, the shank behind it
-        w = layout.mill_width
-        visual(spindle, cyl, (r_mill, w / 2), ORANGE, pos=(0, 0, w / 2))
-        visual(spindle, cyl, (max(r_mill, 0.003), 0.03), STEELC, pos=(0, 0, w + 0.03))
-    else:
-        visual(spindle, cyl, (r_mill, layout.mill_width / 2), ORANGE)  # disc mill
-        visual(spindle, box, (r_mill * 0.9, 0.002, layout.mill_width / 2 + 0.001), DARK)  # angle mark
-        visual(spindle, cyl, (0.012, 0.06), STEELC, pos=(0, 0, -layout.mill_width / 2 - 0.06))  # arbor
+    spindle.add_joint(name="S", type=_HINGE, axis=[0, 0, 1], frictionloss=params.spindle_friction)
+    _add_mill_visuals(spindle, layout)
     spindle.add_site(name="mill_frame", size=[0.002, 0.002, 0.002])
     s_motor = head.add_body(name="s_motor", pos=[r_mill + 0.05, 0.0, 0.18])
     motor(spec, s_motor, "MS", params.s_motor_inertia, params.s_motor_torque)
     s_motor.gravcomp = gc
     couple(spec, "spindle_drive", "S", "MS", params.spindle_drive)
 
-    # ---- ball screws and feed motors: Z on the column, X on the Z slide, Y on the X slide ---------------------
+
+def _add_mill_visuals(spindle: mujoco.MjsBody, layout: FormMillLayout) -> None:
+    """The mill's geoms on the spindle: a finger from its tip with the shank behind, or a disc with mark and arbor."""
+    r_mill, w = layout.mill_radius, layout.mill_width
+    if layout.finger:  # the finger from its tip (the site) along its axis, the shank behind it
+        visual(spindle, _CYL, (r_mill, w / 2), ORANGE, pos=(0, 0, w / 2))
+        visual(spindle, _CYL, (max(r_mill, 0.003), 0.03), STEELC, pos=(0, 0, w + 0.03))
+    else:
+        visual(spindle, _CYL, (r_mill, w / 2), ORANGE)  # disc mill
+        visual(spindle, _BOX, (r_mill * 0.9, 0.002, w / 2 + 0.001), DARK)  # angle mark
+        visual(spindle, _CYL, (0.012, 0.06), STEELC, pos=(0, 0, -w / 2 - 0.06))  # arbor
+
+
+def _add_ball_screws(
+    spec: mujoco.MjSpec,
+    carrier: dict[str, mujoco.MjsBody],
+    layout: FormMillLayout,
+    params: FormMillParams,
+    col_x: float,
+) -> None:
+    """The ball screws TX/TY/TZ and feed motors MX/MY/MZ on their ``carrier`` bodies, with their drives and nuts."""
+    gc, r_mill = params.counterbalance, layout.mill_radius
     lead = layout.screw_pitch / (2 * math.pi)
     nut = DriveStage(lead, params.nut_stiffness, params.nut_backlash, params.nut_damping)
     rot = {"X": [math.cos(math.pi / 4), 0, math.sin(math.pi / 4), 0], "Y": quat_x(-math.pi / 2), "Z": [1, 0, 0, 0]}
-    carrier = {"X": zs, "Y": xs, "Z": world}
     where = {"X": (col_x - 0.2, 0.15, 0.12), "Y": (r_mill + 0.12, 0.0, 0.16), "Z": (col_x + 0.1, 0.2, 0.2)}
     motor_offset = {"X": (0.33, 0, 0), "Y": (0, 0.33, 0), "Z": (0, 0, 0.33)}  # behind the screw, on its axis
     for axis in SLIDES:
         a = axis.lower()
         screw = carrier[axis].add_body(name=f"{a}_screw", pos=list(where[axis]), quat=rot[axis])
         inertial(screw, 9.9, params.screw_inertia, 0.8)
-        screw.add_joint(name=f"T{axis}", type=hinge, axis=[0, 0, 1])
-        visual(screw, cyl, (0.02, 0.25), STEELC)
+        screw.add_joint(name=f"T{axis}", type=_HINGE, axis=[0, 0, 1])
+        visual(screw, _CYL, (0.02, 0.25), STEELC)
         pos = np.add(where[axis], motor_offset[axis]).tolist()
         m = carrier[axis].add_body(name=f"{a}_motor", pos=pos, quat=rot[axis])  # beside the screw, not on it
         motor(spec, m, f"M{axis}", getattr(params, f"{a}_motor_inertia"), getattr(params, f"{a}_motor_torque"))
@@ -379,9 +423,6 @@ def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None =
             screw.gravcomp = m.gravcomp = gc
         couple(spec, f"{a}_drive", f"T{axis}", f"M{axis}", getattr(params, f"{a}_drive"))
         couple(spec, f"{a}_nut", axis, f"T{axis}", nut)
-
-    spec.add_key(name="home", qpos=_home_qpos(spec, layout))
-    return spec
 
 
 def _home_qpos(spec: mujoco.MjSpec, layout: FormMillLayout) -> list[float]:

@@ -206,26 +206,60 @@ def rigid(params, **also: Any):
     return replace(params, **stages, nut_stiffness=None, nut_backlash=0.0, **also)
 
 
+def _check_type(key: str, value: Any, current: Any, may_be_rigid: bool) -> None:
+    """TypeError unless ``value`` has the type of the parameter's default ``current`` (a number for a number or a
+    rigid stage's None; a stiffness may be None, i.e. rigid)."""
+    if value is None and may_be_rigid:
+        return
+    if isinstance(current, bool):
+        ok = isinstance(value, bool)
+    elif isinstance(current, int | float) or current is None:
+        ok = isinstance(value, int | float) and not isinstance(value, bool)
+    else:
+        ok = isinstance(value, type(current))
+    if not ok:
+        kind = "a number" if isinstance(current, int | float) or current is None else type(current).__name__
+        raise TypeError(f"{key!r} must be {kind}, not {value!r}" + (' (or "rigid")' if may_be_rigid else ""))
+
+
+def parameter(params, key: str) -> Any:
+    """The value of the parameter ``key`` of ``params`` (a drive stage's field as ``"work_drive.backlash"``);
+    KeyError saying which part of the name is wrong."""
+    head, _, tail = key.partition(".")
+    if head not in {f.name for f in fields(params)}:
+        raise KeyError(f"unknown machine parameter {key!r}")
+    value = getattr(params, head)
+    if not tail:
+        return value
+    if not isinstance(value, DriveStage):
+        raise KeyError(f"{head!r} is not a drive stage: {key!r} names nothing")
+    if tail not in {f.name for f in fields(DriveStage)}:
+        raise KeyError(f"unknown drive stage field {key!r} (use ratio, stiffness, backlash, damping)")
+    return getattr(value, tail)
+
+
 def override(params, values: dict[str, Any]):
     """``params`` (a frozen dataclass of machine parameters) changed by a flat dict; a drive stage's fields as
     ``"work_drive.backlash"``; a stiffness ``"rigid"`` makes the stage (or the nut) rigid (job files have no
     null). Unknown names raise KeyError naming them."""
     top: dict[str, Any] = {}
     stages: dict[str, dict[str, Any]] = {}
-    names = {f.name for f in fields(params)}
     for key, value in values.items():
         if value == "rigid" and (key.endswith(".stiffness") or key == "nut_stiffness"):
             value = None
         head, _, tail = key.partition(".")
-        if head not in names:
-            raise KeyError(f"unknown machine parameter {key!r}")
+        default = parameter(params, key)
+        current = getattr(params, head)
         if tail:
-            if not isinstance(getattr(params, head), DriveStage):
-                raise KeyError(f"{head!r} is not a drive stage: {key!r} names nothing")
-            if tail not in {f.name for f in fields(DriveStage)}:
-                raise KeyError(f"unknown drive stage field {key!r} (use ratio, stiffness, backlash, damping)")
+            _check_type(key, value, default, tail == "stiffness")
             stages.setdefault(head, {})[tail] = value
         else:
+            if isinstance(current, DriveStage):
+                raise TypeError(
+                    f"{key!r} is a drive stage, not a number: set its fields as a table, [machine.model.{key}] "
+                    "with ratio, stiffness, backlash, damping"
+                )
+            _check_type(key, value, current, key == "nut_stiffness")
             top[head] = value
     for head, changes in stages.items():
         top[head] = replace(getattr(params, head), **changes)

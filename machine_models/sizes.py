@@ -1,51 +1,11 @@
 """Named machine sizes: the skiving machine of :mod:`machine_models.parameters` built for small, medium and large
 gears, and the rule that picks a job's size from its workpiece's diameter and module.
 
-``small`` is the original parameter set, unchanged (:class:`SkivingMachineParams` defaults): a 300 mm table on a
-1:2 stage from a 10 N m class servo (60 N m peak), a 40 N m tool motor on a belt; its default gears are those of the
-default job (up to 80 mm and module 1.5). ``medium`` and ``large`` are the same machine grown to the workpiece
-classes of the dedicated power-skiving machines, whose model numbers name their largest workpiece diameter in mm
-(issue 26 lists Liebherr LK 180/280/300/500, Gleason 100PS/300PS/400PS, Mitsubishi MSS300):
-
-=========  ==============  ========  ==========  ======================================================
-size       workpiece [mm]  module    table, k    stands for
-=========  ==============  ========  ==========  ======================================================
-small      <= 80           <= 1.5    300 mm, 1   the original defaults (gears of the default job's size)
-medium     <= 250          <= 4      400, 4/3    the 180-300 mm class (e.g. LK 180/280/300, 300PS, MSS300)
-large      <= 500          <= 8      630, 2.1    the 400-500 mm class (e.g. LK 500, 400PS)
-=========  ==============  ========  ==========  ======================================================
-
-Where the figures come from. Only the class (the largest workpiece diameter, as the model numbers name it) is taken
-from the market. The makers' data sheets (drive powers, speeds, torques, module ranges) could not be read in this
-project's environment: its searchable copies of the web held none (docs/machines.md, "Machine sizes"), so no
-maker's figure is claimed. Everything else is derived, and says so:
-
-- geometry: each size is the small machine scaled by k = table diameter / 300 mm;
-- inertias of bodies ~ k^5 (rho D^4 h), masses ~ k^3, friction torques and forces ~ k^3 (they follow the weight
-  and the bearing preload), torsional stiffness of shafts, belts and stages ~ k^3 (G I_p / l ~ D^4 / D), linear
-  stiffness of nut, screw and slide ~ k (E A / l), damping so that every stage keeps its damping ratio
-  (c ~ sqrt(k J): k^4 torsional, k^2 linear), backlash and lead errors unchanged (the same precision class), the
-  hydraulic motors' leakage ~ k^-3 (the same slip at their own torque limit);
-- top speeds of the tool spindle and the table ~ 1/k (their bearings' pitch diameter grows with k at the same speed
-  factor n dm = 0.6e6 mm/min: small 6000 / 3000 rpm, medium 4500 / 2250, large 2860 / 1430) and the carriage's
-  travel ~ k (small 1.0 m on its 1.2 m screw, medium 1.33, large 2.1 m): a job beyond them is refused before the
-  run (virtual_machine/processes/skiving/machine_reach.py), as is a workpiece or module beyond the size's class;
-- motors from power and base speed: peak torque = 1.5 x the rated torque P / omega_base (the amplifier's current
-  limit), rotor inertia ~ (peak torque)^(5/3) (geometrically similar motors, T ~ L^3, J ~ L^5): medium tool
-  spindle 20 kW at 1500 rpm (127 N m rated, 191 N m peak), work axis 150 N m peak through its 1:2 stage, feed
-  50 N m; large tool spindle 40 kW at 1000 rpm (382 N m rated, 573 N m peak), work 560 N m, feed 180 N m; the main
-  motor of S1-S3 22 kW (medium) and 45 kW (large) at 1450 rpm (rated torque; 2.5x at breakdown);
-- the CNC's run-up acceleration of the table keeps the small machine's share of what M2 can give the bare table
-  (600 rad/s^2 with 60 N m on 0.0415 kg m^2 at the motor): medium 353, large 137 rad/s^2;
-- every value rounded to three significant figures: orders of magnitude, not the digits of a data sheet.
-
-The stages' frequencies fall with size (tool belt 459 / 231 / 168 Hz, work stage 1324 / 954 / 627 Hz, screw
-318 / 234 / 153 Hz without cutter and blank), staying above the 80 Hz (tool, work) and 40 Hz (feed) speed loops
-whose gains follow the inertias (virtual_machine/structures/axis.py). The motors were sized against the jobs each
-size must hold (virtual_machine/processes/skiving/cutting_load.py, tests/test_machine_sizes.py): spur_external (z
-40, mn 2) and
-helical_internal (z 60, mn 2, ring) on medium need M1 26 of 191 N m and M2 21 of 150 N m; a mn 4 gear of 208 mm
-at 120 m/min needs M1 92 N m on medium, a mn 7 gear of 434 mm 267 N m of the large machine's 573.
+``small`` is the original parameter set (:class:`SkivingMachineParams` defaults); ``medium`` and ``large`` are the
+same machine grown to the workpiece classes of the dedicated power-skiving machines (up to 250 and 500 mm, modules 4
+and 8) by stated scaling rules with the table diameter, their motors derived from power and base speed: no maker's
+data sheet is claimed. The classes, the rules, every derived figure and what the motors were sized against:
+docs/machines.md ("Machine sizes").
 """
 
 from __future__ import annotations

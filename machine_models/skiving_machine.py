@@ -2,7 +2,7 @@
 ``virtual_machine.setting.machine_layout.skiving_layout`` builds it from the job's setup) and
 :class:`SkivingMachineParams`.
 
-Machine frame = the work frame at rest (cutting/skiving/setup.py): z up along the work axis, the common
+Machine frame = the work frame at rest (cutting/skiving/kinematics.py): z up along the work axis, the common
 perpendicular of the axes on +x. Bodies and joints (seed 000 notation):
 
 - ``work_spindle``  hinge ``B2`` about z: table, fixture and blank (B2 + B4 of the seed are one joint);
@@ -193,7 +193,3 @@ def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, lead_screw_pitch: float,
         for k, jid in enumerate(unknown):
             q[model.jnt_qposadr[jid]] = sol[k]
     return q.tolist()
-
-
-def build_model(lay: MachineLayout, params: SkivingMachineParams, structure: str = "mechatronic") -> mujoco.MjModel:
-    return build_spec(lay, params, structure).compile()

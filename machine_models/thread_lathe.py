@@ -230,7 +230,3 @@ def _home_qpos(spec: mujoco.MjSpec, lay: ThreadLayout) -> list[float]:
     coef = tendon_coefs(model, "spindle_drive")
     q[adr["M1"]] = -coef["B1"] * q[adr["B1"]] / coef["M1"]
     return q.tolist()
-
-
-def build_thread_lathe(lay: ThreadLayout, params: ThreadLatheParams | None = None) -> mujoco.MjModel:
-    return build_thread_lathe_spec(lay, params).compile()

@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from cutting.errors import InputError
+from cutting.errors import InputError, UnmeasurableError
 from cutting.gear import Gear
 from metrology.measure import MeasureOptions, measure_gear
 from metrology.sections import MeshData
-from metrology.workpiece import UnmeasurableError, Workpiece
+from metrology.workpiece import Workpiece
 
 UM = 1e3
 

@@ -1,6 +1,6 @@
 """Reading a mesh and setting up the measuring datum: gear axis, face, angular position, tooth numbers.
 
-Datum (issue 3): the workpiece's z axis is the gear axis, the face spans its end faces (probed along the axis in
+Datum: the workpiece's z axis is the gear axis, the face spans its end faces (probed along the axis in
 the gear body), tooth 1 is the first tooth counter-clockwise from +x. Like a measuring machine, the teeth are
 found by scanning the circle near mid depth in the mid section, and the angular position of the gear from the
 flanks themselves: the mean of left and right flank positions on that circle, so a uniform change of tooth

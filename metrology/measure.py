@@ -1,9 +1,9 @@
 """Measure a gear like a gear measuring machine: profile, helix, pitch, runout, thickness, ISO class.
 
 The measurement probes its workpiece (:mod:`metrology.workpiece`: a mesh, or the exact swept volumes of a cut)
-along nominal directions and uses nothing else but the nominal gear data. The result is the fixed JSON schema
-of issue 3 (deviations in micrometres, lengths in mm), built by :func:`measure`; ``workpiece`` says what was
-measured.
+along nominal directions and uses nothing else but the nominal gear data. The result is the fixed JSON schema of
+docs/measurement.md (deviations in micrometres, lengths in mm), built by :func:`measure`; ``workpiece`` says what
+was measured.
 """
 
 from __future__ import annotations
@@ -187,21 +187,55 @@ def topography_block(
 
 def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name: str | None = None) -> dict[str, Any]:
     """Measure ``workpiece`` (a :class:`metrology.workpiece.Workpiece`, or a mesh) as the gear ``gear``; returns
-    the issue-3 JSON document."""
+    the measurement's JSON document (docs/measurement.md)."""
     opt = opt or MeasureOptions()
     wp = as_workpiece(workpiece, name)
     datum = establish_datum(wp, gear, name)
-    z = gear.teeth
-    result: dict[str, Any] = {}
+    roll, face = profile_range(gear, opt), helix_range(gear)
+    L, zs, profile, profile_traces = _measure_profile(wp, gear, datum, opt, roll)
+    zz, helix, helix_traces = _measure_helix(wp, gear, datum, opt, face)
+    r_p = measuring_radius(gear)  # pitch on a circle near mid depth, mid section
+    order = np.argsort(datum.number(np.arange(gear.teeth)))
+    k_sector = opt.sector_teeth or iso.default_sector_pitches(gear.teeth)
+    result: dict[str, Any] = {
+        "evaluation": {
+            "profile_roll_mm": list(roll),
+            "profile_section_z_mm": zs,
+            "helix_z_mm": list(face),
+            "pitch_diameter_mm": 2 * r_p,
+        },
+        "profile": profile,
+        "helix": helix,
+        "pitch": _measure_pitch(wp, gear, datum, r_p, order, k_sector),
+    }
+    result["runout"], over_balls = _measure_over_balls(wp, gear, datum, opt, order)
+    result["thickness"] = _thickness_block(wp, gear, datum, opt, over_balls, face)
+    result["topography"] = topography_block(wp, gear, datum, opt, roll, face)
+    result["iso1328"] = iso1328_block(gear, result, k_sector)
+    result["workpiece"] = {"kind": wp.kind, "name": wp.name}
+    result["gear"] = {
+        "teeth": gear.teeth,
+        "normal_module_mm": gear.mn,
+        "helix_angle_deg": math.degrees(gear.beta),
+        "face_width_mm": gear.face_width,
+        "internal": gear.internal,
+        "datum_rotation_deg": math.degrees(datum.rotation),
+    }
+    result["_traces"] = {"L_mm": L, "z_mm": zz, "profile": profile_traces, "helix": helix_traces, "order": order}
+    return result
 
-    # ---- profile: three transverse sections ----
-    L0, L1 = profile_range(gear, opt)
-    L = np.linspace(L0, L1, opt.profile_points)
+
+def _measure_profile(
+    wp: Workpiece, gear: Gear, datum: Datum, opt: MeasureOptions, roll: tuple[float, float]
+) -> tuple[np.ndarray, list[float], dict[str, Any], dict[str, np.ndarray]]:
+    """Profiles over the roll lengths ``roll`` in the transverse sections: (roll lengths, the sections' z [mm], the
+    profile block per flank with its crowning, the mid section's traces against the design)."""
+    L = np.linspace(*roll, opt.profile_points)
     radii = np.sqrt(gear.base_radius**2 + L**2)
     zs = [float((f - 0.5) * datum.face_width) for f in opt.sections]
     mid = int(np.argmin(np.abs(np.array(opt.sections) - 0.5)))
-    prof = {side: [] for side in SIDES}
-    traces = {"profile": {}, "helix": {}}
+    prof: dict[str, list[dict[str, np.ndarray]]] = {side: [] for side in SIDES}
+    traces: dict[str, np.ndarray] = {}
     crown: dict[str, dict[str, float]] = {}
     for j, zz in enumerate(zs):
         tr = profile_trace(wp, gear, datum, zz, radii)
@@ -209,20 +243,23 @@ def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name:
             design = designed(opt, gear, side, L, zz)
             prof[side].append(evaluate_many(L, tr[side] - design))
             if j == mid:  # the mid section's traces: charts and the profile crowning
-                traces["profile"][side] = tr[side] - design
+                traces[side] = tr[side] - design
                 crown[side] = crowning_block("alpha", L, tr[side], design)
-    result["evaluation"] = {"profile_roll_mm": [L0, L1], "profile_section_z_mm": zs}
-    result["profile"] = {side: {**_flank_block("alpha", prof[side], mid, datum, zs), **crown[side]} for side in SIDES}
+    block = {side: {**_flank_block("alpha", prof[side], mid, datum, zs), **crown[side]} for side in SIDES}
+    return L, zs, block, traces
 
-    # ---- helix on the reference cylinder ----
-    z0, z1 = helix_range(gear)
-    zz = np.linspace(z0, z1, opt.helix_points)
+
+def _measure_helix(
+    wp: Workpiece, gear: Gear, datum: Datum, opt: MeasureOptions, face: tuple[float, float]
+) -> tuple[np.ndarray, dict[str, Any], dict[str, np.ndarray]]:
+    """Helices on the reference cylinder over ``face`` (mm from mid face): (their z, the helix block per flank with
+    its crowning, the traces against the design)."""
+    zz = np.linspace(*face, opt.helix_points)
     ht = helix_trace(wp, gear, datum, gear.reference_radius, zz)
     l_ref = math.sqrt(gear.reference_radius**2 - gear.base_radius**2)
     hd = {side: designed(opt, gear, side, l_ref, zz) for side in SIDES}
-    traces["helix"] = {side: ht[side] - hd[side] for side in SIDES}
-    result["evaluation"]["helix_z_mm"] = [z0, z1]
-    result["helix"] = {
+    traces = {side: ht[side] - hd[side] for side in SIDES}
+    block = {
         side: {
             **_flank_block("beta", [evaluate_many(zz, ht[side] - hd[side])], 0, datum, [0.0]),
             **crowning_block("beta", zz, ht[side], hd[side]),
@@ -230,44 +267,61 @@ def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name:
         for side in SIDES
     }
     for side in SIDES:  # one helix trace per flank: no sections
-        for t in result["helix"][side]["teeth"]:
+        for t in block[side]["teeth"]:
             t.pop("worst", None)
             t.pop("sections", None)
+    return zz, block, traces
 
-    # ---- pitch on a circle near mid depth, mid section ----
-    r_p = measuring_radius(gear)
-    result["evaluation"]["pitch_diameter_mm"] = 2 * r_p
-    order = np.argsort(datum.number(np.arange(z)))
-    k_sector = opt.sector_teeth or iso.default_sector_pitches(z)
+
+def _measure_pitch(
+    wp: Workpiece, gear: Gear, datum: Datum, r_p: float, order: np.ndarray, k: int
+) -> dict[str, dict[str, Any]]:
+    """Pitch deviations per flank from the flank positions on the circle of radius ``r_p`` in the mid section."""
     pitch = {}
     at_circle = profile_trace(wp, gear, datum, 0.0, np.array([r_p]))
     for side in SIDES:
         e = at_circle[side][:, 0]
         u = r_p * e / (side_sign(gear, side) * gear.base_radius) * UM  # arc on the circle, counter-clockwise
-        pitch[side] = pitch_block(u[order], k_sector)
-    result["pitch"] = pitch
+        pitch[side] = pitch_block(u[order], k)
+    return pitch
 
-    # ---- runout and dimension over balls with the same ball ----
+
+def _measure_over_balls(
+    wp: Workpiece, gear: Gear, datum: Datum, opt: MeasureOptions, order: np.ndarray
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Runout and dimension over balls with the same ball seated in every space: (runout block, over-balls block)."""
     D = opt.ball_diameter or nominal.ball_diameter(gear)
     centres = ball_seats(wp, gear, datum, D, ball_centre_radius(gear, D))
     rho = np.hypot(centres[:, 0], centres[:, 1])
-    result["runout"] = {
+    runout = {
         "F_r": float((rho.max() - rho.min()) * UM),
         "ball_diameter_mm": D,
         "ball_centre_radius_mm": [float(v) for v in rho[order]],
     }
+    z = gear.teeth
     half = z // 2 if z % 2 == 0 else (z - 1) // 2
     chords = np.linalg.norm(centres - np.roll(centres, -half, axis=0), axis=1)
     m_dk = chords + (D if not gear.internal else -D)
-    thickness: dict[str, Any] = {
-        "over_balls": {
-            "ball_diameter_mm": D,
-            "M_dK_mm": float(m_dk.mean()),
-            "M_dK_min_mm": float(m_dk.min()),
-            "M_dK_max_mm": float(m_dk.max()),
-            "M_dK_nominal_mm": float(nominal.over_balls(gear, D)),
-        }
+    over_balls = {
+        "ball_diameter_mm": D,
+        "M_dK_mm": float(m_dk.mean()),
+        "M_dK_min_mm": float(m_dk.min()),
+        "M_dK_max_mm": float(m_dk.max()),
+        "M_dK_nominal_mm": float(nominal.over_balls(gear, D)),
     }
+    return runout, over_balls
+
+
+def _thickness_block(
+    wp: Workpiece,
+    gear: Gear,
+    datum: Datum,
+    opt: MeasureOptions,
+    over_balls: dict[str, Any],
+    face: tuple[float, float],
+) -> dict[str, Any]:
+    """Tooth thickness (over balls, span at the end of the helix range ``face``) and tip and root diameters."""
+    thickness: dict[str, Any] = {"over_balls": over_balls}
     if gear.internal:
         thickness["span"] = {
             "k": None,
@@ -277,7 +331,7 @@ def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name:
         }
     else:
         k_span = opt.span_teeth or nominal.span_teeth(gear)
-        w = measure_span(wp, gear, datum, k_span, helix_range(gear)[1])
+        w = measure_span(wp, gear, datum, k_span, face[1])
         thickness["span"] = {
             "k": k_span,
             "W_k_mm": float(np.nanmean(w)),
@@ -288,21 +342,7 @@ def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name:
     thickness["tip_diameter_mm"], thickness["root_diameter_mm"] = _tip_root(wp, gear, datum)
     thickness["tip_diameter_nominal_mm"] = gear.tip_diameter_value
     thickness["root_diameter_nominal_mm"] = gear.root_diameter_value
-    result["thickness"] = thickness
-
-    result["topography"] = topography_block(wp, gear, datum, opt, (L0, L1), (z0, z1))
-    result["iso1328"] = iso1328_block(gear, result, k_sector)
-    result["workpiece"] = {"kind": wp.kind, "name": wp.name}
-    result["gear"] = {
-        "teeth": z,
-        "normal_module_mm": gear.mn,
-        "helix_angle_deg": math.degrees(gear.beta),
-        "face_width_mm": gear.face_width,
-        "internal": gear.internal,
-        "datum_rotation_deg": math.degrees(datum.rotation),
-    }
-    result["_traces"] = {"L_mm": L, "z_mm": zz, **traces, "order": order}
-    return result
+    return thickness
 
 
 def _tip_root(wp: Workpiece, gear: Gear, datum: Datum) -> tuple[float, float]:

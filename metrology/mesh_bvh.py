@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from cutting.threads import run_chunks
+from cutting.parallel import run_chunks
 
 #: triangles per leaf of the tree: the box tests above a leaf cost about as much as its triangles' tests
 LEAF = 4

@@ -14,10 +14,11 @@ import math
 import numpy as np
 from scipy.optimize import brentq, minimize
 
+from cutting.errors import UnmeasurableError
 from cutting.flank import SIDES, flank_points, side_sign
 from cutting.gear import Gear
 from metrology.datum import Datum
-from metrology.workpiece import UnmeasurableError, Workpiece, flank_surface
+from metrology.workpiece import Workpiece, flank_surface
 
 #: half size of the scanned patch around the nominal contact [mm] and points across it; refinement grid
 PATCH_HALF = 0.12

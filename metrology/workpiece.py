@@ -22,11 +22,6 @@ from cutting.flank import Side, flank_normals, flank_points
 from cutting.gear import Gear
 
 
-class UnmeasurableError(RuntimeError):
-    """The workpiece cannot be probed as the nominal gear (a ball finds no seat, a flank is missing): the
-    workpiece's fault, not the gear data's, e.g. a tooth the machine damaged."""
-
-
 @runtime_checkable
 class Workpiece(Protocol):
     """What the measuring machine probes."""

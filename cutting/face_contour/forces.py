@@ -42,7 +42,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import brentq
 
-from cutting.face_contour.slots import FaceCoupling, _frame, _tip, bisect_roots, element_path, path_velocity
+from cutting.face_contour.slots import FaceCoupling, bisect_roots, element_path, path_velocity, tip_position, tool_frame
 from cutting.materials import H_MIN, Material
 
 __all__ = [
@@ -159,7 +159,7 @@ def element_forces(c: FaceCoupling, material: Material, phi: np.ndarray | float,
     force[..., 2] += fp
     tip = element_path(c, phi, element, final=True)
     tip[..., 2] += c.depth - infeed(c, phi)
-    u = _frame(c, phi)[0]
+    u = tool_frame(c, phi)[0]
     psi = phi + float(c.phases[element])
     # the tip's direction of motion on the tool circle (head rotation only): cos psi u + sin psi z
     tangent = np.concatenate([np.cos(psi)[..., None] * u, np.sin(psi)[..., None]], axis=-1)
@@ -195,7 +195,7 @@ class FaceLoad:
             beta = float(c.phases[j])
 
             def radius(x: np.ndarray, beta: float = beta) -> np.ndarray:
-                return np.linalg.norm(_tip(c, x, beta, final=True)[0], axis=-1)
+                return np.linalg.norm(tip_position(c, x, beta, final=True)[0], axis=-1)
 
             r = radius(base)
             for edge in (c.inner_radius, c.outer_radius):

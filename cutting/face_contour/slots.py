@@ -257,7 +257,7 @@ def _check(c: FaceCoupling) -> None:
     # moving on along the slot while it cuts
     for beta in c.phases:
         phi = _pass_phis(c, beta, samples=4001)[1:-1]
-        r = np.linalg.norm(_tip(c, phi, beta, final=True)[0], axis=-1)
+        r = np.linalg.norm(tip_position(c, phi, beta, final=True)[0], axis=-1)
         if r.min() > c.inner_radius or r.max() < c.outer_radius:
             _fail(
                 "depth",
@@ -304,7 +304,7 @@ def work_offset(c: FaceCoupling, phi: np.ndarray | float) -> tuple[np.ndarray, n
     return T * (1 - np.cos(q * phi)), T * q * np.sin(q * phi)
 
 
-def _frame(
+def tool_frame(
     c: FaceCoupling, phi: np.ndarray, final: bool = True, beta: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """At head angle phi: the tool plane's horizontal direction u, the tool axis n (both (..., 2)), the head
@@ -329,8 +329,9 @@ def _along(c: FaceCoupling, phi: np.ndarray, beta: float) -> np.ndarray:
     return c.R * np.sin(phi + beta) - e * np.sin(c.eccentric_ratio * phi)
 
 
-def _tip(c: FaceCoupling, phi: np.ndarray, beta: float, final: bool) -> tuple[np.ndarray, np.ndarray]:
-    u, _, centre, height, _ = _frame(c, phi, final, beta)
+def tip_position(c: FaceCoupling, phi: np.ndarray, beta: float, final: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The tip of the element at phase ``beta`` at head angle phi: its horizontal position (..., 2) and height [mm]."""
+    u, _, centre, height, _ = tool_frame(c, phi, final, beta)
     psi = phi + beta
     return centre + (c.R * np.sin(psi))[..., None] * u, height - c.R * np.cos(psi)
 
@@ -342,7 +343,7 @@ def element_path(c: FaceCoupling, phi: np.ndarray | float, element: int = 0, fin
     if not 0 <= element < c.elements:
         raise ValueError(f"element: must be in 0..{c.elements - 1}, got {element}")
     phi = np.asarray(phi, dtype=float)
-    xy, z = _tip(c, phi, float(c.phases[element]), final)
+    xy, z = tip_position(c, phi, float(c.phases[element]), final)
     return np.concatenate([xy, z[..., None]], axis=-1)
 
 
@@ -427,9 +428,9 @@ def phi_at_radius(c: FaceCoupling, radius: np.ndarray | float, element: int | No
     phi = _pass_phis(c, beta, margin=1.0)
 
     def gap(x: np.ndarray) -> np.ndarray:
-        return np.linalg.norm(_tip(c, x, beta, final=True)[0], axis=-1) - r
+        return np.linalg.norm(tip_position(c, x, beta, final=True)[0], axis=-1) - r
 
-    g = np.linalg.norm(_tip(c, phi, beta, final=True)[0], axis=-1)[None, :] - r[:, None]
+    g = np.linalg.norm(tip_position(c, phi, beta, final=True)[0], axis=-1)[None, :] - r[:, None]
     k, ok = first_sign_change(g)
     x = bisect_roots(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
     return np.where(ok, x, np.nan)
@@ -484,7 +485,7 @@ def setting_sheet(c: FaceCoupling, tool_speed: float = 1.0) -> dict[str, float]:
 def _pass_phis(c: FaceCoupling, beta: float, margin: float = 0.0, samples: int = SCAN_SAMPLES) -> np.ndarray:
     """Head angles of element beta's final pass through slot 0 while its tip is below z = margin [mm]."""
     psi = np.linspace(-1.2, 1.2, 4801)
-    _, z = _tip(c, psi - beta, beta, final=True)
+    _, z = tip_position(c, psi - beta, beta, final=True)
     below = np.flatnonzero(z < margin)
     if below.size == 0:
         raise ValueError(f"height: the tip never goes below z = {margin:.4g} (the slot is {c.depth} deep)")
@@ -532,18 +533,18 @@ def exact_bottom(c: FaceCoupling, radii: np.ndarray) -> np.ndarray:
     best = np.full(r.shape, np.nan)
     for beta in c.phases:
         phi = _pass_phis(c, beta)
-        tip, _ = _tip(c, phi, beta, final=True)
-        u = _frame(c, phi)[0]
+        tip, _ = tip_position(c, phi, beta, final=True)
+        u = tool_frame(c, phi)[0]
         g = np.einsum("ijk,jk->ij", p[:, None, :] - tip[None], u)
         k, ok = first_sign_change(g)
 
         def gap(x: np.ndarray, p: np.ndarray = p, beta: float = beta) -> np.ndarray:
-            t, _ = _tip(c, x, beta, final=True)
-            return np.einsum("ij,ij->i", p - t, _frame(c, x)[0])
+            t, _ = tip_position(c, x, beta, final=True)
+            return np.einsum("ij,ij->i", p - t, tool_frame(c, x)[0])
 
         x = bisect_roots(gap, phi[k], phi[k + 1], g[np.arange(len(r)), k])
-        t, z = _tip(c, x, beta, final=True)
-        across = np.abs(np.einsum("ij,ij->i", p - t, _frame(c, x)[1]))
+        t, z = tip_position(c, x, beta, final=True)
+        across = np.abs(np.einsum("ij,ij->i", p - t, tool_frame(c, x)[1]))
         z = np.where(ok & (across <= 0.5 * c.edge_width), z, np.nan)
         best = np.fmin(best, z)
     return best
@@ -554,7 +555,7 @@ def _side_point(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The ``sign`` flank's end of element beta's section at z = ``height`` (..., 2), and whether the plate
     reaches that height there."""
-    u, n, centre, zc, _ = _frame(c, phi)
+    u, n, centre, zc, _ = tool_frame(c, phi)
     psi = phi + beta
     t = (zc - height) / np.cos(psi)  # distance from the head's centre along the element's radius
     half = 0.5 * c.edge_width + (c.R - t) * math.tan(c.flank_angle)
@@ -646,7 +647,7 @@ def face_blank(c: FaceCoupling, tol: float = SWEEP_TOLERANCE, base: float = 2.0)
 
 def plate_corners(c: FaceCoupling, phi: np.ndarray, beta: float) -> np.ndarray:
     """The element plate's four corners (..., 4, 3) on the final pass: the tip edge's ends and the top's."""
-    u, n, centre, zc, _ = _frame(c, phi)
+    u, n, centre, zc, _ = tool_frame(c, phi)
     psi = phi + beta
     u3 = np.concatenate([u, np.zeros((*u.shape[:-1], 1))], axis=-1)
     n3 = np.concatenate([n, np.zeros((*n.shape[:-1], 1))], axis=-1)

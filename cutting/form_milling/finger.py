@@ -1,4 +1,4 @@
-"""The finger mill of the copying method (seed 003: "a specially profiled disc or finger mill"; issue 28, item 2).
+"""The finger mill of the copying method (seed 003: "a specially profiled disc or finger mill").
 
 A finger mill is an end mill whose axis is normal to the gear axis, along the tooth space's radial symmetry line
 y_s, its tip towards the root: an external gear's space is milled from outside (axis +y_s into the mill), an internal

@@ -1,6 +1,6 @@
 """A helical tooth space by the copying method: the disc mill set over at the helix angle, its profile the envelope
-of the helicoid (issue 28, item 1: seed 003 says "a specially profiled disc or finger mill" and gives the profile
-only as the space's section, which holds for a spur gear).
+of the helicoid (seed 003 says "a specially profiled disc or finger mill" and gives the profile only as the space's
+section, which holds for a spur gear).
 
 The mill sits over tooth space 0 at mid face (space frame: x tangential, y radial, z axial), its centre ``radius``
 above the path point and its axis turned from the tangential direction by the reference helix angle beta about the

@@ -25,19 +25,16 @@ Why it holds the tolerance ``tol`` against :class:`cutting.form_milling.sweep.Mi
   straight feed is assumed: recorded (simulated machine) passes are thinned alike (their wobble keeps more poses);
 - the rest (0.3 tol on the outside) is the margin for the hull of a turning frustum, which exceeds its sweep by a
   term of first order in the move's turn times the length of its facets between polygon points (a translation's
-  hull is its sweep exactly). Measured on the beta = 20 deg pass (31 kept poses, 0.024 rad per move): the flanks
-  within 4.3 um of the exact surface at tol = 5 um (3.8 um on another choice of 30 poses); with the profile at 0.5
-  tol (its longer facets) they came out at 5.7 um, beyond the tolerance, hence the split.
+  hull is its sweep exactly); docs/form-milling.md gives the figures measured on a helical pass that set the split.
 
 Hulls and their union are what cost: manifold's booleans cost with the operands' facets whose boxes overlap, and
-thin stacked slabs with large tilted facets overlap each other's boxes everywhere (a helical pass spent 60 s of 61
-in the union of its 966 hulls; 23 disjoint tilted slabs take 0.6 s to union, the same slabs along an axis 2 ms).
-So each move's hulls are built and unioned in the move's own frame (the mill's axis along z: the slabs stack
-along z and their facets' boxes stay thin), only those that can meet the blank (beyond an end face or the tip
-cylinder's tangent plane they cannot), and moved back by the pose's rigid transform; then the moves are subtracted
-one after another (their union first costs 4-6 times more) from a local stock: the solid's part in the box of the
-space's moves, put back after (a boolean's cost grows with the solid it cuts: 3 x faster at the 11th space, the
-same volume). The union of a move is the same set in either frame, so the tolerance argument is unchanged by it.
+thin stacked slabs with large tilted facets overlap each other's boxes everywhere (docs/form-milling.md, "The
+removal's figures"). So each move's hulls are built and unioned in the move's own frame (the mill's axis along z:
+the slabs stack along z and their facets' boxes stay thin), only those that can meet the blank (beyond an end face
+or the tip cylinder's tangent plane they cannot), and moved back by the pose's rigid transform; then the moves are
+subtracted one after another (their union first costs more) from a local stock: the solid's part in the box of the
+space's moves, put back after (a boolean's cost grows with the solid it cuts). The union of a move is the same set
+in either frame, so the tolerance argument is unchanged by it.
 """
 
 from __future__ import annotations
@@ -279,11 +276,6 @@ def swept_moves(gear: Gear, mill: Mill, p: MillPassPoses, tol: float) -> tuple[l
             move = local[0] if len(local) == 1 else mf.Manifold.batch_boolean(local, mf.OpType.Add)
             moves.append(move.transform(np.hstack([ea.T, ca[:, None]])).as_original())
     return moves, hulls
-
-
-def swept_hulls(gear: Gear, mill: Mill, p: MillPassPoses, tol: float) -> list[mf.Manifold]:
-    """The pass's swept volume within ``tol`` [mm] as solids whose union it is (one per straight move)."""
-    return swept_moves(gear, mill, p, tol)[0]
 
 
 @dataclass

@@ -3,7 +3,7 @@
 :meth:`cutting.form_milling.sweep.MilledGear.margin` asks, for every point, the passes of its own tooth space and of
 the nearer neighbouring one; per (point, pass) pair the work is a bisection over the pass's pose table, a scan of a
 few dozen samples around it and a parabola-vertex refinement, which numpy can only vectorise through many small
-temporaries. :func:`_margins` does it per point, on every core (:func:`cutting.threads.run_chunks`), with the
+temporaries. :func:`_margins` does it per point, on every core (:func:`cutting.parallel.run_chunks`), with the
 arithmetic of the numpy reference (``MilledGear._margin_numpy``) step for step: the same samples, the same
 clipping, the same order of the sums (numpy's einsum of three terms adds the first and the last first), so that
 the two agree to rounding.
@@ -25,7 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
-from cutting.threads import run_chunks
+from cutting.parallel import run_chunks
 
 #: the margin of a point beyond the mill's axial span [mm]
 FAR = 1e3

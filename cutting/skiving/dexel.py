@@ -24,13 +24,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from cutting.gear import Gear
+from cutting.parallel import run_shared
 from cutting.skiving.dexel_kernels import MAX_PIECES, OVERFLOW, STATS, cut_cells
 from cutting.skiving.dexel_lines import DexelLines, DexelSpacing, LineSet
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_kernels import pack_table
 from cutting.skiving.exact_solve import ItemSolver
 from cutting.skiving.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, Outline, PassTable
-from cutting.threads import run_shared
 
 #: the rasters of the outline's signed distance for the march [mm]: a fine one (cell, band of exact distances) near
 #: the edge, a coarse one (cell, pad: exact over all of it) beyond, so that steps far from the edge are long. An
@@ -265,8 +265,3 @@ class DexelWorkpiece:
     def overflowed(self) -> int:
         """Lines that would have held more than MAX_PIECES material intervals (their smallest pieces dropped)."""
         return int((self.flags & OVERFLOW).astype(bool).sum())
-
-
-def pass_tables(motions: Sequence, edge: CuttingEdge) -> list[PassTable]:
-    """The pass tables of ideal or sampled passes, as the exact measurement builds them."""
-    return [PassTable.build(m, edge) for m in motions]

@@ -1,7 +1,7 @@
 """Cutting passes with the dexel workpiece: the ideal motion (`skive cut`) or any sampled one, pass by pass.
 
 Each pass's passages are the exact measurement's pass table (:class:`cutting.skiving.exact_sweep.PassTable`: the same
-windows as :func:`cutting.skiving.removal.passage_range`), cut in time order in chunks (for the progress bar; the
+windows as :func:`cutting.skiving.passages.passage_range`), cut in time order in chunks (for the progress bar; the
 chunks do
 not change the cut: every line takes its passages in time order either way). The gear solid is made once, at the
 end, from the lines' end points (:mod:`cutting.skiving.dexel_solid`).
@@ -22,7 +22,7 @@ from cutting.skiving.dexel_lines import DexelSpacing, gear_phase
 from cutting.skiving.dexel_solid import dexel_solid
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_sweep import PassTable
-from cutting.skiving.removal import Chip, CutResult
+from cutting.skiving.passages import Chip, CutResult
 
 #: passages cut per call (a progress step)
 CHUNK = 256

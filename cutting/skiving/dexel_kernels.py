@@ -32,9 +32,9 @@ import numpy as np
 from numba import njit
 
 from cutting.borrowed import borrowed
+from cutting.parallel import claim
 from cutting.skiving.exact_kernels import in_plane
 from cutting.skiving.exact_solve import margin_at, outline_margin
-from cutting.threads import claim
 
 #: the in-plane track between two estimates may bow: its chord is lengthened by this factor (as the measurement's)
 TRACK_BOW = 1.05
@@ -456,7 +456,7 @@ def cut_cells(
 ):
     """Cut the lines of fan ``cells[k]`` (lines cells[k] * rays ... + rays - 1) by the passages
     ``cell_g[cell_ptr[k]:cell_ptr[k + 1]]`` (in time order), for every k < ``n_cells`` that this thread takes from
-    ``counter`` (cutting.threads.run_shared: the threads share the cells one by one).
+    ``counter`` (cutting.parallel.run_shared: the threads share the cells one by one).
 
     ``p``, ``u``, ``weight``: every line's origin, direction and weights (n, 2): an interval [d1, d2] holds
     w0 (d2 - d1) + w1 (d2^2 - d1^2) / 2 of volume (parallel lines: w0, a fan's rays: w1); ``ray_cos``,

@@ -1,7 +1,7 @@
 """The cutting edge: the outline of one cutter tooth in its rake plane (the cutter's end plane, z0 = 0).
 
 Cutter frame: z along the cutter axis, the rake face in z = 0, tooth 0 centred on +x (the ideal motion of
-:class:`cutting.skiving.setup.SkivingSetup` brings tooth 0 to the mesh point at phi0 = 0). The outline is the
+:class:`cutting.skiving.kinematics.SkivingSetup` brings tooth 0 to the mesh point at phi0 = 0). The outline is the
 closed, counter-clockwise polygon of the tooth section from the depth that can meet the workpiece up to
 the tip; the removed volume is what this planar region sweeps.
 
@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from cutting.flank import SIDES, Side, base_tangent_deviation, flank_points
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 
 EDGE_KINDS = ("involute", "conjugate")
 

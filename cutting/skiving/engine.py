@@ -21,7 +21,8 @@ import numpy as np
 
 from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge
-from cutting.skiving.removal import DEFAULT_SLAB, CutResult, Stock, cut, from_arrays, passage_count, to_arrays
+from cutting.skiving.passages import CutResult, passage_count
+from cutting.skiving.removal import DEFAULT_SLAB, Stock, cut, from_arrays, to_arrays
 from cutting.skiving.trajectory import PassMotion
 
 #: progress(pass_index, passages_done, passages_total)

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from cutting.borrowed import borrowed
-from cutting.threads import run_chunks
+from cutting.parallel import run_chunks
 
 NOT, UNSURE, REMOVED = 0, 1, 2
 
@@ -267,7 +267,7 @@ def settle_lines(
     ``work[i]``: the line's (passage, sample range) pairs, the near ones, and the fine estimates it took.
 
     ``clusters`` = (pointer, line index): nearby lines, handled passage by passage so that a passage's table is
-    read once per cluster; clusters [lo_c, hi_c) are settled here (cutting.threads runs them in parallel);
+    read once per cluster; clusters [lo_c, hi_c) are settled here (cutting.parallel runs them in parallel);
     ``grid`` = (lo, cell, dims, cell pointer, ball index) of the balls; ``balls`` = (centre, radius, passage g,
     subwindow, samples per subwindow, and each one's box: centre, axes, half extents);
     ``tab`` as :func:`_estimate` takes it."""
@@ -423,7 +423,7 @@ def _sweep_bounds(lo_g, hi_g, rot, origin, points, subwindows, margin, centre, r
 
 
 def sweep_bounds(rot, origin, points, subwindows, margin):
-    """:func:`_sweep_bounds` over every passage, on every core (cutting.threads)."""
+    """:func:`_sweep_bounds` over every passage, on every core (cutting.parallel)."""
     m = rot.shape[0]
     out = (
         np.empty((m, subwindows, 3)),

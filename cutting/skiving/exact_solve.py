@@ -22,10 +22,10 @@ import numpy as np
 from numba import njit
 
 from cutting.borrowed import borrowed
+from cutting.parallel import run_chunks
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.sampled_motion import SampledMotion
-from cutting.skiving.setup import SkivingSetup
 from cutting.skiving.trajectory import PassMotion
-from cutting.threads import run_chunks
 
 #: the kinds of compiled pose
 IDEAL, SAMPLED = 0, 1

@@ -27,13 +27,13 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from cutting.gear import Gear
+from cutting.parallel import run_chunks
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
 from cutting.skiving.exact_solve import ItemSolver, compiled_outline, pose_table
-from cutting.skiving.removal import passage_range
+from cutting.skiving.passages import passage_range
 from cutting.skiving.sweep import outline_points, simplify_outline
 from cutting.skiving.trajectory import PassMotion
-from cutting.threads import run_chunks
 
 #: a line's crossing is solved to this [mm] (and the rake-plane instant to 1e-10 mm of the plane's distance)
 CROSSING_TOLERANCE = 1e-9

@@ -16,8 +16,9 @@ from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import CuttingEdge, make_edge
 from cutting.skiving.engine import cut_passes
 from cutting.skiving.holder import check_holder_side
-from cutting.skiving.removal import DEFAULT_SLAB, CutResult, expected_genus
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
+from cutting.skiving.passages import CutResult, expected_genus
+from cutting.skiving.removal import DEFAULT_SLAB
 from cutting.skiving.trajectory import ideal_passes
 
 

@@ -22,8 +22,8 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from cutting.skiving.kinematics import rot_z
 from cutting.skiving.sampled_motion import SampledMotion
-from cutting.skiving.setup import rot_z
 from cutting.skiving.trajectory import PassMotion
 
 

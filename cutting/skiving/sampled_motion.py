@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import check_poses
 
 

@@ -70,7 +70,8 @@ def sample_window(
 
 
 def tube(outline: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> mf.Manifold:
-    """The closed swept volume of the planar ``outline`` (CCW, star-shaped) through the poses (m >= 2)."""
+    """The closed swept volume of the planar ``outline`` (CCW, star-shaped) through the poses (m >= 2): the plain
+    sweep the zipped one (:class:`ZippedSweep`) is checked against."""
     n = len(outline)
     m = len(rot)
     w = place(outline_points(outline), rot, trans)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cutting.errors import InputError, Problem
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 
 
 @dataclass(frozen=True)

@@ -261,10 +261,6 @@ class TurningSetup:
         """r_c = r0 - a_p + r_eps [mm]: the nose centre's radius."""
         return self.radius - self.depth + self.nose_radius
 
-    def plain(self) -> TurningSetup:
-        """The same cut without the vibration."""
-        return dataclasses.replace(self, vibration=None)
-
     def path(self, theta: np.ndarray | float) -> np.ndarray | float:
         """z(theta) = S0 theta / 2 pi + a(theta) [mm]: the nose centre's axial position at the spindle angle."""
         z = self.feed * np.asarray(theta, dtype=float) / TWO_PI

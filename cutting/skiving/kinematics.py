@@ -1,4 +1,4 @@
-"""The skiving setup: crossed-axes pair of cutter and workpiece, and its ideal kinematics.
+"""The skiving kinematics: the crossed-axes pair of cutter and workpiece (its setup) and its ideal motion.
 
 Machine frame (fixed): z along the work axis; the common perpendicular of the two axes along +x;
 the cutter centre (the rake-face centre) at (a, 0, s), s being the carriage position along z.
@@ -318,110 +318,136 @@ INTERNAL_RETRACT_CLEARANCE = 1.0
 
 def check_setup(setup: SkivingSetup) -> list[Problem]:
     """Every reason why ``setup.cutter`` cannot skive ``setup.gear`` with ``setup.passes``."""
+    for fatal in (_shaft_angle_problem, _internal_cutter_size_problem, _base_circle_problem):
+        problem = fatal(setup)
+        if problem is not None:  # the other checks would be meaningless
+            return [problem]
+    checks = (_pointed_tip_problem, _root_diameter_problem, _passes_problem, _interference_problem)
+    return [problem for problem in (check(setup) for check in checks) if problem is not None]
+
+
+def _shaft_angle_problem(setup: SkivingSetup) -> Problem | None:
+    """A shaft angle below MIN_SHAFT_ANGLE: no sliding, so no cutting speed."""
     g, c = setup.gear, setup.cutter
-    out: list[Problem] = []
-    sigma = math.degrees(setup.shaft_angle)
     if abs(setup.shaft_angle) < MIN_SHAFT_ANGLE:
+        sigma = math.degrees(setup.shaft_angle)
         need = (
             "a helical cutter"
             if g.helix_angle == 0
             else f"a cutter helix other than {math.degrees(g.helix_angle):+.1f} deg"
         )
-        out.append(
-            Problem(
-                "cutter.helix_angle",
-                round(math.degrees(c.helix_angle), 6),
-                f"the shaft angle Sigma = {sigma:+.2f} deg leaves no cutting speed (skiving cuts by the sliding "
-                f"of crossed axes, v ~ sin(Sigma))",
-                f"choose {need} so that |Sigma| >= {math.degrees(MIN_SHAFT_ANGLE):.0f} deg (10-30 deg is usual)",
-            )
+        return Problem(
+            "cutter.helix_angle",
+            round(math.degrees(c.helix_angle), 6),
+            f"the shaft angle Sigma = {sigma:+.2f} deg leaves no cutting speed (skiving cuts by the sliding "
+            f"of crossed axes, v ~ sin(Sigma))",
+            f"choose {need} so that |Sigma| >= {math.degrees(MIN_SHAFT_ANGLE):.0f} deg (10-30 deg is usual)",
         )
-        return out
+    return None
+
+
+def _internal_cutter_size_problem(setup: SkivingSetup) -> Problem | None:
+    """An internal gear's cutter too large to be retracted through the bore after the cut."""
+    g, c = setup.gear, setup.cutter
     if g.internal and (
         setup.final_centre_distance <= c.mn
         or setup.cutter_tip_diameter > g.tip_diameter_value - 2 * INTERNAL_RETRACT_CLEARANCE * g.mn
     ):
-        out.append(
-            Problem(
-                "cutter.teeth",
-                c.teeth,
-                f"the cutter (d0 = {c.reference_diameter:.3f} mm, tip {setup.cutter_tip_diameter:.3f} mm) is too large "
-                f"for the internal gear: it must pass the bore d_a2 = {g.tip_diameter_value:.3f} mm with "
-                f"{INTERNAL_RETRACT_CLEARANCE:g} mn clearance on the radius to be retracted after the cut",
-                "use a cutter with clearly fewer teeth than the gear (z0 <= z2 - 10 is a safe start)",
-            )
+        return Problem(
+            "cutter.teeth",
+            c.teeth,
+            f"the cutter (d0 = {c.reference_diameter:.3f} mm, tip {setup.cutter_tip_diameter:.3f} mm) is too large "
+            f"for the internal gear: it must pass the bore d_a2 = {g.tip_diameter_value:.3f} mm with "
+            f"{INTERNAL_RETRACT_CLEARANCE:g} mn clearance on the radius to be retracted after the cut",
+            "use a cutter with clearly fewer teeth than the gear (z0 <= z2 - 10 is a safe start)",
         )
-        return out
-    ra0 = setup.cutter_tip_diameter / 2
-    if ra0 <= c.base_radius:
-        out.append(
-            Problem(
-                "cutter.tip_diameter",
-                round(setup.cutter_tip_diameter, 6),
-                f"the cutter tip circle lies inside its base circle d_b0 = {c.base_diameter:.3f} mm: no involute edge",
-                f"use a tip diameter above {c.base_diameter:.3f} mm",
-            )
+    return None
+
+
+def _base_circle_problem(setup: SkivingSetup) -> Problem | None:
+    """A cutter tip circle inside the cutter's base circle: no involute edge."""
+    c = setup.cutter
+    if setup.cutter_tip_diameter / 2 <= c.base_radius:
+        return Problem(
+            "cutter.tip_diameter",
+            round(setup.cutter_tip_diameter, 6),
+            f"the cutter tip circle lies inside its base circle d_b0 = {c.base_diameter:.3f} mm: no involute edge",
+            f"use a tip diameter above {c.base_diameter:.3f} mm",
         )
-        return out
+    return None
+
+
+def _pointed_tip_problem(setup: SkivingSetup) -> Problem | None:
+    """Cutter teeth whose tip land is below MIN_TIP_THICKNESS modules."""
+    c = setup.cutter
     tip_thickness = c.normal_thickness_at(setup.cutter_tip_diameter)
     if tip_thickness < MIN_TIP_THICKNESS * c.mn:
-        out.append(
-            Problem(
-                "cutter.tip_diameter",
-                round(setup.cutter_tip_diameter, 6),
-                f"the cutter teeth are pointed: tip land {tip_thickness:.3f} mm < {MIN_TIP_THICKNESS} mn "
-                f"(cutter profile shift {c.x:+.3f})",
-                "reduce the cutter tip diameter or its profile shift, or cut a shallower gear",
-            )
+        return Problem(
+            "cutter.tip_diameter",
+            round(setup.cutter_tip_diameter, 6),
+            f"the cutter teeth are pointed: tip land {tip_thickness:.3f} mm < {MIN_TIP_THICKNESS} mn "
+            f"(cutter profile shift {c.x:+.3f})",
+            "reduce the cutter tip diameter or its profile shift, or cut a shallower gear",
         )
-    if c.tip_diameter is not None and g.root_diameter is not None:
-        gen = setup.generated_root_diameter
-        if abs(gen - g.root_diameter_value) > 0.01:
-            want = default_cutter_tip_diameter(g, c, setup.final_centre_distance)
-            out.append(
-                Problem(
-                    "cutter.tip_diameter",
-                    c.tip_diameter,
-                    f"at the finishing centre distance {setup.final_centre_distance:.4f} mm this cutter cuts a root "
-                    f"diameter of {gen:.4f} mm, but gear.root_diameter = {g.root_diameter_value:.4f} mm",
-                    f"set cutter.tip_diameter = {want:.4f} or drop one of the two keys",
-                )
-            )
-    if not setup.passes or any(p <= 0 for p in setup.passes):
-        out.append(
-            Problem(
-                "process.passes",
-                list(setup.passes),
-                "every radial infeed increment must be > 0 mm",
-                "give a list of positive increments, e.g. [2.0, 1.5, 0.8, 0.2]",
-            )
+    return None
+
+
+def _root_diameter_problem(setup: SkivingSetup) -> Problem | None:
+    """A given cutter tip diameter that does not cut the given gear root diameter (within 0.01 mm)."""
+    g, c = setup.gear, setup.cutter
+    if c.tip_diameter is None or g.root_diameter is None:
+        return None
+    gen = setup.generated_root_diameter
+    if abs(gen - g.root_diameter_value) > 0.01:
+        want = default_cutter_tip_diameter(g, c, setup.final_centre_distance)
+        return Problem(
+            "cutter.tip_diameter",
+            c.tip_diameter,
+            f"at the finishing centre distance {setup.final_centre_distance:.4f} mm this cutter cuts a root "
+            f"diameter of {gen:.4f} mm, but gear.root_diameter = {g.root_diameter_value:.4f} mm",
+            f"set cutter.tip_diameter = {want:.4f} or drop one of the two keys",
         )
-    elif sum(setup.passes) > setup.full_depth + 1e-6:
-        out.append(
-            Problem(
-                "process.passes",
-                list(setup.passes),
-                f"the increments sum to {sum(setup.passes):.4f} mm, deeper than the tooth: from first touch of the "
-                f"blank to the finishing centre distance is {setup.full_depth:.4f} mm",
-                f"make the increments sum to at most {setup.full_depth:.4f} mm",
-            )
+    return None
+
+
+def _passes_problem(setup: SkivingSetup) -> Problem | None:
+    """Radial infeed increments that are not positive, or that reach deeper than the tooth."""
+    if not setup.passes or setup.passes[0] <= 0 or any(p < 0 for p in setup.passes):
+        return Problem(
+            "process.passes",
+            list(setup.passes),
+            "the first radial infeed increment must be > 0 mm and none negative (a 0 after it is a spring pass)",
+            "give increments like [2.0, 1.5, 0.8, 0.2] or, with a spring pass, [2.0, 1.5, 0.8, 0.2, 0.0]",
         )
+    if sum(setup.passes) > setup.full_depth + 1e-6:
+        return Problem(
+            "process.passes",
+            list(setup.passes),
+            f"the increments sum to {sum(setup.passes):.4f} mm, deeper than the tooth: from first touch of the "
+            f"blank to the finishing centre distance is {setup.full_depth:.4f} mm",
+            f"make the increments sum to at most {setup.full_depth:.4f} mm",
+        )
+    return None
+
+
+def _interference_problem(setup: SkivingSetup) -> Problem | None:
+    """The ideal involute edge entering the nominal teeth by more than INTERFERENCE_TOLERANCE."""
+    g, c = setup.gear, setup.cutter
     intrusion = setup.edge_intrusion()
     if intrusion > INTERFERENCE_TOLERANCE:
+        sigma = math.degrees(setup.shaft_angle)
         where = (
             "tip interference with the internal gear's teeth"
             if g.internal
             else "the cutter edge undercuts or fouls the teeth"
         )
-        out.append(
-            Problem(
-                "cutter.teeth",
-                c.teeth,
-                f"{where}: the cutting edge enters the nominal teeth by {intrusion:.3f} mm under the ideal motion "
-                f"(Sigma = {sigma:+.1f} deg)",
-                "use fewer cutter teeth"
-                + (" (internal gears need z2 - z0 well above 8)" if g.internal else "")
-                + ", another cutter helix angle, or change the profile shifts",
-            )
+        return Problem(
+            "cutter.teeth",
+            c.teeth,
+            f"{where}: the cutting edge enters the nominal teeth by {intrusion:.3f} mm under the ideal motion "
+            f"(Sigma = {sigma:+.1f} deg)",
+            "use fewer cutter teeth"
+            + (" (internal gears need z2 - z0 well above 8)" if g.internal else "")
+            + ", another cutter helix angle, or change the profile shifts",
         )
-    return out
+    return None
