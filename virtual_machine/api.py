@@ -9,7 +9,9 @@ Each stage takes a job (a :class:`virtual_machine.job.Job`, or the path of a job
 process (:data:`virtual_machine.processes.PROCESSES`), exactly as `skive setup|simulate|cut|run` do; each returns a
 :class:`virtual_machine.processes.Product` (``data``, ``text``, ``files``, ``out``). Progress goes to stderr as on
 the command line (a line per stage, bars on a terminal); ``quiet=True`` silences it. Errors in the input raise
-:class:`cutting.errors.InputError` (its message says what is wrong and how to fix it), before anything runs.
+:class:`cutting.errors.InputError` (its message says what is wrong and how to fix it), before anything runs; every
+error skive raises is a :class:`cutting.errors.SkiveError`. A stage's files appear in ``out`` only when it is
+complete (:mod:`virtual_machine.output.staging`).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from virtual_machine.job import Job, default_job_path, load_job, with_machine
+from virtual_machine.job import Job, default_job_path, load_job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes import Product, process_for
@@ -31,16 +33,15 @@ def _job(job: JobLike | None) -> Job:
     return load_job(default_job_path() if job is None else job)
 
 
-def _tolerance(job: Job, mesh_tolerance: float | None) -> Job:
-    from virtual_machine.processes.skiving.run import with_mesh_tolerance
-
-    return with_mesh_tolerance(job, None if mesh_tolerance is None else mesh_tolerance * 1e-3)
+def _perform(stage: str, job: JobLike | None, out: str | Path | None, quiet: bool = False, **options: Any) -> Product:
+    j = _job(job)
+    folder = None if out is None else Path(out)
+    return process_for(j).perform(stage, j, folder, reporter=Reporter(quiet=quiet), **options)
 
 
 def setup(job: JobLike | None = None, *, structure: str | None = None) -> Product:
     """The setting sheet of ``job`` (default: the default job); ``structure``: another machine structure."""
-    j = _job(job)
-    return process_for(j).setup(j, structure=structure)
+    return _perform("setup", job, None, structure=structure)
 
 
 def simulate(
@@ -56,11 +57,17 @@ def simulate(
 ) -> Product:
     """The machine runs through the job without cutting (``duration`` [s] of machine time at most), the [machine]
     keys given here replacing the job's; writes the motion into ``out``."""
-    j = with_machine(
-        _job(job), structure=structure, synchronization=synchronization, adaptive_correction=adaptive_correction
+    return _perform(
+        "simulate",
+        job,
+        out,
+        quiet,
+        duration=duration,
+        rrd=None if rrd is None else Path(rrd),
+        structure=structure,
+        synchronization=synchronization,
+        adaptive_correction=adaptive_correction,
     )
-    rec = Path(rrd) if rrd is not None else None
-    return process_for(j).simulate(j, Path(out), duration=duration, rrd=rec, reporter=Reporter(quiet=quiet))
 
 
 def cut(
@@ -71,15 +78,22 @@ def cut(
     workers: int | None = None,
     trajectory: str | Path | None = None,
     mesh_tolerance: float | None = None,
-    removal: str = "dexel",
+    removal: str | None = None,
     quiet: bool = False,
 ) -> Product:
     """The ideal machine (or the simulated motion in ``trajectory``, a `simulate` trajectory.npz) cuts the
-    workpiece; it is measured and written into ``out``. ``mesh_tolerance`` [um]: gear.stl's sweep error."""
-    j = _tolerance(_job(job), mesh_tolerance)
-    path = Path(trajectory) if trajectory is not None else None
-    return process_for(j).cut(
-        j, Path(out), edge=edge, workers=workers, trajectory=path, removal=removal, reporter=Reporter(quiet=quiet)
+    workpiece; it is measured and written into ``out``. ``mesh_tolerance`` [um]: gear.stl's sweep error;
+    ``removal``: "dexel" (default) or "manifold"."""
+    return _perform(
+        "cut",
+        job,
+        out,
+        quiet,
+        edge=edge,
+        workers=workers,
+        trajectory=None if trajectory is None else Path(trajectory),
+        mesh_tolerance=mesh_tolerance,
+        removal=removal,
     )
 
 
@@ -90,14 +104,13 @@ def run(
     rrd: str | Path | None = None,
     workers: int | None = None,
     mesh_tolerance: float | None = None,
-    removal: str = "dexel",
+    removal: str | None = None,
     quiet: bool = False,
 ) -> Product:
     """The simulated machine cuts the workpiece under its cutting forces; measured, the report (and with ``rrd``
     the Rerun recording) written into ``out``. ``result.measurement`` is measurement.json's document."""
-    j = _tolerance(_job(job), mesh_tolerance)
-    rec = Path(rrd) if rrd is not None else None
-    return process_for(j).run(j, Path(out), rrd=rec, workers=workers, removal=removal, reporter=Reporter(quiet=quiet))
+    rec = None if rrd is None else Path(rrd)
+    return _perform("run", job, out, quiet, rrd=rec, workers=workers, mesh_tolerance=mesh_tolerance, removal=removal)
 
 
 def measure(mesh: str | Path, job: str | Path | None = None, out: str | Path | None = None) -> dict[str, Any]:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -13,12 +14,14 @@ os.environ.setdefault("MUJOCO_GL", "disable")
 
 import click
 
-from cutting.errors import InputError, Problem
-from virtual_machine.job import STRUCTURES, default_job_path, load_job, with_machine
+from cutting.errors import InputError, Problem, SkiveError, UnmeasurableGearError
+from virtual_machine.job import STRUCTURES, default_job_path, load_job
+from virtual_machine.job.kinds import GRADED
 from virtual_machine.output.formatting import format_measurement
 from virtual_machine.output.json_file import json_text
 from virtual_machine.output.progress import Progress, Reporter
 from virtual_machine.processes import process_for
+from virtual_machine.processes.options import REMOVALS
 
 MESH_TOLERANCE_HELP = (
     "Sweep error of the finishing pass's manifold solid [um] (default: the job's process.sweep_error), and the most "
@@ -31,17 +34,37 @@ REMOVAL_HELP = (
     "How the cut removes material: 'dexel' (the blank as lines cut exactly passage by passage, the solid made once "
     "at the end) or 'manifold' (the reference: every passage's swept tube subtracted by manifold3d)."
 )
-REMOVALS = ("dexel", "manifold")
-#: the job kinds whose workpiece is a gear with an ISO 1328-1 class (`skive check`)
-GRADED = ("gear", "form_milling")
 
 
-def _fail(exc: Exception) -> None:
+def _fail(exc: BaseException) -> None:
     click.echo(f"skive: {exc}", err=True)
     sys.exit(2)
 
 
-@click.group(help="skive: a physics-based virtual gear-skiving machine.")
+def _terminate(signum: int, _frame) -> None:
+    """SIGTERM ends the command as Ctrl-C does: cleanup blocks run (a stage's staging folder is removed)."""
+    raise SystemExit(128 + signum)
+
+
+class _Commands(click.Group):
+    """The commands, each of whose errors is reported here once: skive's own (bad input, a job beyond its machine, a
+    run that failed: exit 2, the message says what to change) and the file system's."""
+
+    def invoke(self, ctx: click.Context):
+        signal.signal(signal.SIGTERM, _terminate)
+        try:
+            return super().invoke(ctx)
+        except (SkiveError, OSError) as exc:
+            _fail(exc)
+
+
+def _perform(stage: str, path: Path, out: Path | None = None, quiet: bool = False, **options):
+    """``stage`` of the job at ``path`` through its process, with the options the user gave (None: not given)."""
+    job = load_job(path)
+    return process_for(job).perform(stage, job, out, reporter=Reporter(quiet=quiet), **options)
+
+
+@click.group(cls=_Commands, help="skive: a physics-based virtual gear-skiving machine.")
 def main() -> None:
     pass
 
@@ -51,12 +74,7 @@ def main() -> None:
 @click.option("--structure", type=click.Choice(STRUCTURES), help="Machine structure (default: the job's).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
 def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
-    path = job or default_job_path()
-    try:
-        j = load_job(path)
-        sheet = process_for(j).setup(j, structure=structure)
-    except (InputError, ValueError) as exc:
-        _fail(exc)
+    sheet = _perform("setup", job or default_job_path(), structure=structure)
     click.echo(sheet.json() if as_json else sheet.text)
 
 
@@ -68,10 +86,7 @@ def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
 def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) -> None:
     from virtual_machine import api
 
-    try:
-        doc = api.measure(mesh, job_path, out)
-    except (InputError, ValueError, RuntimeError) as exc:
-        _fail(exc)
+    doc = api.measure(mesh, job_path, out)
     if as_json:
         click.echo(json_text(doc))
     else:
@@ -91,7 +106,7 @@ def measure(mesh: Path, job_path: Path | None, as_json: bool, out: Path | None) 
     help="Cut along a simulated pose trajectory (trajectory.npz of `skive simulate`) instead of the ideal motion.",
 )
 @click.option("--mesh-tolerance", type=click.FloatRange(min=0.0, min_open=True), metavar="UM", help=MESH_TOLERANCE_HELP)
-@click.option("--removal", type=click.Choice(REMOVALS), default="dexel", show_default=True, help=REMOVAL_HELP)
+@click.option("--removal", type=click.Choice(REMOVALS), help=REMOVAL_HELP)
 def cut(
     job: Path | None,
     out: Path,
@@ -99,18 +114,18 @@ def cut(
     workers: int | None,
     trajectory: Path | None,
     mesh_tolerance: float | None,
-    removal: str,
+    removal: str | None,
 ) -> None:
-    from virtual_machine.processes.skiving.run import with_mesh_tolerance
-
-    path = job or default_job_path()
-    try:
-        j = with_mesh_tolerance(load_job(path), None if mesh_tolerance is None else mesh_tolerance * 1e-3)
-        made = process_for(j).cut(
-            j, out, edge=edge, workers=workers, trajectory=trajectory, removal=removal, reporter=Reporter()
-        )
-    except (InputError, ValueError, OSError) as exc:
-        _fail(exc)
+    made = _perform(
+        "cut",
+        job or default_job_path(),
+        out,
+        edge=edge,
+        workers=workers,
+        trajectory=trajectory,
+        removal=removal,
+        mesh_tolerance=mesh_tolerance,
+    )
     click.echo(made.text)
 
 
@@ -120,21 +135,17 @@ def cut(
 @click.option("--rrd", type=click.Path(dir_okay=False, path_type=Path), help="Also write the Rerun recording here.")
 @click.option("--workers", type=click.IntRange(1, 64), help="Removal processes (default: one per core, at most 8).")
 @click.option("--mesh-tolerance", type=click.FloatRange(min=0.0, min_open=True), metavar="UM", help=MESH_TOLERANCE_HELP)
-@click.option("--removal", type=click.Choice(REMOVALS), default="dexel", show_default=True, help=REMOVAL_HELP)
+@click.option("--removal", type=click.Choice(REMOVALS), help=REMOVAL_HELP)
 def run(
-    job: Path | None, out: Path, rrd: Path | None, workers: int | None, mesh_tolerance: float | None, removal: str
+    job: Path | None,
+    out: Path,
+    rrd: Path | None,
+    workers: int | None,
+    mesh_tolerance: float | None,
+    removal: str | None,
 ) -> None:
-    from virtual_machine.processes.skiving.run import UnmeasurableGearError, with_mesh_tolerance
-    from virtual_machine.runtime.integrator import SimulationDivergedError
-    from virtual_machine.runtime.machine_run import LostSynchronismError
-
-    path = job or default_job_path()
-    try:
-        j = with_mesh_tolerance(load_job(path), None if mesh_tolerance is None else mesh_tolerance * 1e-3)
-        made = process_for(j).run(j, out, rrd=rrd, workers=workers, removal=removal, reporter=Reporter())
-    except (InputError, ValueError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError) as exc:
-        _fail(exc)
-    click.echo(made.text)
+    options = {"rrd": rrd, "workers": workers, "mesh_tolerance": mesh_tolerance, "removal": removal}
+    click.echo(_perform("run", job or default_job_path(), out, **options).text)
 
 
 @main.command(
@@ -162,16 +173,13 @@ def study(
     from virtual_machine.studies.runner import finished
     from virtual_machine.studies.spec import load_study
 
-    try:  # every check before any case runs
-        spec = load_study(study_file)
-        store = CaseCache(spec.cache) if spec.cache is not None else None
-        # the cases to run now: not finished before, and not in the study's case store (those are reused)
-        todo = sum(
-            finished(out, c, retry_failed) is None and (store is None or store.get(c.job_text) is None)
-            for c in cases(spec)
-        )
-    except (InputError, ValueError) as exc:
-        _fail(exc)
+    # every check before any case runs
+    spec = load_study(study_file)
+    store = CaseCache(spec.cache) if spec.cache is not None else None
+    # the cases to run now: not finished before, and not in the study's case store (those are reused)
+    todo = sum(
+        finished(out, c, retry_failed) is None and (store is None or store.get(c.job_text) is None) for c in cases(spec)
+    )
     bar = Progress("study", max(todo, 1), "cases", step=1 / todo if 0 < todo <= 100 else 0.01, value_format="{:.0f}")
 
     def progress(done: int, failed: int, total: int, left: float | None) -> None:
@@ -190,10 +198,8 @@ def study(
             progress=progress,
             retry_failed=retry_failed,
         )
-    except (InputError, ValueError, OSError) as exc:
+    finally:
         bar.close()
-        _fail(exc)
-    bar.close()
     click.echo(format_study(outcome, out))
 
 
@@ -230,22 +236,17 @@ def format_study(outcome, out: Path) -> str:
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
 def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
     from virtual_machine.output.check import class_verdict, format_verdict
-    from virtual_machine.processes.skiving.run import UnmeasurableGearError
-    from virtual_machine.runtime.integrator import SimulationDivergedError
-    from virtual_machine.runtime.machine_run import LostSynchronismError
 
+    j = load_job(job)
+    if j.kind not in GRADED:
+        raise InputError(
+            Problem("job", j.kind, "skive check grades gears by ISO 1328-1", "use `skive run` for this job")
+        )
     try:
-        j = load_job(job)
-        if j.kind not in GRADED:
-            raise InputError(
-                Problem("job", j.kind, "skive check grades gears by ISO 1328-1", "use `skive run` for this job")
-            )
-        doc = process_for(j).run(j, out, reporter=Reporter(quiet=True)).data
+        doc = process_for(j).perform("run", j, out, reporter=Reporter(quiet=True)).data
     except UnmeasurableGearError as exc:  # a gear that cannot be measured fails any class
         click.echo(f"FAIL {job}: {exc}", err=True)
         sys.exit(1)
-    except (InputError, ValueError, SimulationDivergedError, LostSynchronismError) as exc:
-        _fail(exc)
     verdict = class_verdict(doc, j.gear, max_class)
     if as_json:
         click.echo(json.dumps({"job": str(job), **verdict}, indent=2))
@@ -278,17 +279,9 @@ def simulate(
     correction: bool | None,
     rrd: Path | None,
 ) -> None:
-    from virtual_machine.runtime.integrator import SimulationDivergedError
-    from virtual_machine.runtime.machine_run import LostSynchronismError
-
-    path = job or default_job_path()
     overrides = {"structure": structure, "synchronization": synchronization, "adaptive_correction": correction}
-    try:
-        j = with_machine(load_job(path), **overrides)
-        reporter = Reporter(quiet=as_json)  # stdout carries the JSON: no progress on stderr either
-        made = process_for(j).simulate(j, out, duration=duration, rrd=rrd, reporter=reporter)
-    except (InputError, ValueError, SimulationDivergedError, LostSynchronismError, NotImplementedError) as exc:
-        _fail(exc)
+    # with --json stdout carries the JSON: no progress on stderr either
+    made = _perform("simulate", job or default_job_path(), out, as_json, duration=duration, rrd=rrd, **overrides)
     click.echo(made.json() if as_json else made.text)
 
 

@@ -43,6 +43,7 @@ import math
 
 import numpy as np
 
+from cutting.errors import InputError, Problem
 from cutting.face_contour.slots import FaceCoupling, held_speed_factor, work_offset, workpiece_angle
 
 from .pulses import FrequencyDivider, RateMultiplier, ReferenceGenerator, Summator
@@ -90,7 +91,14 @@ class ElectronicGearbox:
         self.mult_e = RateMultiplier(c.eccentric_ratio, 1)
         n_s = round(c.S * 1e-3 / infeed_resolution)
         if n_s < 1:
-            raise ValueError(f"S = {c.S} mm: below the infeed resolution {infeed_resolution * 1e3:g} mm")
+            raise InputError(
+                Problem(
+                    "coupling.S",
+                    c.S,
+                    f"the infeed per head turn is below the gearbox's infeed resolution {infeed_resolution * 1e3:g} mm",
+                    f"give coupling.S >= {infeed_resolution * 1e3:g} mm",
+                )
+            )
         self.ks = RateMultiplier(n_s, p)
         self.feed_per_turn = n_s * infeed_resolution  # m: S as the gearbox realises it
         self.depth_pulses = round(c.depth * 1e-3 / infeed_resolution)

@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from cutting.errors import InputError, Problem
-from virtual_machine.job.head import MODEL_ONLY_MACHINE_KEYS, Job, model_problems
+from virtual_machine.job.head import MODEL_ONLY_MACHINE_KEYS, Job, ModelOnlyMachine, model_problems
 from virtual_machine.job.keys import (
     MATERIAL,
     REQUIRED,
@@ -25,6 +25,7 @@ from virtual_machine.job.keys import (
     one_of,
     parse_sections,
     positive,
+    section_class,
     unknown_sections,
 )
 
@@ -97,10 +98,16 @@ FACE_PROCESS_KEYS: dict[str, Key] = {
 SECTIONS_FACE = {"coupling": COUPLING_KEYS, "process": FACE_PROCESS_KEYS, "machine": MODEL_ONLY_MACHINE_KEYS}
 
 
-@dataclass(frozen=True)
-class FaceContourPayload:
-    """The face coupling to cut."""
+FaceContourProcess = section_class(
+    "FaceContourProcess", FACE_PROCESS_KEYS, "[process] of a face-contour job (FACE_PROCESS_KEYS).", __name__
+)
 
+
+@dataclass(frozen=True)
+class FaceContourJob(Job):
+    """A face-contour job: the face coupling to cut."""
+
+    kind: ClassVar[str] = "face_contour"
     coupling: FaceCoupling
 
 
@@ -110,7 +117,7 @@ def _face_machine():
     return FaceMachineParams()
 
 
-def parse_face_contour_job(data: dict[str, Any], source: str) -> Job:
+def parse_face_contour_job(data: dict[str, Any], source: str) -> FaceContourJob:
     """Validate a face-contour job; the coupling's own checks name their key. Raises :class:`InputError` with every
     problem."""
     problems = unknown_sections(data, SECTIONS_FACE, SECTIONS_FACE)
@@ -132,7 +139,8 @@ def parse_face_contour_job(data: dict[str, Any], source: str) -> Job:
             )
     if problems:
         raise InputError(problems, source)
-    return Job(source, "face_contour", parsed["machine"], parsed["process"], FaceContourPayload(coupling))
+    machine, process = ModelOnlyMachine(**parsed["machine"]), FaceContourProcess(**parsed["process"])
+    return FaceContourJob(source, machine, process, coupling)
 
 
 def _coupling(c: dict[str, Any]) -> FaceCoupling:

@@ -14,14 +14,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from cutting.errors import InputError, Problem
 from cutting.form_milling import PATH_FORMS
 from cutting.gear import Gear, check_gear
 from cutting.modification import Modification, design_problems
 from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, parse_optional_sections
-from virtual_machine.job.head import MODEL_ONLY_MACHINE_KEYS, Job, model_problems
+from virtual_machine.job.head import MODEL_ONLY_MACHINE_KEYS, Job, ModelOnlyMachine, model_problems
 from virtual_machine.job.keys import (
     MATERIAL,
     STL_TOLERANCE,
@@ -30,6 +30,7 @@ from virtual_machine.job.keys import (
     one_of,
     parse_sections,
     positive,
+    section_class,
     unknown_sections,
 )
 
@@ -91,10 +92,17 @@ FORM_PROCESS_KEYS: dict[str, Key] = {
 SECTIONS_FORM = {"gear": GEAR_KEYS, "mill": MILL_KEYS, "process": FORM_PROCESS_KEYS, "machine": MODEL_ONLY_MACHINE_KEYS}
 
 
-@dataclass(frozen=True)
-class FormMillingPayload:
-    """The gear to mill, [mill], the measurement options and the designed topography."""
+FormMillingProcess = section_class(
+    "FormMillingProcess", FORM_PROCESS_KEYS, "[process] of a form-milling job (FORM_PROCESS_KEYS).", __name__
+)
 
+
+@dataclass(frozen=True)
+class FormMillingJob(Job):
+    """A form-milling job (the copying method): the gear to mill, [mill], the measurement options and the designed
+    topography."""
+
+    kind: ClassVar[str] = "form_milling"
     gear: Gear
     mill: dict[str, Any]
     measurement: dict[str, Any]
@@ -107,7 +115,7 @@ def _form_mill_machine():
     return FormMillParams()
 
 
-def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
+def parse_form_milling_job(data: dict[str, Any], source: str) -> FormMillingJob:
     """Validate a form-milling job. Raises :class:`InputError` with every problem."""
     problems: list[Problem] = []
     if "cutter" in data:
@@ -159,8 +167,8 @@ def parse_form_milling_job(data: dict[str, Any], source: str) -> Job:
             problems += design_problems(modification, gear)
     if problems:
         raise InputError(problems, source)
-    payload = FormMillingPayload(gear, mill, measurement, modification)
-    return Job(source, "form_milling", parsed["machine"], parsed["process"], payload)
+    machine, process = ModelOnlyMachine(**parsed["machine"]), FormMillingProcess(**parsed["process"])
+    return FormMillingJob(source, machine, process, gear, mill, measurement, modification)
 
 
 def _mill_type_problems(mill: dict[str, Any], process: dict[str, Any], raw_process: Any) -> list[Problem]:

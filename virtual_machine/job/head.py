@@ -1,10 +1,12 @@
-"""What every job has: its source, its kind, [machine] and [process], and the kind's payload.
+"""What every job has: its source, its kind, [machine] and [process]; each kind's :class:`Job` subclass adds its own
+sections.
 
 [machine] is the machine that makes the part: its kinematic structure and synchronisation (seeds 000, 001), the
 fixed ratios of its chains, its pulse generators and encoders, its change gears, its size and [machine.model], the
 physical parameters of its MuJoCo model overriding those of its size (SI units, machine_models/parameters.py).
 A form-milling or face-contour job's [machine] only overrides the model (:data:`MODEL_ONLY_MACHINE_KEYS`).
-Units: mm, rpm, Hz. [process] is the kind's own (its module declares it); :func:`read_toml` reads a job file.
+Units: mm, rpm, Hz. [process] is the kind's own (its module declares it); each is parsed once into a typed section
+(:func:`virtual_machine.job.keys.section_class`). :func:`read_toml` reads a job file.
 """
 
 from __future__ import annotations
@@ -13,21 +15,11 @@ import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, ClassVar
 
 from cutting.errors import InputError, Problem
-from cutting.gear import Gear
-from cutting.modification import Modification
-from cutting.skiving.setup import SkivingSetup
 from machine_models.sizes import SIZE_NAMES
-from virtual_machine.job.keys import Key, at_least, one_of, positive
-
-if TYPE_CHECKING:
-    from virtual_machine.job.face_contour import FaceContourPayload
-    from virtual_machine.job.form_milling import FormMillingPayload
-    from virtual_machine.job.skiving import SkivingPayload
-    from virtual_machine.job.thread import ThreadPayload
-    from virtual_machine.job.turning import TurningPayload
+from virtual_machine.job.keys import Key, at_least, one_of, positive, section_class
 
 STRUCTURES = ("mechanical", "hydraulic-differential", "hydraulic-shaft", "mechatronic")
 SYNCHRONIZATIONS = ("equal-coordinates", "master-slave")
@@ -103,12 +95,9 @@ MODEL_ONLY_MACHINE_KEYS: dict[str, Key] = {"model": MACHINE_KEYS["model"]}
 C2_DEFAULT = {"mechanical": 1 / 24, "hydraulic-differential": 1 / 24, "hydraulic-shaft": 1 / 24, "mechatronic": 1.0}
 
 
-def machine_constants(machine: dict[str, Any], structure: str) -> dict[str, Any]:
-    """The [machine] values with the structure-dependent defaults resolved for ``structure``."""
-    out = dict(machine)
-    if out.get("c2") is None:
-        out["c2"] = C2_DEFAULT.get(structure, 1.0)
-    return out
+def machine_constants(machine: Any, structure: str) -> Any:
+    """[machine] with the structure-dependent defaults resolved for ``structure``."""
+    return replace(machine, c2=C2_DEFAULT.get(structure, 1.0)) if machine.c2 is None else machine
 
 
 def flatten_model(model: dict[str, Any] | None) -> dict[str, Any]:
@@ -141,88 +130,44 @@ def model_problems(model: dict[str, Any] | None, machine: Callable[[], Any]) -> 
         try:
             override(base, {key: value})
             good[key] = value
-        except (KeyError, TypeError) as exc:
+        except KeyError as exc:
             out.append(Problem(f"machine.model.{key}", value, str(exc.args[0]), f"valid parameters: {names}"))
+        except TypeError as exc:
+            out.append(Problem(f"machine.model.{key}", value, str(exc), "see the parameter table in docs/machines.md"))
     params = override(base, good)
     return out + [
         Problem("machine.model", good, p, "see the parameter table in docs/machines.md") for p in params.problems()
     ]
 
 
+#: [machine] of the machines set by their structure (skiving, the lathe of seed 001): typed values
+MachineSection = section_class(
+    "MachineSection",
+    MACHINE_KEYS,
+    "[machine] of a skiving, thread or turning job: its structure and synchronisation, the fixed ratios of its chains, "
+    "its pulse generators and encoders, its change gears, its size and [machine.model] (see MACHINE_KEYS).",
+    __name__,
+)
+#: [machine] of the machines set by their model alone (form milling, face contours)
+ModelOnlyMachine = section_class(
+    "ModelOnlyMachine",
+    MODEL_ONLY_MACHINE_KEYS,
+    "[machine] of a form-milling or face-contour job: [machine.model] only.",
+    __name__,
+)
+
+
 @dataclass(frozen=True)
 class Job:
-    """A parsed, validated job: the head every job has and the ``payload`` of its ``kind`` ("gear" (skiving),
-    "thread", "form_milling" (the copying method), "face_contour" or "turning"; see virtual_machine.job.kinds).
-
-    The payload's sections read as the job's own (``job.gear``, ``job.thread``, ...); None where the kind has none.
-    """
+    """A parsed, validated job: its source, its [machine] and [process] as typed sections, and, in the subclass of
+    its ``kind`` (one module per kind: :mod:`.skiving`, :mod:`.thread`, :mod:`.form_milling`, :mod:`.face_contour`,
+    :mod:`.turning`), the sections only that kind has (a thread job has no ``gear``)."""
 
     source: str
-    kind: str
-    machine: dict[str, Any]
-    process: dict[str, Any]
-    payload: SkivingPayload | ThreadPayload | FormMillingPayload | FaceContourPayload | TurningPayload
-
-    @property
-    def gear(self) -> Gear | None:
-        return getattr(self.payload, "gear", None)
-
-    @property
-    def cutter(self) -> Gear | None:
-        return getattr(self.payload, "cutter", None)
-
-    @property
-    def cutter_options(self) -> dict[str, Any] | None:
-        return getattr(self.payload, "cutter_options", None)
-
-    @property
-    def thread(self) -> dict[str, Any] | None:
-        return getattr(self.payload, "thread", None)
-
-    @property
-    def measurement(self) -> dict[str, Any] | None:
-        return getattr(self.payload, "measurement", None)
-
-    @property
-    def modification(self) -> Modification | None:
-        """The designed flank topography ([modification])."""
-        return getattr(self.payload, "modification", None)
-
-    @property
-    def mill(self) -> dict[str, Any] | None:
-        """The profiled disc mill ([mill]) of a form-milling job."""
-        return getattr(self.payload, "mill", None)
-
-    @property
-    def turning(self) -> dict[str, Any] | None:
-        """[turning] of a turning job (its ``thread`` the lathe's feed as a lead)."""
-        return getattr(self.payload, "turning", None)
-
-    @property
-    def vibration(self) -> Any:
-        """The feed vibration (cutting.turning.vibration.FeedVibration) of a turning job, or None."""
-        return getattr(self.payload, "vibration", None)
-
-    @property
-    def coupling(self) -> Any:
-        """The face coupling (cutting.face_contour.slots.FaceCoupling) of a face-contour job."""
-        return getattr(self.payload, "coupling", None)
-
-    @property
-    def skiving(self) -> SkivingSetup:
-        if self.gear is None or self.cutter is None:
-            raise ValueError(f"{self.source} is a {self.kind.replace('_', '-')} job; it has no skiving setup")
-        p = self.process
-        return SkivingSetup(
-            self.gear,
-            self.cutter,
-            p["tool_speed"],
-            p["axial_feed"],
-            tuple(p["passes"]),
-            p["feed_direction"],
-            p["clearance"],
-            holder_diameter=(self.cutter_options or {}).get("holder_diameter"),
-        )
+    machine: Any
+    process: Any
+    #: the job kind ("skiving", "thread", "form_milling", "face_contour" or "turning"; virtual_machine.job.kinds)
+    kind: ClassVar[str] = ""
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
@@ -234,8 +179,23 @@ def read_toml(path: str | Path) -> dict[str, Any]:
                 "job", str(p), "no such file", "give the path of a .toml job file, e.g. assets/jobs/spur_external.toml"
             )
         )
+    raw = p.read_bytes()
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        raise InputError(
+            Problem(
+                "job",
+                str(p),
+                f"not UTF-8 text: byte 0x{raw[exc.start]:02x} at line {line}, column {column} is not valid UTF-8",
+                "save the file as UTF-8 (a TOML file must be UTF-8), or remove that character",
+            ),
+            str(p),
+        ) from exc
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(
             Problem("job", str(p), f"not valid TOML: {exc}", "fix the syntax at the line shown"), str(p)
@@ -246,7 +206,7 @@ def read_toml(path: str | Path) -> dict[str, Any]:
 def with_machine(job: Job, **overrides: Any) -> Job:
     """The job with [machine] keys replaced (``None``: kept as the job says), e.g. another structure."""
     given = {k: v for k, v in overrides.items() if v is not None}
-    return replace(job, machine={**job.machine, **given}) if given else job
+    return replace(job, machine=replace(job.machine, **given)) if given else job
 
 
 def default_job_path() -> Path:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, make_dataclass
 from typing import Any
 
 from cutting.errors import Problem
@@ -59,14 +59,23 @@ def _passes(v: list) -> tuple[str, str] | None:
         return ("needs at least one pass", "e.g. [2.0, 1.5, 0.8, 0.2]; the last is the finishing pass")
     if not all(isinstance(p, int | float) and not isinstance(p, bool) for p in v):
         return ("must be a list of numbers [mm]", "e.g. [2.0, 1.5, 0.8, 0.2]")
-    if any(p <= 0 for p in v):
-        return ("every radial infeed increment must be > 0 mm", "drop zero or negative increments")
+    if v[0] <= 0 or any(p < 0 for p in v):
+        return (
+            "the first radial infeed increment must be > 0 mm and none negative",
+            "drop negative increments; a 0 after the first is a spring pass at the same depth, e.g. [2.0, 1.5, 0.0]",
+        )
     return None
 
 
 # [process] keys several kinds share
-PASSES = Key(list, REQUIRED, "mm", "radial infeed increments from first touch; the last is the finishing pass", _passes)
-MATERIAL = Key(str, "16MnCr5", "", "workpiece material (cutting forces, later issues)")
+PASSES = Key(
+    list,
+    REQUIRED,
+    "mm",
+    "radial infeed increments from first touch; the last is the finishing pass (0: a spring pass at the same depth)",
+    _passes,
+)
+MATERIAL = Key(str, "16MnCr5", "", "workpiece material: its cutting-force coefficients (assets/materials.toml)")
 CUTTING_SPEED = Key(float, REQUIRED, "m/min", "cutting speed at the thread diameter", positive)
 STL_TOLERANCE = Key(
     float, 0.010, "mm", "how far simplifying gear.stl may move its surface (0: the solid as cut)", at_least(0.0)
@@ -74,7 +83,14 @@ STL_TOLERANCE = Key(
 
 
 def _type_name(kind: type | tuple[type, ...]) -> str:
-    names = {int: "an integer", float: "a number", bool: "true or false", str: "a string", list: "a list"}
+    names = {
+        int: "an integer",
+        float: "a number",
+        bool: "true or false",
+        str: "a string",
+        list: "a list",
+        dict: "a table",
+    }
     return names.get(kind, str(kind))
 
 
@@ -124,7 +140,10 @@ def parse_section(name: str, table: Any, keys: dict[str, Key], problems: list[Pr
             continue
         value, err = _coerce(table[k], key)
         if err:
-            problems.append(Problem(f"{name}.{k}", table[k], err, f"{key.doc} [{key.unit or '-'}]"))
+            hint = f"{key.doc} [{key.unit or '-'}]"
+            if key.kind is dict:  # a table written as a plain value
+                hint = f"write it as a table, [{name}.{k}] followed by key = value lines: {key.doc}"
+            problems.append(Problem(f"{name}.{k}", table[k], err, hint))
             continue
         if key.check is not None:
             bad = key.check(value)
@@ -147,3 +166,24 @@ def unknown_sections(data: dict[str, Any], allowed: Iterable[str], listed: Itera
     allowed, listed = set(allowed), list(listed)
     hint = "valid sections: " + ", ".join(f"[{s}]" for s in listed)
     return [Problem(name, "[section]", "unknown section", hint) for name in data if name not in allowed]
+
+
+def section_class(name: str, keys: dict[str, Key], doc: str, module: str, extra: dict[str, type] | None = None) -> type:
+    """A section's typed values: a frozen dataclass named ``name`` with one field per key of ``keys`` (its declared
+    type, or None where the key has no value), and the fields ``extra`` the parser derives; ``module`` is where the
+    class is bound to ``name`` (it pickles by that name). The key tables stay the one declaration of every key; the
+    parsed job reads ``job.process.tool_speed``, not a string lookup."""
+    fields = [(k, _annotation(key.kind) | None, field(default=None, metadata={"key": key})) for k, key in keys.items()]
+    fields += [(k, kind | None, field(default=None)) for k, kind in (extra or {}).items()]
+    cls = make_dataclass(name, fields, frozen=True, namespace={"__doc__": doc})
+    cls.__module__ = module
+    return cls
+
+
+def _annotation(kind: type | tuple[type, ...]) -> Any:
+    if isinstance(kind, tuple):
+        out = kind[0]
+        for k in kind[1:]:
+            out = out | k
+        return out
+    return kind

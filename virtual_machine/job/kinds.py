@@ -30,10 +30,12 @@ KINDS: dict[str, JobKind] = {
     "turning": JobKind("turning", turning.parse_turning_job),
     "face_contour": JobKind("coupling", face_contour.parse_face_contour_job),
     "thread": JobKind("thread", thread.parse_thread_job),
-    "gear": JobKind(None, skiving.parse_skiving_job),
+    "skiving": JobKind(None, skiving.parse_skiving_job),
 }
+#: the kinds whose workpiece is a gear with an ISO 1328-1 class (`skive check`, the studies' error budget)
+GRADED = ("skiving", "form_milling")
 #: the kind of a job that none of the sections of KINDS marks
-UNMARKED_KIND = "gear"
+UNMARKED_KIND = "skiving"
 
 
 def job_kind(data: dict[str, Any]) -> str:

@@ -1,5 +1,5 @@
-"""A skiving job (kind "gear"): [gear], [cutter], [process], [machine], and optionally [measurement] and
-[modification] (virtual_machine.job.gear_sections).
+"""A skiving job (kind "skiving", marked by no other kind's section): [gear], [cutter], [process], [machine], and
+optionally [measurement] and [modification] (virtual_machine.job.gear_sections).
 
 [cutter] is the skiving cutter (tooth count z0, helix angle beta0 in degrees, right hand positive; its profile
 shift, tip diameter, body width and holder diameter in mm; the edge made by the envelope method or an involute).
@@ -12,14 +12,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from functools import cached_property
+from typing import Any, ClassVar
 
 from cutting.errors import InputError, Problem
 from cutting.gear import Gear, check_gear
 from cutting.modification import Modification, design_problems
-from cutting.skiving.setup import check_setup
+from cutting.skiving.kinematics import SkivingSetup, check_setup
 from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, helix, parse_optional_sections
-from virtual_machine.job.head import MACHINE_KEYS, Job, model_problems
+from virtual_machine.job.head import MACHINE_KEYS, Job, MachineSection, model_problems
 from virtual_machine.job.keys import (
     MATERIAL,
     PASSES,
@@ -30,6 +31,7 @@ from virtual_machine.job.keys import (
     one_of,
     parse_sections,
     positive,
+    section_class,
     unknown_sections,
 )
 
@@ -76,16 +78,44 @@ PROCESS_KEYS: dict[str, Key] = {
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
 
 
-@dataclass(frozen=True)
-class SkivingPayload:
-    """The gear to skive, the cutter (a Gear: z0, beta0, x0, da0, its body width as face width), the cutter's
-    ``edge`` and ``holder_diameter`` (cutter_options), the measurement options and the designed topography."""
+SkivingProcess = section_class("SkivingProcess", PROCESS_KEYS, "[process] of a skiving job (PROCESS_KEYS).", __name__)
 
+
+@dataclass(frozen=True)
+class CutterOptions:
+    """What [cutter] says beyond the cutter's gear data: the ``edge`` ("conjugate" or "involute") and the
+    ``holder_diameter`` [mm] (None: half the cutter's reference diameter)."""
+
+    edge: str = "conjugate"
+    holder_diameter: float | None = None
+
+
+@dataclass(frozen=True)
+class SkivingJob(Job):
+    """A skiving job: the gear to skive, the cutter (a Gear: z0, beta0, x0, da0, its body width as face width), the
+    cutter's options, the measurement options and the designed topography; ``skiving`` the crossed-axes setup they
+    make with [process] (made once)."""
+
+    kind: ClassVar[str] = "skiving"
     gear: Gear
     cutter: Gear
-    cutter_options: dict[str, Any]
+    cutter_options: CutterOptions
     measurement: dict[str, Any]
     modification: Modification | None = None
+
+    @cached_property
+    def skiving(self) -> SkivingSetup:
+        p = self.process
+        return SkivingSetup(
+            self.gear,
+            self.cutter,
+            p.tool_speed,
+            p.axial_feed,
+            tuple(p.passes),
+            p.feed_direction,
+            p.clearance,
+            holder_diameter=self.cutter_options.holder_diameter,
+        )
 
 
 def _skiving_machine():
@@ -94,7 +124,7 @@ def _skiving_machine():
     return SkivingMachineParams()
 
 
-def parse_skiving_job(data: dict[str, Any], source: str) -> Job:
+def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
     """Validate a skiving job. Raises :class:`InputError` with every problem."""
     problems = unknown_sections(data, (*SECTIONS_GEAR, *OPTIONAL_SECTIONS), SECTIONS_GEAR)
     parsed = parse_sections(data, SECTIONS_GEAR, problems)
@@ -134,13 +164,15 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> Job:
         problems += design_problems(modification, gear)
     if problems:
         raise InputError(problems, source)
-    cutter_options = {"edge": c["edge"], "holder_diameter": c["holder_diameter"]}
-    job = Job(
+    job = SkivingJob(
         source,
-        "gear",
-        machine,
-        parsed["process"],
-        SkivingPayload(gear, cutter, cutter_options, measurement, modification),
+        MachineSection(**machine),
+        SkivingProcess(**parsed["process"]),
+        gear,
+        cutter,
+        CutterOptions(c["edge"], c["holder_diameter"]),
+        measurement,
+        modification,
     )
     problems += check_setup(job.skiving)
     if problems:
@@ -148,10 +180,10 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> Job:
     return job
 
 
-def dexel_spacing(job: Job):
+def dexel_spacing(job: SkivingJob):
     """The dexel lines of a skiving job: the process's spacings, else the gear's defaults
     (cutting.skiving.dexel_lines)."""
     from cutting.skiving.dexel_lines import DexelSpacing
 
     p = job.process
-    return DexelSpacing.for_gear(job.gear, p["axial_feed"], p.get("dexel_profile_spacing"), p.get("dexel_face_spacing"))
+    return DexelSpacing.for_gear(job.gear, p.axial_feed, p.dexel_profile_spacing, p.dexel_face_spacing)

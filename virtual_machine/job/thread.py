@@ -9,11 +9,11 @@ Its [machine] is the lathe's (head.MACHINE_KEYS; the lathe comes in one size). L
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job.gear_sections import OPTIONAL_SECTIONS, parse_optional_sections
-from virtual_machine.job.head import MACHINE_KEYS, Job, model_problems
+from virtual_machine.job.head import MACHINE_KEYS, Job, MachineSection, model_problems
 from virtual_machine.job.keys import (
     CUTTING_SPEED,
     MATERIAL,
@@ -23,6 +23,7 @@ from virtual_machine.job.keys import (
     one_of,
     parse_sections,
     positive,
+    section_class,
     unknown_sections,
 )
 
@@ -38,10 +39,14 @@ THREAD_PROCESS_KEYS: dict[str, Key] = {"cutting_speed": CUTTING_SPEED, "passes":
 SECTIONS_THREAD = {"thread": THREAD_KEYS, "process": THREAD_PROCESS_KEYS, "machine": MACHINE_KEYS}
 
 
-@dataclass(frozen=True)
-class ThreadPayload:
-    """[thread]: lead, hand, diameter, length."""
+ThreadProcess = section_class("ThreadProcess", THREAD_PROCESS_KEYS, "[process] of a thread job.", __name__)
 
+
+@dataclass(frozen=True)
+class ThreadJob(Job):
+    """A thread job: [thread] (lead, hand, diameter, length)."""
+
+    kind: ClassVar[str] = "thread"
     thread: dict[str, Any]
 
 
@@ -66,7 +71,7 @@ def lathe_has_one_size(machine: dict[str, Any]) -> list[Problem]:
     ]
 
 
-def parse_thread_job(data: dict[str, Any], source: str) -> Job:
+def parse_thread_job(data: dict[str, Any], source: str) -> ThreadJob:
     """Validate a thread job. Raises :class:`InputError` with every problem."""
     if "gear" in data:
         raise InputError(
@@ -86,4 +91,4 @@ def parse_thread_job(data: dict[str, Any], source: str) -> Job:
     problems += lathe_has_one_size(machine)
     if problems:
         raise InputError(problems, source)
-    return Job(source, "thread", machine, parsed["process"], ThreadPayload(parsed["thread"]))
+    return ThreadJob(source, MachineSection(**machine), ThreadProcess(**parsed["process"]), parsed["thread"])

@@ -12,10 +12,10 @@ needs its mechatronic master-slave chain.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from cutting.errors import InputError, Problem
-from virtual_machine.job.head import MACHINE_KEYS, Job, model_problems
+from virtual_machine.job.head import MACHINE_KEYS, Job, MachineSection, model_problems
 from virtual_machine.job.keys import (
     CUTTING_SPEED,
     MATERIAL,
@@ -26,6 +26,7 @@ from virtual_machine.job.keys import (
     parse_section,
     parse_sections,
     positive,
+    section_class,
     unknown_sections,
 )
 from virtual_machine.job.thread import lathe_has_one_size, lathe_machine
@@ -60,17 +61,27 @@ TURNING_PROCESS_KEYS: dict[str, Key] = {
 SECTIONS_TURNING = {"turning": TURNING_KEYS, "process": TURNING_PROCESS_KEYS, "machine": MACHINE_KEYS}
 
 
-@dataclass(frozen=True)
-class TurningPayload:
-    """[turning], the lathe's feed as a thread (lead S0, right hand, the diameter and length) and the feed
-    vibration (None: plain turning)."""
+TurningProcess = section_class(
+    "TurningProcess",
+    TURNING_PROCESS_KEYS,
+    "[process] of a turning job (TURNING_PROCESS_KEYS), with ``passes``: the depth of cut as the lathe's one pass.",
+    __name__,
+    {"passes": list},
+)
 
+
+@dataclass(frozen=True)
+class TurningJob(Job):
+    """A turning job: [turning], the lathe's feed as a thread (lead S0, right hand, the diameter and length) and the
+    feed vibration (None: plain turning)."""
+
+    kind: ClassVar[str] = "turning"
     thread: dict[str, Any]
     turning: dict[str, Any]
     vibration: FeedVibration | None = None
 
 
-def parse_turning_job(data: dict[str, Any], source: str) -> Job:
+def parse_turning_job(data: dict[str, Any], source: str) -> TurningJob:
     """Validate a turning job. Raises :class:`InputError` with every problem."""
     listed = (*SECTIONS_TURNING, "vibration")
     problems = unknown_sections(data, listed, listed)
@@ -111,5 +122,5 @@ def parse_turning_job(data: dict[str, Any], source: str) -> Job:
     if problems:
         raise InputError(problems, source)
     thread = {"lead": t["feed"], "hand": "right", "diameter": t["diameter"], "length": t["length"]}
-    process = {**parsed["process"], "passes": [t["depth"]]}
-    return Job(source, "turning", machine, process, TurningPayload(thread, t, vibration))
+    process = TurningProcess(**parsed["process"], passes=[t["depth"]])
+    return TurningJob(source, MachineSection(**machine), process, thread, t, vibration)

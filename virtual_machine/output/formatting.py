@@ -15,7 +15,7 @@ def format_sheet(sheet: SetupSheet, source: str) -> str:
     """The setting sheet as a setter reads it."""
     lines = [f"SETTING SHEET  {source}", f"structure: {sheet.structure}", ""]
     g = sheet.geometry
-    if sheet.kind == "gear":
+    if sheet.kind == "skiving":
         gear, cut = g["gear"], g["cutter"]
         kind = "internal" if gear["internal"] else "external"
         lines += [

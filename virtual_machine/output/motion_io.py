@@ -1,18 +1,20 @@
 """Files of a simulated run: the motion record, the pose trajectory (the cutting engine's input) and a summary.
 
 ``trajectory.npz`` holds, per feed stroke i, ``pass{i}_t`` [s from the stroke's start], ``pass{i}_rot``
-(n, 3, 3) and ``pass{i}_trans`` (n, 3) [mm]: the cutter frame in the blank frame (cutting/skiving/setup.py
+(n, 3, 3) and ``pass{i}_trans`` (n, 3) [mm]: the cutter frame in the blank frame (cutting/skiving/kinematics.py
 conventions), plus the axis values that produced them (``pass{i}_cutter_angle`` [rad], ``pass{i}_carriage``,
 ``pass{i}_centre_distance`` [mm]). ``motion.npz`` holds the per-tick record (see :class:`MotionRecord`).
 """
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from cutting.errors import InputError, Problem
 from virtual_machine.output.json_file import write_json
 from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory, error_stats
 from virtual_machine.runtime.physics import AXES
@@ -99,17 +101,30 @@ def write_model(xml: str, out: Path, name: str = "machine.xml") -> Path:
 
 
 def load_trajectory(path: Path) -> list[PassTrajectory]:
-    """The pass trajectories of a trajectory.npz; a clear error when the file is not one."""
-    with np.load(path) as z:
-        if "format" not in z or str(z["format"]) != TRAJECTORY_FORMAT:
-            raise ValueError(f"{path}: not a skive pose trajectory (write one with `skive simulate JOB --out DIR`)")
-        return [
-            PassTrajectory(
-                int(i),
-                *(z[f"pass{int(i)}_{n}"] for n in ("t", "rot", "trans", "cutter_angle", "carriage", "centre_distance")),
+    """The pass trajectories of a trajectory.npz; InputError (key ``--trajectory``) when the file is not one."""
+
+    def not_one(why: str) -> InputError:
+        return InputError(
+            Problem(
+                "--trajectory",
+                str(path),
+                f"not a skive pose trajectory: {why}",
+                "give the trajectory.npz that `skive simulate JOB --out DIR` writes (DIR/trajectory.npz)",
             )
-            for i in z["passes"]
-        ]
+        )
+
+    if not zipfile.is_zipfile(path):
+        raise not_one("the file is not an npz archive (a zip of numpy arrays)")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "format" not in z or str(z["format"]) != TRAJECTORY_FORMAT:
+                raise not_one("the archive has no skive trajectory format mark")
+            names = ("t", "rot", "trans", "cutter_angle", "carriage", "centre_distance")
+            return [PassTrajectory(int(i), *(z[f"pass{int(i)}_{n}"] for n in names)) for i in z["passes"]]
+    except InputError:
+        raise
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+        raise not_one(f"{type(exc).__name__}: {exc}") from exc
 
 
 def _chart(rec: MotionRecord, path: Path) -> None:

@@ -37,7 +37,7 @@ from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTraj
 from virtual_machine.runtime.physics import AXES
 
 if TYPE_CHECKING:
-    from cutting.skiving.setup import SkivingSetup
+    from cutting.skiving.kinematics import SkivingSetup
 
 MACHINE, GEAR, SIGNALS, MEASUREMENT = "/machine", "/gear", "/signals", "/measurement"
 BLANK_SITE = "blank_frame"
@@ -72,7 +72,7 @@ def write_recording(
     ----------
     model_xml: the MJCF the run used (``motion.model_xml``), lengths in metres
     motion: the simulation record (4 kHz ticks)
-    setup: the job's :class:`cutting.skiving.setup.SkivingSetup` (its gear colours ``gear_mesh``), or None
+    setup: the job's :class:`cutting.skiving.kinematics.SkivingSetup` (its gear colours ``gear_mesh``), or None
     snapshots: (time [s], vertices (n, 3) mm, triangles (m, 3)) of the blank in the blank frame
     gear_mesh: (vertices mm, triangles) of the finished gear in the blank frame (z = 0 mid face)
     measurement: the dict of :func:`metrology.measure.measure_gear` (or its JSON form)

@@ -1,7 +1,7 @@
-"""The shape every process has: the stages of a job and what each makes.
+"""The shape every process has: the stages of a job, the options each takes, and what each makes.
 
 A process (skiving, thread cutting, form milling, face contours, vibration turning) takes a parsed
-:class:`virtual_machine.job.Job` through four stages, each a method that writes its files into ``out`` and
+:class:`virtual_machine.job.Job` through the stages it has, each a method that writes its files into ``out`` and
 returns a :class:`Product`:
 
 - ``setup``: the setting sheet (no files): what the machine is set to;
@@ -9,22 +9,28 @@ returns a :class:`Product`:
 - ``cut``: the ideal machine cuts the workpiece, which is measured;
 - ``run``: the simulated machine cuts it under its own forces; measured, reported, optionally recorded.
 
-A stage a process does not have raises :class:`cutting.errors.InputError` saying which stage to use instead.
-The CLI (`skive setup|simulate|cut|run`) and the Python API (:mod:`virtual_machine.api`) are thin layers over
-these methods; :data:`virtual_machine.processes.PROCESSES` finds a job's process by its kind.
+``Process.stages`` declares the stages a process has and the options dataclass of each
+(:mod:`virtual_machine.processes.options`). :meth:`Process.perform` is the one entry the CLI, the Python API and
+the studies use: it refuses a stage the process lacks and an option its stage does not take (InputError naming
+it), and writes the stage's files through a staging folder so that ``out`` only ever holds one run's complete
+outputs (:mod:`virtual_machine.output.staging`).
 """
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
+from abc import ABC
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import json_text
 from virtual_machine.output.progress import Reporter
+from virtual_machine.output.staging import StagedOutputs
+from virtual_machine.processes.options import StageOptions, stage_options
+
+STAGES = ("setup", "simulate", "cut", "run")
 
 
 @dataclass
@@ -65,58 +71,80 @@ def written(out: Path, *names: str) -> list[Path]:
 
 
 class Process(ABC):
-    """One process: the job kind it takes and its four stages. Options a stage does not use are ignored."""
+    """One process: the job kind it takes, its stages and their options.
+
+    A subclass sets ``kind``, ``title`` and ``stages`` and implements the stages it lists, each
+    ``stage(job, out, options, reporter) -> Product`` (``setup(job, options)``: no files). ``hints`` says, for a
+    stage it lacks, what to use instead.
+    """
 
     #: the job kind (virtual_machine.job.Job.kind) this process takes
-    kind: str
+    kind: ClassVar[str]
     #: what it makes, in a few words
-    title: str
+    title: ClassVar[str]
+    #: the stages it has and the options dataclass of each
+    stages: ClassVar[dict[str, type[StageOptions]]]
+    #: for a stage it lacks: what to use instead
+    hints: ClassVar[dict[str, str]] = {}
 
-    def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        """The setting sheet. ``structure``: another machine structure than the job's (skiving)."""
-        raise self._no("setup", "the job's kind has no setting sheet")
+    def options(self, stage: str, given: dict[str, Any] | None = None) -> StageOptions:
+        """The stage's options from those ``given`` by name (None: not given); InputError for a stage this process
+        lacks or an option its stage does not take."""
+        if stage not in self.stages:
+            raise self._no(stage)
+        return stage_options(self.kind, self.title, stage, self.stages[stage], given or {})
+
+    def takes(self, stage: str, option: str) -> bool:
+        """Whether this process's ``stage`` takes ``option``."""
+        return stage in self.stages and option in {f.name for f in fields(self.stages[stage])}
+
+    def perform(
+        self, stage: str, job: Job, out: Path | None = None, *, reporter: Reporter | None = None, **given: Any
+    ) -> Product:
+        """Run ``stage`` of ``job`` with the options ``given`` (None: not given), its files written into ``out``
+        (a staging folder beside it until the stage is complete; ``setup`` writes none)."""
+        options = self.options(stage, given)
+        if stage == "setup":
+            return self.setup(job, options)
+        if out is None:
+            raise InputError(Problem("--out", None, f"`{stage}` writes files", "give the folder to write them in"))
+        rrd = getattr(options, "rrd", None)
+        with StagedOutputs(Path(out), rrd) as staging:
+            if rrd is not None:
+                options = replace(options, rrd=staging.rrd_staged)
+            made = getattr(self, stage)(job, staging.folder, options, reporter)
+            data, text, files = staging.publish(made.data, made.text)
+        return Product(made.stage, data, text, files, Path(out))
+
+    def setup(self, job: Job, options: StageOptions | None = None) -> Product:
+        """The setting sheet."""
+        raise self._no("setup")
 
     def simulate(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        duration: float | None = None,
-        rrd: Path | None = None,
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: StageOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
-        """The machine moves through the job (``duration`` [s] of machine time at most); writes the motion."""
-        raise self._no("simulate", "use `skive run`")
+        """The machine moves through the job; writes the motion."""
+        raise self._no("simulate")
 
     def cut(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        edge: str | None = None,
-        workers: int | None = None,
-        trajectory: Path | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: StageOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
-        """The ideal machine (or the motion in ``trajectory``) cuts the workpiece; measured."""
-        raise self._no("cut", "use `skive run`")
+        """The ideal machine (or a recorded motion) cuts the workpiece; measured."""
+        raise self._no("cut")
 
-    @abstractmethod
     def run(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        rrd: Path | None = None,
-        workers: int | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: StageOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
-        """The simulated machine cuts the workpiece under its forces; measured, reported (``rrd``: recorded)."""
+        """The simulated machine cuts the workpiece under its forces; measured, reported."""
+        raise self._no("run")
 
-    def _no(self, stage: str, hint: str) -> InputError:
+    def _no(self, stage: str) -> InputError:
+        hint = self.hints.get(stage, "use one of its stages: " + ", ".join(f"`skive {s}`" for s in self.stages))
         return InputError(Problem("job", self.kind, f"a {self.title} job has no `{stage}` stage", hint))
+
+    def _options(self, stage: str, options: StageOptions | None) -> Any:
+        """The stage's options as given, or its defaults (a stage called directly, without :meth:`perform`)."""
+        return self.stages[stage]() if options is None else options
 
 
 def reporter_or_default(reporter: Reporter | None) -> Reporter:

@@ -7,15 +7,15 @@ from __future__ import annotations
 
 import math
 
-from cutting.errors import InputError, Problem
+from cutting.errors import Problem
 from virtual_machine.job import Job
 from virtual_machine.output.formatting import three_figures
-from virtual_machine.output.limits import beyond_limit
+from virtual_machine.reach.limits import Limit, refuse
 from virtual_machine.setting.machine_layout import workpiece_diameter
 
 
 def check_form_reach(job: Job, params) -> None:
-    """Refuse (InputError) a form-milling job beyond the machine ``params`` (FormMillParams) or whose clearance
+    """Refuse (MachineLimitError) a form-milling job beyond the machine ``params`` (FormMillParams) or whose clearance
     leaves no mill in the space."""
     g, m = job.gear, job.mill
     problems = []
@@ -32,36 +32,33 @@ def check_form_reach(job: Job, params) -> None:
         )
     d = m.get("diameter") or 0.0  # the finger's is fitted to the space (its largest diameter)
     stroke = g.face_width / math.cos(g.helix_angle) + d  # the face and the mill's reach past both ends [mm]
-    checks = (
-        (
+    limits = (
+        Limit(
             "workpiece_diameter_limit",
             workpiece_diameter(g) * 1e-3,
+            params.workpiece_diameter_limit,
+            "m",
             f"the workpiece's {three_figures(workpiece_diameter(g))} mm diameter exceeds what the table takes, "
             f"{three_figures(params.workpiece_diameter_limit * 1e3)} mm",
             "a smaller gear",
-            "m",
         ),
-        (
+        Limit(
             "z_travel",
             stroke * 1e-3,
+            params.z_travel,
+            "m",
             f"a pass's stroke (the face and the mill's reach past its ends) of about {three_figures(stroke)} mm "
             f"exceeds the Z slide's travel {three_figures(params.z_travel * 1e3)} mm",
             "a narrower gear.face_width or a smaller mill",
-            "m",
         ),
-        (
+        Limit(
             "mill_diameter_limit",
             d * 1e-3,
+            params.mill_diameter_limit,
+            "m",
             f"a mill of {three_figures(d)} mm exceeds what the spindle carries, "
             f"{three_figures(params.mill_diameter_limit * 1e3)} mm",
             "a smaller mill.diameter",
-            "m",
         ),
     )
-    problems += [
-        beyond_limit("form-milling machine", key, getattr(params, key), need, unit, what, less)
-        for key, need, what, less, unit in checks
-        if not need <= getattr(params, key)
-    ]
-    if problems:
-        raise InputError(problems, job.source)
+    refuse("form-milling machine", limits, problems, job.source)

@@ -3,14 +3,14 @@ and the table's top speeds and the carriage's travel (machine_models/parameters.
 ``module_limit``, ``tool_speed_limit``, ``work_speed_limit``, ``carriage_travel``; each size has its own,
 machine_models/sizes.py). A machine's data sheet bounds the workpiece and module it takes, and its CNC refuses a
 spindle speed above its limit and a stroke beyond its travel; so does skive, before the run, naming the limit, what
-the job needs, and what would hold it. The motors' torque is the other check (cutting_load.py)."""
+the job needs, and what would hold it. The motors' torque is the other check (:mod:`.skiving_load`)."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from cutting.errors import InputError, Problem
+from cutting.errors import MachineLimitError, Problem
 from machine_models.parameters import RPM, SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from virtual_machine.job import Job, flatten_model
@@ -70,15 +70,16 @@ def machine_reach(job: Job, params: SkivingMachineParams) -> list[Reach]:
     ]
 
 
-def check_machine_reach(job: Job, params: SkivingMachineParams, size: str) -> list[Reach]:
-    """Refuse (InputError) a job that needs more than the machine ``params`` (of size ``size``) can give: a spindle
-    speed above its top speed, a pass's stroke beyond the carriage's travel. Returns the reach when it holds."""
+def check_skiving_reach(job: Job, params: SkivingMachineParams, size: str) -> list[Reach]:
+    """Refuse (MachineLimitError) a job that needs more than the machine ``params`` (of size ``size``) can give: a
+    spindle speed above its top speed, a pass's stroke beyond the carriage's travel. Returns the reach when it
+    holds."""
     reach = machine_reach(job, params)
     bad = [r for r in reach if not r.holds]
     if not bad:
         return reach
-    model = flatten_model(job.machine.get("model"))
-    chosen = "machine.size" if job.machine.get("size") else "the default size for this gear"
+    model = flatten_model(job.machine.model)
+    chosen = "machine.size" if job.machine.size else "the default size for this gear"
     problems = []
     # a larger size that reaches all of it (its spindles turn slower: it may trade one limit for another)
     larger = next(
@@ -116,4 +117,4 @@ def check_machine_reach(job: Job, params: SkivingMachineParams, size: str) -> li
                 + ("" if larger else " (no larger machine size reaches it)"),
             )
         )
-    raise InputError(problems, job.source)
+    raise MachineLimitError(problems, job.source)

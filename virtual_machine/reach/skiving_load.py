@@ -21,31 +21,8 @@ velocity, the chip thickness from the chip's volume over the swept area):
    apart and overlap (2-6 teeth in the cut on the shipped jobs): the torques of all teeth are summed over one
    pitch and the peak is taken. The mean power is the chips' energy rate, kc V_k z0 n0 (tested).
 
-Measured against the co-simulation (`cosimulate(job, workers=1)`: forces on, the removal inline, so every engagement
-feels the newest chip; 2026-11-26, the small machine), estimate vs measured peak:
-
-=====================  ==================  ===================  ===================  ==================
-job, pass              chip V [mm^3]       h [um]               peak force [N]       M1 [N m]
-=====================  ==================  ===================  ===================  ==================
-default, 1 / 2         0.49 / 0.24 vs      36 / 12 vs           1151 / 674 vs        7.8 / 4.9 vs
-                       0.40 / 0.20 (med.)  35 / 12 (median)     1338 / 768           7.5 / 5.0
-small job (b 4), 1     0.74 vs 0.53        37 vs 35             1510 vs 1773         10.5 vs 9.8
-spur_external, 1 - 4   0.88 / 1.02 / 0.70  32 / 17 / 8.5 / 2.2  1498 / 1740 / 1270   22.1 / 25.7 / 19.5
-                       / 0.20 vs 0.78 /    vs 29 / 18 / 8.6 /   / 353 vs 1587 / 2182 / 5.8 vs 19.4 /
-                       1.06 / 0.71 / 0.20  2.2                  / 1572 / 426         26.4 / 20.2 / 6.5
-=====================  ==================  ===================  ===================  ==================
-
-The tool motor's peak is within 0.88-1.11x of the estimate (M1 = the spindle's peak + its friction), the resultant
-force's within 0.85-1.25x (the co-simulation's chips vary from one engagement to the next and the sync error
-modulates them), the torque about the work axis within 0.75-1.14x on the small jobs but 1.0-3.2x on spur_external
-(on a spur gear it is the small difference of the teeth entering and leaving the cut: 5.4 vs 1.7 N m in its second
-pass). The 4 mm faces of the small jobs are shorter than their engagement zones (4.2 mm), so their chips never reach
-the steady state the estimate assumes (0.75x, 0.81x). spur_external on the medium machine (2 workers): M1 at most
-22.7 / 29.7 / 23.5 / 9.9 N m against 22.7 / 26.4 / 20.2 / 6.5 estimated (1.0-1.16x in the roughing passes; the
-finishing pass's small load is mostly servo ripple).
-The work motor M2 shows more than its quasi-static load (4.3 N m peak vs 1.5 estimated on the default job): the
-tooth-passing impulses ring its servo; every size's M2 holds that many times over. tests/test_machine_sizes.py holds
-the estimate within 0.75-1.33x of a co-simulated small job's peaks.
+How the estimate compares with the co-simulated peaks, and the margin that covers it: docs/machines.md ("The cut
+against the motors").
 
 Which motor holds which spindle, per structure (power through each chain; the motor's torque = the spindle's
 torque x the spindle's turn per motor turn):
@@ -66,16 +43,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.errors import InputError, Problem
+from cutting.errors import MachineLimitError, Problem
 from cutting.gear import Gear
 from cutting.materials import material, rake_factor
 from cutting.skiving.edge import make_edge
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.sweep import outline_points, place, simplify_outline, split_sides
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
 from virtual_machine.job import Job, flatten_model
+from virtual_machine.setting.machine_layout import machine_size
 
 #: the check refuses a job whose estimated peak motor torque x this exceeds the motor's peak torque: the estimate is
 #: of the quasi-static load; the co-simulated tool motor's peaks run up to 1.11x above it (chip-to-chip changes,
@@ -224,8 +202,8 @@ def _overlapped(phi: np.ndarray, pitch: float, half: float):
 def motor_loads(job: Job, params: SkivingMachineParams, loads: list[PassLoad] | None = None) -> list[MotorLoad]:
     """Every motor of the job's structure with the largest torque the estimate asks of it over the passes."""
     setup = job.skiving
-    loads = pass_loads(setup, job.process["material"]) if loads is None else loads
-    structure = job.machine["structure"]
+    loads = pass_loads(setup, job.process.material) if loads is None else loads
+    structure = job.machine.structure
     keys = MOTOR_TORQUE_KEYS[structure]
     p = params
     ratio = abs(setup.speed_ratio)  # work turn per tool turn
@@ -239,7 +217,7 @@ def motor_loads(job: Job, params: SkivingMachineParams, loads: list[PassLoad] | 
     if structure == "mechatronic":
         add("M1", "tool spindle", [t * abs(p.tool_drive.ratio) for t in tool], p.tool_motor_torque)
         add("M2", "work spindle", [t * abs(p.work_drive.ratio) for t in work], p.work_motor_torque)
-        lead = job.machine["lead_screw_pitch"] * 1e-3 * (1 + p.lead_screw_pitch_error) / (2 * math.pi)  # m/rad
+        lead = job.machine.lead_screw_pitch * 1e-3 * (1 + p.lead_screw_pitch_error) / (2 * math.pi)  # m/rad
         weight = (1 - p.counterbalance) * (p.carriage_mass + p.radial_mass) * G + p.ways_friction
         add(
             "M3",
@@ -273,18 +251,16 @@ def motor_loads(job: Job, params: SkivingMachineParams, loads: list[PassLoad] | 
 
 
 def check_machine_holds(job: Job, params: SkivingMachineParams, margin: float = MARGIN) -> list[MotorLoad]:
-    """Refuse (InputError) a job whose estimated peak torque at a motor, x ``margin``, exceeds that motor's peak
+    """Refuse (MachineLimitError) a job whose estimated peak torque at a motor, x ``margin``, exceeds that motor's peak
     torque, naming the motor, both torques, and what would hold it: a larger machine size and the motor torque
     that would do. Returns the motors' loads when they all hold."""
-    from virtual_machine.runtime.machine_run import machine_size
-
-    loads = pass_loads(job.skiving, job.process["material"])
+    loads = pass_loads(job.skiving, job.process.material)
     motors = motor_loads(job, params, loads)
     bad = [m for m in motors if m.torque * margin > m.limit]
     if not bad:
         return motors
     size = machine_size(job)
-    chosen = "machine.size" if job.machine.get("size") else "the default size for this gear"
+    chosen = "machine.size" if job.machine.size else "the default size for this gear"
     larger = _larger_size_that_holds(job, size, loads, margin)
     problems = []
     for m in bad:
@@ -309,7 +285,7 @@ def check_machine_holds(job: Job, params: SkivingMachineParams, margin: float = 
                 "process.axial_feed",
             )
         )
-    raise InputError(problems, job.source)
+    raise MachineLimitError(problems, job.source)
 
 
 def _spindle_torque(m: MotorLoad, ld: PassLoad) -> float:
@@ -317,13 +293,13 @@ def _spindle_torque(m: MotorLoad, ld: PassLoad) -> float:
 
 
 def _torque_of(size: str, key: str, job: Job) -> str:
-    params = override(size_params(size), flatten_model(job.machine.get("model")))
+    params = override(size_params(size), flatten_model(job.machine.model))
     return f"{key} {getattr(params, key):.0f} N m" if key else size
 
 
 def _larger_size_that_holds(job: Job, size: str, loads: list[PassLoad], margin: float) -> str | None:
     """The next size above ``size`` whose motors (with the job's [machine.model] overrides) hold every pass."""
-    model = flatten_model(job.machine.get("model"))
+    model = flatten_model(job.machine.model)
     for name in SIZE_NAMES[SIZE_NAMES.index(size) + 1 :]:
         params = override(size_params(name), model)
         if all(m.torque * margin <= m.limit for m in motor_loads(job, params, loads)):

@@ -1,1 +1,2 @@
-"""The machines' run: the CNC program, the physics, the fixed tick loops of the skiving machine and the thread lathe."""
+"""The machines' run: the one machine loop every machine runs (:mod:`.loop`, :mod:`.integrator`), the skiving
+machine on it (its CNC program, physics and stepper) and the lathe of seed 001."""

@@ -1,28 +1,24 @@
-"""The physics side of every machine's tick loop (dm_control style: the controllers tick, then N physics sub-steps):
-MuJoCo stepped over a servo tick with the divergence and runaway checks every machine needs.
-
-The skiving machine, the thread lathe, the form-milling and the face-contour machines each build one
-:class:`Integrator` and call :meth:`Integrator.step` once per servo tick; what differs per machine is only what it
-watches and what its messages say (the stage to soften, the servo gain to lower).
+"""The physics side of the machine loop (:mod:`virtual_machine.runtime.loop`): MuJoCo stepped over a servo tick with
+the divergence and runaway checks every machine needs; what differs per machine is only what it watches and what its
+messages say (the stage to soften, the servo gain to lower). The only place that steps MuJoCo.
 """
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable, Sequence
 
 import mujoco
 import numpy as np
 
+from cutting.errors import SimulationDivergedError
+
 #: the warnings MuJoCo raises when the integration blows up (it then resets the state and carries on)
 BAD_ACCELERATION = (mujoco.mjtWarning.mjWARN_BADQACC,)
 BAD_ACCELERATION_OR_SPEED = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL)
 
 _mj_step, _isfinite = mujoco.mj_step, math.isfinite  # bound once: a step is the skiving machine's hot path
-
-
-class SimulationDivergedError(RuntimeError):
-    """The integration blew up; the message names the stage most likely responsible and how to fix it."""
 
 
 def servo_substeps(timestep: float, servo_rate: float) -> int:
@@ -84,6 +80,12 @@ class Integrator:
         self._error = error
         self._limits = None if limits is None else np.asarray(limits, dtype=float)
         self._runaway = runaway
+
+    def single(self) -> Integrator:
+        """This integrator stepping one physics step at a time (a load that changes within the tick)."""
+        one = copy.copy(self)
+        one.nstep = 1
+        return one
 
     def step(self) -> None:
         """Run one servo tick's physics sub-steps and check the result."""

@@ -1,34 +1,35 @@
-"""The simulation loop (fixed, dm_control style): CNC tick -> controllers -> physics sub-steps -> record.
-
-Controllers run at the servo rate (``servo_substeps`` physics steps per tick, torques held between); the
-record keeps per tick the axis positions, motor torques and the synchronisation error, and per pass the
-pose trajectory of the cutter in the blank frame (the cutting engine's input).
+"""The skiving machine on the machine loop (:mod:`virtual_machine.runtime.loop`): its task (the CNC's program, the
+structure's controllers at the servo rate, the record and the following-error alarm), its load hook (the cut's
+forces in the blank frame, or a test's disturbance) and the motion record: per tick the axis positions, motor torques
+and the synchronisation error, and per pass the pose trajectory of the cutter in the blank frame (the cutting
+engine's input).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 
-from cutting.errors import InputError, Problem
+from cutting.errors import InputError, LostSynchronismError, Problem
 from cutting.skiving.path_correction import PathCorrection
-from machine_models.parameters import SkivingMachineParams, override
-from machine_models.sizes import size_for, size_params
+from machine_models.parameters import SkivingMachineParams
 from machine_models.skiving_machine import MM, build_spec
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
 from virtual_machine.controllers import InductionMotor
-from virtual_machine.job import Job, flatten_model
+from virtual_machine.job import Job
+from virtual_machine.reach.skiving import check_skiving_reach
+from virtual_machine.reach.skiving_load import check_machine_holds
 from virtual_machine.runtime.integrator import Integrator
-from virtual_machine.runtime.physics import AXES, MachinePhysics
+from virtual_machine.runtime.loop import AxisDisturbance, LoadHook, MachineLoop
+from virtual_machine.runtime.physics import AXES, BlankFrameLoad, MachinePhysics
 from virtual_machine.runtime.program import ProgramSettings, program
 from virtual_machine.setting.chains import chain_ratios
-from virtual_machine.setting.machine_layout import skiving_layout, workpiece_diameter
+from virtual_machine.setting.machine_layout import machine_params, machine_size, skiving_layout
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.setting.sheet import setup_sheet
 from virtual_machine.structures.hydraulic import HydraulicS2, HydraulicS3
@@ -36,10 +37,6 @@ from virtual_machine.structures.mechanical import MechanicalS1
 from virtual_machine.structures.mechatronic import MechatronicS4, MechatronicS4MasterSlave, S4Tuning
 
 SEGMENTS = ("runup", "settle", "infeed", "feed", "retract", "return")
-
-
-class LostSynchronismError(RuntimeError):
-    """The simulated machine stopped the job (the CNC's alarm), with what happened and what to change."""
 
 
 def error_stats(e: np.ndarray) -> dict[str, float]:
@@ -107,17 +104,6 @@ class MotionRecord:
         return out
 
 
-def machine_size(job: Job) -> str:
-    """The name of the job's machine size: ``machine.size``, else the smallest size whose workpiece diameter and
-    module hold the gear (machine_models/sizes.py)."""
-    return job.machine.get("size") or size_for(workpiece_diameter(job.gear), job.gear.mn).name
-
-
-def machine_params(job: Job) -> SkivingMachineParams:
-    """The job's machine: its size's parameters with the job's [machine.model] overrides on top."""
-    return override(size_params(machine_size(job)), flatten_model(job.machine.get("model")))
-
-
 def build_structure(
     job: Job,
     params: SkivingMachineParams,
@@ -129,21 +115,21 @@ def build_structure(
     (equal coordinates) here, S1-S3 in :func:`_build_chain_structure`."""
     m = job.machine
     plan = plan_of(job, plan)
-    if m["structure"] in ("mechanical", "hydraulic-differential", "hydraulic-shaft"):
+    if m.structure in ("mechanical", "hydraulic-differential", "hydraulic-shaft"):
         return _build_chain_structure(job, params, phys, plan)
-    if m["structure"] != "mechatronic":
+    if m.structure != "mechatronic":
         raise NotImplementedError(f"machine.structure = {m['structure']!r}: unknown structure")
     sheet = plan.sheet("mechatronic")
     st = sheet.settings
     setup = job.skiving
     j_tool = params.tool_motor_inertia + params.tool_inertia * params.tool_drive.ratio**2
     j_work = params.work_motor_inertia + params.work_inertia * params.work_drive.ratio**2
-    lead = m["lead_screw_pitch"] * MM / (2 * math.pi)
+    lead = m.lead_screw_pitch * MM / (2 * math.pi)
     j_feed = (
         params.feed_motor_inertia + (params.screw_inertia + params.carriage_mass * lead**2) * params.feed_drive.ratio**2
     )
     ky = st["ky"].realisation.get("integer")
-    adaptive = m["adaptive_correction"] if adaptive is None else adaptive
+    adaptive = m.adaptive_correction if adaptive is None else adaptive
     # the amplifiers' current limits are the motors' peak torques of the machine (amplifiers 3, 11, 18)
     base = S4Tuning()
     tuning = S4Tuning(
@@ -152,17 +138,17 @@ def build_structure(
         dataclasses.replace(base.feed, peak_torque=params.feed_motor_torque),
     )
     angle0 = (phys.q("B1"), phys.q("B2"), phys.q("TV"))
-    if m["synchronization"] == "master-slave":
+    if m.synchronization == "master-slave":
         feed_dir = -1 if setup.feed_direction == "down" else 1
-        t_tv = m["lead_screw_pitch"]
+        t_tv = m.lead_screw_pitch
         return MechatronicS4MasterSlave(
-            f_ref=m["reference_frequency"],
-            p=m["command_pulses_per_rev"],
+            f_ref=m.reference_frequency,
+            p=m.command_pulses_per_rev,
             kv=st["kv"].realisation["integer"],
             ratio_x=setup.speed_ratio,  # work turn per tool turn
             ratio_y=setup.differential_rotation_per_mm * t_tv / (2 * math.pi),  # work rad per screw rad (B4)
             ratio_s=feed_dir * setup.axial_feed / t_tv * (1 if setup.speed_ratio > 0 else -1),  # screw per work
-            encoder_lines=m["encoder_lines"],
+            encoder_lines=m.encoder_lines,
             ratios=(params.tool_drive.ratio, params.work_drive.ratio, params.feed_drive.ratio),
             inertias=(j_tool, j_work, j_feed),
             adaptive=adaptive,
@@ -170,15 +156,15 @@ def build_structure(
             tuning=tuning,
         )
     return MechatronicS4(
-        f_ref=m["reference_frequency"],
-        p=m["command_pulses_per_rev"],
+        f_ref=m.reference_frequency,
+        p=m.command_pulses_per_rev,
         kv=st["kv"].realisation["integer"],
         kx=st["kx"].realisation["integer"],
         ks=st["ks"].realisation["integer"],
         ky=ky,
         dir_work=1 if setup.speed_ratio > 0 else -1,
         dir_b4=1 if setup.differential_rotation_per_mm > 0 else -1,
-        encoder_lines=m["encoder_lines"],
+        encoder_lines=m.encoder_lines,
         ratios=(params.tool_drive.ratio, params.work_drive.ratio, params.feed_drive.ratio),
         inertias=(j_tool, j_work, j_feed),
         adaptive=adaptive,
@@ -191,33 +177,33 @@ def _build_chain_structure(job: Job, params: SkivingMachineParams, phys: Machine
     """S1 and S2: the main motor, and the CNC's or the hydraulic elements beside the chains of the model."""
     m = job.machine
     motor = InductionMotor(
-        sync_speed=m["motor_speed"] * 2 * math.pi / 60 / (1 - params.main_motor_slip),
+        sync_speed=m.motor_speed * 2 * math.pi / 60 / (1 - params.main_motor_slip),
         rated_torque=params.main_motor_torque,
         rated_slip=params.main_motor_slip,
     )
-    if m["structure"] == "mechanical":
+    if m.structure == "mechanical":
         return MechanicalS1(
-            motor, m["command_pulses_per_rev"], m["encoder_lines"], params.traverse_motor_inertia, phys.q("TV")
+            motor, m.command_pulses_per_rev, m.encoder_lines, params.traverse_motor_inertia, phys.q("TV")
         )
     stepping = {
-        "steps_per_rev": m["hydraulic_steps_per_rev"],
+        "steps_per_rev": m.hydraulic_steps_per_rev,
         "stiffness": params.hydraulic_stiffness,
         "damping": params.hydraulic_damping,
         "leakage": params.hydraulic_leakage,
         "torque_limit": params.hydraulic_torque_limit,
     }
-    if m["structure"] == "hydraulic-shaft":
-        reverse = "up" if job.process["feed_direction"] == "down" else "down"
-        back = dataclasses.replace(job, process=dict(job.process, feed_direction=reverse))
+    if m.structure == "hydraulic-shaft":
+        reverse = "up" if job.process.feed_direction == "down" else "down"
+        back = dataclasses.replace(job, process=dataclasses.replace(job.process, feed_direction=reverse))
         sheets = (plan.sheet("hydraulic-shaft"), setup_sheet(back, "hydraulic-shaft"))  # the return stroke's own
         discs = tuple(s.settings["kx"].realisation["disc_windows"] for s in sheets)
         home = {j: phys.q(j) for j in ("B2", "TV", "GShD")}
-        return HydraulicS3(motor, discs, stepping, m["command_pulses_per_rev"], m["encoder_lines"], home)
+        return HydraulicS3(motor, discs, stepping, m.command_pulses_per_rev, m.encoder_lines, home)
     sheet = plan.sheet("hydraulic-differential")
     windows = tuple(sheet.settings[k].realisation.get("disc_windows") for k in ("kx", "ky", "is"))
     home = {j: phys.q(j) for j in ("B1", "B2", "TV", "GShD1", "GShD2", "GShD3")}
     return HydraulicS2(
-        motor, windows, stepping, m["command_pulses_per_rev"], m["encoder_lines"], chain_ratios(job).feed, home
+        motor, windows, stepping, m.command_pulses_per_rev, m.encoder_lines, chain_ratios(job).feed, home
     )
 
 
@@ -227,7 +213,7 @@ def check_correction(job: Job, correction: PathCorrection | None) -> None:
     if correction is None or not np.any(correction.dphi):
         return
     m = job.machine
-    if m["structure"] != "mechatronic" or m["synchronization"] != "equal-coordinates":
+    if m.structure != "mechatronic" or m.synchronization != "equal-coordinates":
         raise InputError(
             Problem(
                 "machine.structure",
@@ -241,19 +227,19 @@ def check_correction(job: Job, correction: PathCorrection | None) -> None:
 
 
 class MachineRun:
-    """The simulation loop as a stepper: :meth:`advance` runs the machine up to a time, so another stage (the
-    cutting co-simulation) can act between calls; :meth:`record` assembles the :class:`MotionRecord`.
+    """The skiving machine on the machine loop (:class:`virtual_machine.runtime.loop.MachineLoop`), as a stepper:
+    :meth:`advance` runs it up to a time, so another stage (the cutting co-simulation) can act between calls;
+    :meth:`record` assembles the :class:`MotionRecord`. Its task: before each tick the CNC's program and the
+    structure's controllers; after it the record and the CNC's following-error alarm.
 
     Without ``params`` the machine is the job's own (:func:`machine_params`: its size with the [machine.model]
-    overrides), and a job whose estimated cutting torque its motors cannot hold is refused before anything runs
-    (virtual_machine/processes/skiving/cutting_load.py: InputError naming the motor); given ``params`` are taken as
-    they are (tests,
-    benchmarks). Without ``settings`` the run-up follows the machine's ``work_acceleration``.
-    ``plan``: the job's setup, ideal passes and setting sheets as an earlier stage made them (else made here).
-
-    ``load``, if set, gives the cutting loads of a servo tick, ``load(t, dt)``: (force [N] on the workpiece,
-    point [mm], moment [N m]) in the blank frame, one per engaged tooth, each the mean over [t, t + dt]; each is
-    applied to the blank and (opposite) to the cutter for the tick.
+    overrides), and a job beyond its reach or whose estimated cutting torque its motors cannot hold is refused
+    before anything runs (:mod:`virtual_machine.reach.skiving`: MachineLimitError naming the limit); given
+    ``params`` are taken as they are (tests, benchmarks). Without ``settings`` the run-up follows the machine's
+    ``work_acceleration``. ``plan``: the job's setup, ideal passes and setting sheets as an earlier stage made them.
+    ``cut(t, dt)``: the cut's loads in the blank frame (:class:`virtual_machine.runtime.physics.BlankFrameLoad`);
+    ``disturbance(t)``: instead, an extra torque [N m] or force [N] on ``disturbance_axis`` (tests of the correction
+    and the schemes).
     """
 
     def __init__(
@@ -266,30 +252,37 @@ class MachineRun:
         disturbance_axis: str = "B2",
         correction: PathCorrection | None = None,
         plan: SkivingPlan | None = None,
+        cut: Callable[[float, float], Iterable[tuple]] | None = None,
     ):
+        if disturbance is not None and cut is not None:
+            raise ValueError("one load hook per run: a disturbance or the cut's load")
         self.job = job
         self.plan = plan = plan_of(job, plan)
-        if params is None:  # the job's own machine: refused before the run if its motors cannot hold the cut
-            from virtual_machine.processes.skiving.cutting_load import check_machine_holds
-            from virtual_machine.processes.skiving.machine_reach import check_machine_reach
-
+        if params is None:  # the job's own machine: refused before the run if it cannot do the job
             params = machine_params(job)
-            check_machine_reach(job, params, machine_size(job))
+            check_skiving_reach(job, params, machine_size(job))
             check_machine_holds(job, params)
         self.params = params
         self.setup = setup = plan.setup
-        structure = job.machine["structure"]
+        structure = job.machine.structure
         chains = chain_ratios(job) if structure != "mechatronic" else None
-        layout = skiving_layout(setup, job.machine["lead_screw_pitch"], plan.passes[0])
+        layout = skiving_layout(setup, job.machine.lead_screw_pitch, plan.passes[0])
         self.spec = build_spec(layout, self.params, structure, chains)
         self.phys = phys = MachinePhysics(self.spec.compile(), self.params)
         self.machine = machine = build_structure(job, self.params, phys, plan=plan)
         self.servo_substeps = servo_substeps
         self.dt = phys.model.opt.timestep * servo_substeps
         # the tick's physics; a divergence names the stage to soften (at the time MuJoCo leaves after the step)
-        self.integrator = Integrator(phys.model, phys.data, servo_substeps, phys.qadr["B2"], phys.diagnose)
-        p = job.machine["command_pulses_per_rev"]
-        ppm = p / job.machine["lead_screw_pitch"]  # screw pulses per mm of carriage
+        integrator = Integrator(phys.model, phys.data, servo_substeps, phys.qadr["B2"], phys.diagnose)
+        #: the load hook: the cut's loads (their resultant per tick in its ``rows``), or a test's disturbance
+        self.load: LoadHook | None = None
+        if cut is not None:
+            self.load = BlankFrameLoad(phys, cut)
+        elif disturbance is not None:
+            self.load = AxisDisturbance(phys.vadr[disturbance_axis], disturbance)
+        self.loop = MachineLoop(integrator, self, self.load, phys.cutter_body, phys.blank_body)
+        p = job.machine.command_pulses_per_rev
+        ppm = p / job.machine.lead_screw_pitch  # screw pulses per mm of carriage
         settings = settings or ProgramSettings(runup_acceleration=self.params.work_acceleration)
         check_correction(job, correction)
         self.work_pulses_per_rad = p / (2 * math.pi)  # B4 command pulses of the work axis per radian
@@ -299,87 +292,85 @@ class MachineRun:
         self.corrections: list[float] = []  # the tangential correction asked for at each tick [rad]
         # the CNC of the servo structures watches the synchronisation (following error); a chain has no CNC loop
         self.following_limit = settings.following_error_limit if structure == "mechatronic" else math.inf
-        self._pending = None  # a tick fetched from the program but not yet run
-        self.finished = False  # the program has ended
-        self.disturbance, self.load = disturbance, None
-        self._dof_dist = phys.vadr[disturbance_axis]
         self.rows: list[tuple] = []
         self.home = (phys.q("B1"), phys.q("B2"), phys.q("P3") / MM)
-        self.timing = {"physics": 0.0, "control": 0.0}
-        # with a cutting load: the work the load does on the machine and the work of the actuators [J] (per tick),
-        # and per tick the load's resultant on the workpiece (blank frame) [N] and its torque about the work axis
-        self.load_work = self.actuator_work = 0.0
-        self.load_rows: list[tuple[float, float, float, float, float]] = []
         self._clutch_state: dict[str, bool] = {}
         self._last_cnc = None
+        self._tick = None
+        self._torques = (0.0,) * len(machine.actuators)
+        self._progress: Callable[[float], None] | None = None
+        # what the ticks read and write, bound once: data's arrays are live views
+        data = phys.data
+        self._qpos, self._qvel, self._ctrl = data.qpos, data.qvel, data.ctrl
+        self._qa = [phys.qadr[a] for a in AXES]
+        self._sensors = [phys.qadr[j] for j in machine.sensors]
+        self._speeds = [phys.vadr[j] for j in machine.speeds]
+        self._acts = [phys.act[a] for a in machine.actuators]
+        self._radial = phys.act["X"]
+        self._segment = {name: k for k, name in enumerate(SEGMENTS)}
+        self._b1, self._b2, self._p3 = phys.qadr["B1"], phys.qadr["B2"], phys.qadr["P3"]
+        self._ratio, self._diff = setup.speed_ratio, setup.differential_rotation_per_mm
+        self._limit = self.following_limit / (setup.gear.reference_radius * 1e3)  # rad of work spindle
 
     @property
     def time(self) -> float:
         return self.phys.time
 
+    @property
+    def finished(self) -> bool:
+        """The program has ended."""
+        return self.loop.finished
+
+    @property
+    def timing(self) -> dict[str, float]:
+        """Seconds in the controllers, the physics (with the loads) and the records (the loop's)."""
+        return self.loop.timing
+
     def advance(self, until: float = math.inf, progress: Callable[[float], None] | None = None) -> bool:
-        """Run servo ticks while the machine time is below ``until`` [s]; False once the program has ended."""
-        phys, machine, dt, step = self.phys, self.machine, self.dt, self.integrator.step
-        data = phys.data
-        qpos, qvel, ctrl, qfrc = data.qpos, data.qvel, data.ctrl, data.qfrc_applied
-        qa = [phys.qadr[a] for a in AXES]
-        sensors = [phys.qadr[j] for j in machine.sensors]
-        speeds = [phys.vadr[j] for j in machine.speeds]
-        acts = [phys.act[a] for a in machine.actuators]
-        radial = phys.act["X"]
-        segment_index = {name: k for k, name in enumerate(SEGMENTS)}
-        rows, clock, disturbance, load = self.rows, time.perf_counter, self.disturbance, self.load
-        t_phys = t_ctrl = 0.0
-        b1, b2, p3 = phys.qadr["B1"], phys.qadr["B2"], phys.qadr["P3"]
+        """Run servo ticks while the machine time is below ``until`` [s]; False once the program has ended.
+        ``progress(t)`` after each tick."""
+        self._progress = progress
+        return self.loop.run(until)
+
+    def before_tick(self) -> bool:
+        """The CNC's next tick of the program: the radial slide's target, the clutches, the controllers' torques."""
+        tick = next(self._ticks, None)
+        if tick is None:
+            return False
+        self._tick = tick
+        self._ctrl[self._radial] = tick.radial  # the radial slide's position servo target [m]
+        if tick.cnc is not self._last_cnc:  # the CNC's state objects are shared while a segment holds them
+            self._last_cnc = tick.cnc
+            for tendon, on in self.machine.clutches(tick.cnc).items():
+                if self._clutch_state.get(tendon) != on:
+                    self.phys.engage(tendon, on)
+                    self._clutch_state[tendon] = on
+        qpos = self._qpos
+        self._torques = torques = self.machine.tick(
+            self.dt, tick.cnc, qpos.take(self._sensors).tolist(), self._qvel.take(self._speeds).tolist()
+        )
+        self._ctrl[self._acts] = torques
+        return True
+
+    def after_tick(self) -> None:
+        """The tick's record, and the CNC's following-error alarm (LostSynchronismError)."""
+        qpos, tick = self._qpos, self._tick
+        t = self.phys.data.time
+        segment = self._segment[tick.segment]
+        self.rows.append((t, *qpos.take(self._qa).tolist(), segment, tick.pass_index, *self._torques))
+        wanted = tick.cnc.correction_b4 / self.work_pulses_per_rad  # a modification's extra turn is no error
+        self.corrections.append(wanted)
         b1_0, b2_0, p3_0 = self.home
-        ratio, diff = self.setup.speed_ratio, self.setup.differential_rotation_per_mm
-        limit = self.following_limit / (self.setup.gear.reference_radius * 1e3)  # rad of work spindle
-        while data.time < until:
-            tick = self._pending or next(self._ticks, None)
-            self._pending = None
-            if tick is None:
-                self.finished = True
-                break
-            ctrl[radial] = tick.radial  # the radial slide's position servo target [m]
-            if tick.cnc is not self._last_cnc:  # the CNC's state objects are shared while a segment holds them
-                self._last_cnc = tick.cnc
-                for tendon, on in machine.clutches(tick.cnc).items():
-                    if self._clutch_state.get(tendon) != on:
-                        phys.engage(tendon, on)
-                        self._clutch_state[tendon] = on
-            c0 = clock()
-            torques = machine.tick(dt, tick.cnc, qpos.take(sensors).tolist(), qvel.take(speeds).tolist())
-            c1 = clock()
-            ctrl[acts] = torques
-            if disturbance is not None or load is not None:
-                qfrc[:] = 0.0
-                if disturbance is not None:
-                    qfrc[self._dof_dist] = disturbance(data.time)
-                if load is not None:
-                    fx = fy = fz = tz = 0.0
-                    for force, point, moment in load(data.time, dt):
-                        phys.apply_cutting_load(force, point, moment)
-                        fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
-                        tz += (point[0] * force[1] - point[1] * force[0]) * 1e-3 + moment[2]
-                    self.load_rows.append((data.time, fx, fy, fz, tz))
-            step()
-            if load is not None:
-                self.load_work += float(qfrc @ qvel) * dt
-                self.actuator_work += float(data.actuator_force @ data.actuator_velocity) * dt
-            c2 = clock()
-            t_ctrl += c1 - c0
-            t_phys += c2 - c1
-            rows.append((data.time, *qpos.take(qa).tolist(), segment_index[tick.segment], tick.pass_index, *torques))
-            wanted = tick.cnc.correction_b4 / self.work_pulses_per_rad  # a modification's extra turn is no error
-            self.corrections.append(wanted)
-            delta = (qpos[b2] - b2_0) - ratio * (qpos[b1] - b1_0) - diff * (qpos[p3] / MM - p3_0) - wanted
-            if abs(delta) > limit:
-                raise LostSynchronismError(self._lost_synchronism(delta))
-            if progress is not None:
-                progress(data.time)
-        self.timing["physics"] += t_phys
-        self.timing["control"] += t_ctrl
-        return not self.finished
+        delta = (
+            (qpos[self._b2] - b2_0)
+            - self._ratio * (qpos[self._b1] - b1_0)
+            - self._diff * (qpos[self._p3] / MM - p3_0)
+            - wanted
+        )
+        if abs(delta) > self._limit:
+            raise LostSynchronismError(self._lost_synchronism(delta))
+        if self._progress is not None:
+            self._progress(t)
 
     def _lost_synchronism(self, delta: float) -> str:
         """What the CNC's following-error alarm says: where, how far, which motors were at their limit."""
@@ -389,7 +380,7 @@ class MachineRun:
         last = rows[-1]
         seg = SEGMENTS[int(last[1 + n_ax])]
         model = self.phys.model
-        keys = MOTOR_TORQUE_KEYS.get(self.job.machine["structure"], {})
+        keys = MOTOR_TORQUE_KEYS.get(self.job.machine.structure, {})
         peaks, saturated = [], []
         for name, value in zip(self.machine.actuators, torques, strict=True):
             limit = float(model.actuator_ctrlrange[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, name), 1])
@@ -467,8 +458,8 @@ def simulate(
 ) -> MotionRecord:
     """Run the machine through the job's passes (no cutting). ``duration`` [s] stops early; ``disturbance(t)``
     is an extra torque [N m] (or force [N]) on ``disturbance_axis`` (tests of the correction and the schemes).
-    ``timing``, if given, receives the seconds spent in the physics and in the controllers (benchmarks); ``plan``:
-    the job's plan if the caller has it."""
+    ``timing``, if given, receives the seconds spent in the controllers, the physics and the records (benchmarks);
+    ``plan``: the job's plan if the caller has it."""
     run = MachineRun(job, params, servo_substeps, settings, disturbance, disturbance_axis, plan=plan)
     run.advance(math.inf if duration is None else duration, progress)
     if timing is not None:
@@ -482,7 +473,7 @@ def relative_pose(setup, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     The bodies between the two frames are rigid, so this is the forward kinematics of the model
     (blank_frame = Rz(B2 + work_phase); cutter_frame at (X, 0, P3), Rx(tilt) Rz(B1 + cutter_phase));
     tests check it against MuJoCo's own site poses."""
-    from cutting.skiving.setup import rot_x, rot_z
+    from cutting.skiving.kinematics import rot_x, rot_z
 
     back = rot_z(-(q[:, 1] + setup.work_phase))
     rot = back @ rot_x(setup.tilt) @ rot_z(q[:, 0] + setup.cutter_phase)

@@ -1,15 +1,17 @@
-"""The physics side of the simulation loop: a compiled machine model, its state and the signals the
+"""The skiving machine's physics on the machine loop: a compiled machine model, its state and the signals the
 controllers read (axis angles and speeds) and write (motor torques), and the diagnosis of a divergence (the stage to
-soften); :class:`virtual_machine.runtime.integrator.Integrator` steps it."""
+soften), and its load hook (:class:`BlankFrameLoad`: the cut's loads in the blank frame)."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterable
 
 import mujoco
 import numpy as np
 
 from machine_models.parameters import SkivingMachineParams
+from virtual_machine.runtime.loop import ToolLoad
 
 AXES = ("B1", "B2", "P3", "X", "TV")  # the machine's axes, in every structure
 
@@ -50,13 +52,6 @@ class MachinePhysics:
     def v(self, axis: str) -> float:
         return float(self.data.qvel[self.vadr[axis]])
 
-    def set_torque(self, motor: str, torque: float) -> None:
-        self.data.ctrl[self.act[motor]] = torque
-
-    def set_radial(self, x: float) -> None:
-        """Target of the radial slide's position servo [m]."""
-        self.data.ctrl[self.act["X"]] = x
-
     def engage(self, tendon: str, on: bool) -> None:
         """A clutch: engage (re-centred on the chain's present relative position: the clutch takes hold where it
         is) or release the chain ``tendon`` (no force). A rigid chain's equality is switched the same way."""
@@ -72,19 +67,6 @@ class MachinePhysics:
         k, c, gap = self._spring[t]
         m.tendon_stiffness[t], m.tendon_damping[t] = (k, c) if on else (0.0, 0.0)
         m.tendon_lengthspring[t] = [length - gap / 2, length + gap / 2]
-
-    def apply_cutting_load(self, force: np.ndarray, point: np.ndarray, moment: np.ndarray | None = None) -> None:
-        """Add a cutting load to ``qfrc_applied``: ``force`` [N] and ``moment`` [N m] on the workpiece at ``point``
-        [mm], all in the blank frame, and the opposite wrench on the cutter at the same point (action and reaction
-        through the chip). The frames are those of the last step (the servo tick holds the load over its
-        sub-steps)."""
-        d = self.data
-        rb = d.site_xmat[self.site_blank].reshape(3, 3)
-        f_world = rb @ force
-        m_world = np.zeros(3) if moment is None else rb @ moment
-        p_world = d.site_xpos[self.site_blank] + rb @ point * 1e-3
-        mujoco.mj_applyFT(self.model, d, f_world, m_world, p_world, self.blank_body, d.qfrc_applied)
-        mujoco.mj_applyFT(self.model, d, -f_world, -m_world, p_world, self.cutter_body, d.qfrc_applied)
 
     def cutter_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """The cutter frame in the blank frame: rotation (3, 3) and translation [mm] (current state)."""
@@ -118,3 +100,32 @@ class MachinePhysics:
             f"Stiffest stage: {worst} with omega*h = {worst_wh:.2f}; lower machine.{worst}.stiffness, raise its "
             f"damping, or reduce machine.timestep (now {h:g} s)"
         )
+
+
+class BlankFrameLoad:
+    """The skiving machine's load hook: the cut's loads in the blank frame, ``cut(t, dt)``: (force [N] on the
+    workpiece, point [mm], moment [N m]) per engaged tooth, each the mean over the tick, as loads on the tool in the
+    world frame (the workpiece takes the opposite: action and reaction through the chip). The frames are those of the
+    last step (the servo tick holds the load over its sub-steps). ``rows`` keeps per tick the time [s], the loads'
+    resultant on the workpiece (blank frame) [N] and its torque about the work axis [N m]."""
+
+    every_substep = False
+
+    def __init__(self, phys: MachinePhysics, cut: Callable[[float, float], Iterable[tuple]]):
+        self.cut = cut
+        self._xmat = phys.data.site_xmat[phys.site_blank]
+        self._xpos = phys.data.site_xpos[phys.site_blank]
+        self.rows: list[tuple[float, float, float, float, float]] = []
+
+    def __call__(self, t: float, dt: float) -> list[ToolLoad]:
+        rb = self._xmat.reshape(3, 3)
+        out = []
+        fx = fy = fz = tz = 0.0
+        for force, point, moment in self.cut(t, dt):
+            f_world = rb @ force
+            p_world = self._xpos + rb @ point * 1e-3
+            out.append(ToolLoad(-f_world, -(rb @ moment), p_world))
+            fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
+            tz += (point[0] * force[1] - point[1] * force[0]) * 1e-3 + moment[2]
+        self.rows.append((t, fx, fy, fz, tz))
+        return out

@@ -11,8 +11,8 @@ import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.path_correction import PathCorrection
-from cutting.skiving.setup import SkivingSetup
 from cutting.skiving.trajectory import PassMotion
 from virtual_machine.structures.mechatronic import CncState
 

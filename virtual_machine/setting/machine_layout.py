@@ -1,5 +1,6 @@
 """The machines' numeric layouts from the cutting objects: the skiving machine's from the job's setup and its first
-ideal pass, the face-contour machine's from the coupling, and the workpiece diameter that picks a machine size.
+ideal pass, the face-contour machine's from the coupling, the workpiece diameter that picks a machine size, and a
+skiving job's machine (its size and parameters).
 
 They read ``cutting`` objects, so they live here rather than in ``machine_models`` (which imports neither ``cutting``
 nor ``virtual_machine``): ``machine_models.skiving_machine.build_spec`` and
@@ -11,10 +12,13 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from cutting.gear import Gear
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import PassMotion
+from machine_models.parameters import SkivingMachineParams, override
 from machine_models.parts import MM
+from machine_models.sizes import size_for, size_params
 from machine_models.skiving_machine import MachineLayout
+from virtual_machine.job import Job, flatten_model
 
 if TYPE_CHECKING:  # the face machine's modules load only for a face-contour job (a skiving run never needs them)
     from cutting.face_contour.slots import FaceCoupling
@@ -74,3 +78,14 @@ def face_layout(c: FaceCoupling, blank_thickness: float = 20 * MM, home_z: float
         home_z=home_z,
         work_setting=c.work_setting_on,
     )
+
+
+def machine_size(job: Job) -> str:
+    """The name of a skiving job's machine size: ``machine.size``, else the smallest size whose workpiece diameter and
+    module hold the gear (machine_models/sizes.py)."""
+    return job.machine.size or size_for(workpiece_diameter(job.gear), job.gear.mn).name
+
+
+def machine_params(job: Job) -> SkivingMachineParams:
+    """A skiving job's machine: its size's parameters with the job's [machine.model] overrides on top."""
+    return override(size_params(machine_size(job)), flatten_model(job.machine.model))

@@ -5,7 +5,7 @@ passes' strokes), cuts along the passes and reports the setting sheet. Each of t
 passes and the sheet from the job; a :class:`SkivingPlan` is made once per stage chain (``skive run``, ``skive cut``,
 ``skive simulate``) and every step takes it:
 
-- ``setup``: the cut's kinematics (:class:`cutting.skiving.setup.SkivingSetup`);
+- ``setup``: the cut's kinematics (:class:`cutting.skiving.kinematics.SkivingSetup`);
 - ``passes``: the ideal motion of every pass (:func:`cutting.skiving.trajectory.ideal_passes`);
 - ``sheet(structure)``: the machine setting sheet (seed 000, S1-S4) of a structure, made on first use.
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import PassMotion, ideal_passes
 from virtual_machine.job import Job
 from virtual_machine.setting.sheet import SetupSheet, setup_sheet
@@ -31,13 +31,13 @@ class SkivingPlan:
 
     @classmethod
     def of(cls, job: Job) -> SkivingPlan:
-        """The plan of ``job`` (a "gear" job; ValueError for other kinds, as ``job.skiving``)."""
+        """The plan of ``job`` (a skiving job: others have no ``skiving`` setup)."""
         setup = job.skiving
         return cls(job, setup, tuple(ideal_passes(setup)))
 
     def sheet(self, structure: str | None = None) -> SetupSheet:
         """The setting sheet for ``structure`` (default: the job's [machine] structure), made once."""
-        key = structure or self.job.machine["structure"]
+        key = structure or self.job.machine.structure
         if key not in self._sheets:
             self._sheets[key] = setup_sheet(self.job, key)
         return self._sheets[key]

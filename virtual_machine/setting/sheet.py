@@ -15,7 +15,7 @@ kx = P / (i0 P_TV); equal coordinates kv and kx = c kv / P with c = i01 P_TV.
 T is the lead of the gear helix, pi mn z2 / sin(beta2). The sign conventions of skive: the additional
 rotation B4 and the "1 + s/T" of S3 carry the signs of the helix hand, the feed direction and the work's
 direction of rotation (s/T -> dir2 s_z / p_z with s_z = -s for a downward feed and dir2 = -1 for an external
-gear, which turns against the cutter), see :func:`feed_over_lead` and :mod:`cutting.skiving.setup`.
+gear, which turns against the cutter), see :func:`feed_over_lead` and :mod:`cutting.skiving.kinematics`.
 
 A divider (frequency divider = pulse counter + coefficient block) emits one pulse per k input pulses:
 f_out = f_ref / k. Seed 000's ky for S4 is printed as ks t_TV / (c2 T); deriving it from the same
@@ -35,13 +35,6 @@ from typing import Any
 from cutting.errors import InputError, Problem
 from virtual_machine.job import Job, machine_constants
 from virtual_machine.setting.change_gears import STANDARD_SET, ChangeGearSet, choose_change_gears
-
-STRUCTURE_SETTINGS = {
-    "mechanical": ("ix", "iy", "iv", "is"),
-    "hydraulic-differential": ("kx", "ky", "iv", "is"),
-    "hydraulic-shaft": ("kx", "iv", "is"),
-    "mechatronic": ("kv", "kx", "ks", "ky"),
-}
 
 
 @dataclass
@@ -77,7 +70,7 @@ class Setting:
 @dataclass
 class SetupSheet:
     structure: str
-    kind: str  # "gear" or "thread"
+    kind: str  # "skiving" or "thread"
     settings: dict[str, Setting]
     constants: dict[str, float]
     geometry: dict[str, Any]
@@ -101,7 +94,7 @@ class SetupSheet:
 
 # ---- realising a ratio ---------------------------------------------------------------------------
 def gear_set_of(job: Job) -> ChangeGearSet:
-    teeth = job.machine.get("change_gears")
+    teeth = job.machine.change_gears
     return STANDARD_SET if teeth is None else ChangeGearSet("job", tuple(teeth))
 
 
@@ -165,7 +158,7 @@ def ratio_error_effect(job: Job, eps: float) -> dict[str, float]:
     cutter crosses the face (b / s revolutions) the drift accumulates to r_b2 2 pi eps b / s along the base
     tangent: a helix slope error.
     """
-    g, s = job.gear, job.process["axial_feed"]
+    g, s = job.gear, job.process.axial_feed
     return {
         "pitch_um_per_work_rev": eps * math.pi * g.reference_diameter * 1e3,
         "helix_drift_um_over_face": eps * 2 * math.pi * g.base_radius * g.face_width / s * 1e3,
@@ -189,17 +182,17 @@ def speed_effect(eps: float, what: str) -> dict[str, float]:
 def _skiving_constants(job: Job, names: tuple[str, ...]) -> dict[str, float]:
     m = job.machine
     table = {
-        "c1": m["c1"],
-        "c2": m["c2"],
-        "c3": m["c3"],
-        "c4": m["c4"],
-        "i_sigma": m["i_sigma"],
-        "t_tv": m["lead_screw_pitch"],
-        "n_m": m["motor_speed"],
-        "f_ref": m["reference_frequency"],
-        "p_cmd": m["command_pulses_per_rev"],
-        "q_step": m["hydraulic_steps_per_rev"],
-        "n_disc_max": m["hydraulic_max_windows"],
+        "c1": m.c1,
+        "c2": m.c2,
+        "c3": m.c3,
+        "c4": m.c4,
+        "i_sigma": m.i_sigma,
+        "t_tv": m.lead_screw_pitch,
+        "n_m": m.motor_speed,
+        "f_ref": m.reference_frequency,
+        "p_cmd": m.command_pulses_per_rev,
+        "q_step": m.hydraulic_steps_per_rev,
+        "n_disc_max": m.hydraulic_max_windows,
     }
     return {n: table[n] for n in names}
 
@@ -208,15 +201,15 @@ def feed_over_lead(job: Job) -> float:
     """dir2 s_z / p_z: the carriage travel per work revolution over the signed lead, times the work's direction of
     rotation (+1 with the cutter, -1 against it); 0 for spur.
 
-    The work turns phi2 = r phi0 - 2 pi z / p_z (cutting.skiving.setup), with z = s_z |phi2| / 2 pi, so per work turn
-    the cutter turns (1 + dir2 s_z / p_z) / |r|: B4 slows the work (per cutter turn) when this is positive. An
+    The work turns phi2 = r phi0 - 2 pi z / p_z (cutting.skiving.kinematics), with z = s_z |phi2| / 2 pi, so per work
+    turn the cutter turns (1 + dir2 s_z / p_z) / |r|: B4 slows the work (per cutter turn) when this is positive. An
     external gear turns against the cutter (dir2 = -1), an internal one with it: the sign is the gear's as much as
     the feed's.
     """
     g = job.gear
     if g.helix_angle == 0:
         return 0.0
-    s_z = -job.process["axial_feed"] if job.process["feed_direction"] == "down" else job.process["axial_feed"]
+    s_z = -job.process.axial_feed if job.process.feed_direction == "down" else job.process.axial_feed
     dir_work = 1.0 if job.skiving.speed_ratio > 0 else -1.0
     return dir_work * s_z / g.lead
 
@@ -227,18 +220,16 @@ def sheet_mechanical(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     gs = gear_set_of(job)
     T = g.lead
     ix = Setting(
-        "ix", "guitar ix (Fv internal link, 4 -> 5)", "z0 / (c1 iS z2)", c.teeth / (m["c1"] * m["i_sigma"] * g.teeth)
+        "ix", "guitar ix (Fv internal link, 4 -> 5)", "z0 / (c1 iS z2)", c.teeth / (m.c1 * m.i_sigma * g.teeth)
     )
     iy = Setting(
         "iy",
         "guitar iy (Fs internal link, 13 -> 14)",
         "t_TV / (T c2 iS)",
-        0.0 if math.isinf(T) else m["lead_screw_pitch"] / (T * m["c2"] * m["i_sigma"]),
+        0.0 if math.isinf(T) else m.lead_screw_pitch / (T * m.c2 * m.i_sigma),
     )
-    iv = Setting(
-        "iv", "guitar iv (Fv external link, 10 -> 3)", "n0 / (c3 n_M)", p["tool_speed"] / (m["c3"] * m["motor_speed"])
-    )
-    is_ = Setting("is", "guitar is (Fs external link, 7 -> 13)", "s / c4", p["axial_feed"] / m["c4"])
+    iv = Setting("iv", "guitar iv (Fv external link, 10 -> 3)", "n0 / (c3 n_M)", p.tool_speed / (m.c3 * m.motor_speed))
+    is_ = Setting("is", "guitar is (Fs external link, 7 -> 13)", "s / c4", p.axial_feed / m.c4)
     for s in (ix, iy, iv, is_):
         realise_guitar(s, gs, 2)
     ix.effect = ratio_error_effect(job, ix.relative_error)
@@ -251,24 +242,22 @@ def sheet_mechanical(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
 def sheet_hydraulic_differential(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     """S2, seed 000 fig. 2: kx on GGI1/GShD1, ky on GGI2/GShD2, iv two-gear guitar, is on GGI3."""
     g, c, m, p = job.gear, job.cutter, job.machine, job.process
-    q, nmax = m["hydraulic_steps_per_rev"], m["hydraulic_max_windows"]
+    q, nmax = m.hydraulic_steps_per_rev, m.hydraulic_max_windows
     T = g.lead
     kx = Setting(
         "kx",
         "pulse generator GGI1 -> stepping motor GShD1",
         "z0 / (c1 iS z2)",
-        c.teeth / (m["c1"] * m["i_sigma"] * g.teeth),
+        c.teeth / (m.c1 * m.i_sigma * g.teeth),
     )
     ky = Setting(
         "ky",
         "pulse generator GGI2 -> stepping motor GShD2",
         "t_TV / (T c2 iS)",
-        0.0 if math.isinf(T) else m["lead_screw_pitch"] / (T * m["c2"] * m["i_sigma"]),
+        0.0 if math.isinf(T) else m.lead_screw_pitch / (T * m.c2 * m.i_sigma),
     )
-    iv = Setting("iv", "two-gear guitar iv (M -> 7)", "n0 / (c3 n_M)", p["tool_speed"] / (m["c3"] * m["motor_speed"]))
-    is_ = Setting(
-        "is", "pulse generator GGI3 -> stepping motor GShD3 (lead screw)", "s / c4", p["axial_feed"] / m["c4"]
-    )
+    iv = Setting("iv", "two-gear guitar iv (M -> 7)", "n0 / (c3 n_M)", p.tool_speed / (m.c3 * m.motor_speed))
+    is_ = Setting("is", "pulse generator GGI3 -> stepping motor GShD3 (lead screw)", "s / c4", p.axial_feed / m.c4)
     realise_pulse_generator(kx, q, nmax)
     realise_pulse_generator(ky, q, nmax)
     realise_guitar(iv, gear_set_of(job), 1)
@@ -284,15 +273,15 @@ def sheet_hydraulic_differential(job: Job) -> tuple[dict[str, Setting], tuple[st
 def sheet_hydraulic_shaft(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     """S3, seed 000 fig. 3: one hydraulic shaft carries B2 + B4; kx = (z2/z0)(1 + s/T) / c1."""
     g, c, m, p = job.gear, job.cutter, job.machine, job.process
-    q, nmax = m["hydraulic_steps_per_rev"], m["hydraulic_max_windows"]
+    q, nmax = m.hydraulic_steps_per_rev, m.hydraulic_max_windows
     kx = Setting(
         "kx",
         "pulse generator GGI -> stepping motor GShD (work -> tool)",
         "(z2/z0)(1 + s/T) / c1",
-        g.teeth / c.teeth * (1 + feed_over_lead(job)) / m["c1"],
+        g.teeth / c.teeth * (1 + feed_over_lead(job)) / m.c1,
     )
-    iv = Setting("iv", "two-gear guitar iv (M -> 8)", "n0 / (c3 n_M)", p["tool_speed"] / (m["c3"] * m["motor_speed"]))
-    is_ = Setting("is", "guitar is (5 -> 9 -> lead screw)", "s / c4", p["axial_feed"] / m["c4"])
+    iv = Setting("iv", "two-gear guitar iv (M -> 8)", "n0 / (c3 n_M)", p.tool_speed / (m.c3 * m.motor_speed))
+    is_ = Setting("is", "guitar is (5 -> 9 -> lead screw)", "s / c4", p.axial_feed / m.c4)
     realise_pulse_generator(kx, q, nmax)
     realise_guitar(iv, gear_set_of(job), 1)
     realise_guitar(is_, gear_set_of(job), 2)
@@ -310,9 +299,9 @@ def sheet_mechatronic(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     is far below a micrometre).
     """
     g, c, m, p = job.gear, job.cutter, job.machine, job.process
-    f, pp = m["reference_frequency"], m["command_pulses_per_rev"]
-    factor = Fraction(m["c1"]).limit_denominator(10**6) * Fraction(g.teeth, c.teeth)  # kx / kv
-    kv_ideal = divider_for_rate(f, pp, p["tool_speed"])
+    f, pp = m.reference_frequency, m.command_pulses_per_rev
+    factor = Fraction(m.c1).limit_denominator(10**6) * Fraction(g.teeth, c.teeth)  # kx / kv
+    kv_ideal = divider_for_rate(f, pp, p.tool_speed)
     kv_int = multiple_near(kv_ideal, factor.denominator)
     kv = Setting(
         "kv",
@@ -323,14 +312,14 @@ def sheet_mechatronic(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
         {"integer": kv_int},
     )
     kv.effect = speed_effect(kv_ideal / kv_int - 1, "cutting_speed")  # n ~ 1/k
-    kx_ideal = m["c1"] * kv_int * g.teeth / c.teeth
+    kx_ideal = m.c1 * kv_int * g.teeth / c.teeth
     kx_int = round(kx_ideal)
     kx = Setting(
         "kx", "frequency divider 7 (work spindle, B2)", "c1 kv z2 / z0", kx_ideal, float(kx_int), {"integer": kx_int}
     )
     kx.effect = ratio_error_effect(job, kx_ideal / kx_int - 1)
     n0 = 60 * f / (pp * kv_int)
-    n_screw = p["axial_feed"] * n0 * c.teeth / g.teeth / m["lead_screw_pitch"]  # rpm of the lead screw
+    n_screw = p.axial_feed * n0 * c.teeth / g.teeth / m.lead_screw_pitch  # rpm of the lead screw
     ks_ideal = divider_for_rate(f, pp, n_screw)
     ks_int = max(1, round(ks_ideal))
     ks = Setting(
@@ -352,7 +341,7 @@ def sheet_mechatronic(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
             {"integer": None, "note": "divider 22 off: spur gear, no additional rotation"},
         )
     else:
-        ky_ideal = m["c2"] * ks_int * abs(g.lead) / m["lead_screw_pitch"]
+        ky_ideal = m.c2 * ks_int * abs(g.lead) / m.lead_screw_pitch
         ky_int = round(ky_ideal)
         sign = "-" if feed_over_lead(job) > 0 else "+"  # B4 adds to the work pulses when it speeds the work
         ky = Setting(
@@ -403,7 +392,7 @@ def skiving_geometry(job: Job) -> tuple[dict[str, Any], list[dict[str, float]], 
             "d_mm": c.reference_diameter,
             "db_mm": c.base_diameter,
             "da_mm": st.cutter_tip_diameter,
-            "edge": job.cutter_options["edge"],
+            "edge": job.cutter_options.edge,
         },
         "shaft_angle_deg": math.degrees(st.shaft_angle),
         "centre_distance_final_mm": st.final_centre_distance,
@@ -430,85 +419,31 @@ def skiving_geometry(job: Job) -> tuple[dict[str, Any], list[dict[str, float]], 
 def thread_sheet(job: Job, structure: str) -> SetupSheet:
     """Seed 001: mechanical ix (+ iv), master-slave kx, equal coordinates kv, kx."""
     t, m, p = job.thread, job.machine, job.process
-    P, t_tv = t["lead"], m["lead_screw_pitch"]
-    n_sp = 1000 * p["cutting_speed"] / (math.pi * t["diameter"])
-    settings: dict[str, Setting] = {}
-    lead_effect = lambda eps: {"lead_um": eps * P * 1e3, "pitch_um_over_length": eps * t["length"] * 1e3}  # noqa: E731
+    P = t["lead"]
+    n_sp = 1000 * p.cutting_speed / (math.pi * t["diameter"])
+
+    def lead_effect(eps: float) -> dict[str, float]:
+        return {"lead_um": eps * P * 1e3, "pitch_um_over_length": eps * t["length"] * 1e3}
+
     if structure == "mechanical":
-        ix = realise_guitar(
-            Setting("ix", "guitar ix (5 -> R1 -> 6 -> TV)", "P / (i01 t_TV)", P / (m["i01"] * t_tv)),
-            gear_set_of(job),
-            2,
-        )
-        ix.effect = lead_effect(ix.relative_error)
-        iv = realise_guitar(
-            Setting("iv", "guitar iv (M -> 8 -> R2 -> 5)", "n / (c3 n_M)", n_sp / (m["c3"] * m["motor_speed"])),
-            gear_set_of(job),
-            2,
-        )
-        iv.effect = speed_effect(iv.relative_error, "cutting_speed")
-        settings = {"ix": ix, "iv": iv}
-        consts = ("i01", "c3", "t_tv", "n_m")
-        name = "thread-mechanical"
-    elif m["synchronization"] == "master-slave":
-        # encoder 6 (4 counts per line) -> counter 7 with block 8 -> M2 (p pulses/rev) -> i0 -> TV. Block 8 holds
-        # two integers: the counter adds N per encoder pulse and emits a pulse per K (a rate multiplier), so
-        # slave pulses per master pulse = N / K; a plain divide-by-K (N = 1) misses most leads by percent.
-        e = 4 * m["encoder_lines"]
-        pp = m["command_pulses_per_rev"]
-        kx_val = P / (m["i0"] * t_tv)
-        frac = Fraction(kx_val * pp / e).limit_denominator(65535)
-        kx = Setting(
-            "kx",
-            "frequency divider: counter 7 + coefficient block 8",
-            "P / (i0 P_TV)",
-            kx_val,
-            float(frac) * e / pp,
-            {"block_N": frac.numerator, "counter_K": frac.denominator, "encoder_counts_per_rev": e},
-        )
-        kx.effect = lead_effect(kx.relative_error)
-        settings = {"kx": kx}
-        consts = ("i0", "t_tv", "p_cmd", "n_enc")
-        name = "thread-master-slave"
+        name, settings, consts = "thread-mechanical", _thread_mechanical(job, n_sp, lead_effect), THREAD_CONSTS[0]
+    elif m.synchronization == "master-slave":
+        name, settings, consts = "thread-master-slave", _thread_master_slave(job, lead_effect), THREAD_CONSTS[1]
     else:
-        f, pp = m["reference_frequency"], m["command_pulses_per_rev"]
-        c_const = Fraction(m["i01"] * t_tv / P).limit_denominator(10**6)  # kx / kv
-        kv_ideal = divider_for_rate(f, pp, n_sp)
-        kv_int = multiple_near(kv_ideal, c_const.denominator)
-        kv = Setting(
-            "kv",
-            "frequency divider: counter 9 + block 11 (spindle)",
-            "60 f_ref / (p n)",
-            kv_ideal,
-            float(kv_int),
-            {"integer": kv_int},
-        )
-        kv.effect = speed_effect(kv_ideal / kv_int - 1, "cutting_speed")
-        kx_ideal = m["i01"] * t_tv * kv_int / P
-        kx = Setting(
-            "kx",
-            "frequency divider: counter 10 + block 12 (carriage)",
-            "c kv / P, c = i01 P_TV",
-            kx_ideal,
-            float(round(kx_ideal)),
-            {"integer": round(kx_ideal)},
-        )
-        kx.effect = lead_effect(kx_ideal / round(kx_ideal) - 1)
-        settings = {"kv": kv, "kx": kx}
-        consts = ("i01", "t_tv", "f_ref", "p_cmd")
-        name = "thread-equal-coordinates"
+        name, settings = "thread-equal-coordinates", _thread_equal_coordinates(job, n_sp, lead_effect)
+        consts = THREAD_CONSTS[2]
     table = {
-        "i0": m["i0"],
-        "i01": m["i01"],
-        "c3": m["c3"],
-        "t_tv": t_tv,
-        "n_m": m["motor_speed"],
-        "f_ref": m["reference_frequency"],
-        "p_cmd": m["command_pulses_per_rev"],
-        "n_enc": m["encoder_lines"],
+        "i0": m.i0,
+        "i01": m.i01,
+        "c3": m.c3,
+        "t_tv": m.lead_screw_pitch,
+        "n_m": m.motor_speed,
+        "f_ref": m.reference_frequency,
+        "p_cmd": m.command_pulses_per_rev,
+        "n_enc": m.encoder_lines,
     }
     feed = P * n_sp / 60  # mm/s
-    passes = [{"pass": i + 1, "infeed_mm": inc, "time_s": t["length"] / feed} for i, inc in enumerate(p["passes"])]
+    passes = [{"pass": i + 1, "infeed_mm": inc, "time_s": t["length"] / feed} for i, inc in enumerate(p.passes)]
     return SetupSheet(
         name,
         "thread",
@@ -516,23 +451,102 @@ def thread_sheet(job: Job, structure: str) -> SetupSheet:
         {k: table[k] for k in consts},
         {"lead_mm": P, "hand": t["hand"], "diameter_mm": t["diameter"], "spindle_speed_rpm": n_sp},
         passes,
-        {"cutting_speed_m_min": p["cutting_speed"], "total_time_s": len(passes) * t["length"] / feed},
+        {"cutting_speed_m_min": p.cutting_speed, "total_time_s": len(passes) * t["length"] / feed},
         [],
     )
 
 
+#: the machine constants each form of the thread group's sheet lists: mechanical, master-slave, equal coordinates
+THREAD_CONSTS = (("i01", "c3", "t_tv", "n_m"), ("i0", "t_tv", "p_cmd", "n_enc"), ("i01", "t_tv", "f_ref", "p_cmd"))
+
+
+def _thread_mechanical(job: Job, n_sp: float, lead_effect) -> dict[str, Setting]:
+    """Seed 001 fig. 1: the guitars ix (the lead) and iv (the spindle speed ``n_sp`` [rpm])."""
+    m, P, t_tv = job.machine, job.thread["lead"], job.machine.lead_screw_pitch
+    ix = realise_guitar(
+        Setting("ix", "guitar ix (5 -> R1 -> 6 -> TV)", "P / (i01 t_TV)", P / (m.i01 * t_tv)), gear_set_of(job), 2
+    )
+    ix.effect = lead_effect(ix.relative_error)
+    iv = realise_guitar(
+        Setting("iv", "guitar iv (M -> 8 -> R2 -> 5)", "n / (c3 n_M)", n_sp / (m.c3 * m.motor_speed)),
+        gear_set_of(job),
+        2,
+    )
+    iv.effect = speed_effect(iv.relative_error, "cutting_speed")
+    return {"ix": ix, "iv": iv}
+
+
+def _thread_master_slave(job: Job, lead_effect) -> dict[str, Setting]:
+    """Seed 001 fig. 2: encoder 6 (4 counts per line) -> counter 7 with block 8 -> M2 (p pulses/rev) -> i0 -> TV.
+    Block 8 holds two integers: the counter adds N per encoder pulse and emits a pulse per K (a rate multiplier),
+    so slave pulses per master pulse = N / K; a plain divide-by-K (N = 1) misses most leads by percent."""
+    m, P = job.machine, job.thread["lead"]
+    e = 4 * m.encoder_lines
+    pp = m.command_pulses_per_rev
+    kx_val = P / (m.i0 * m.lead_screw_pitch)
+    frac = Fraction(kx_val * pp / e).limit_denominator(65535)
+    kx = Setting(
+        "kx",
+        "frequency divider: counter 7 + coefficient block 8",
+        "P / (i0 P_TV)",
+        kx_val,
+        float(frac) * e / pp,
+        {"block_N": frac.numerator, "counter_K": frac.denominator, "encoder_counts_per_rev": e},
+    )
+    kx.effect = lead_effect(kx.relative_error)
+    return {"kx": kx}
+
+
+def _thread_equal_coordinates(job: Job, n_sp: float, lead_effect) -> dict[str, Setting]:
+    """Seed 001 fig. 3: dividers kv (counter 9 + block 11, the spindle at ``n_sp`` [rpm]) and kx (counter 10 +
+    block 12, the carriage) on one reference generator."""
+    m, P, t_tv = job.machine, job.thread["lead"], job.machine.lead_screw_pitch
+    f, pp = m.reference_frequency, m.command_pulses_per_rev
+    c_const = Fraction(m.i01 * t_tv / P).limit_denominator(10**6)  # kx / kv
+    kv_ideal = divider_for_rate(f, pp, n_sp)
+    kv_int = multiple_near(kv_ideal, c_const.denominator)
+    kv = Setting(
+        "kv",
+        "frequency divider: counter 9 + block 11 (spindle)",
+        "60 f_ref / (p n)",
+        kv_ideal,
+        float(kv_int),
+        {"integer": kv_int},
+    )
+    kv.effect = speed_effect(kv_ideal / kv_int - 1, "cutting_speed")
+    kx_ideal = m.i01 * t_tv * kv_int / P
+    kx = Setting(
+        "kx",
+        "frequency divider: counter 10 + block 12 (carriage)",
+        "c kv / P, c = i01 P_TV",
+        kx_ideal,
+        float(round(kx_ideal)),
+        {"integer": round(kx_ideal)},
+    )
+    kx.effect = lead_effect(kx_ideal / round(kx_ideal) - 1)
+    return {"kv": kv, "kx": kx}
+
+
 def setup_sheet(job: Job, structure: str | None = None) -> SetupSheet:
     """The setting sheet of ``job`` for ``structure`` (default: the job's [machine] structure)."""
-    structure = structure or job.machine["structure"]
+    structure = structure or job.machine.structure
     if job.kind == "thread":
         if structure not in ("mechanical", "mechatronic"):
-            raise ValueError(
-                f"--structure {structure!r}: the thread group of seed 001 exists as 'mechanical' or "
-                "'mechatronic' (with machine.synchronization 'master-slave' or 'equal-coordinates')"
+            raise InputError(
+                Problem(
+                    "--structure",
+                    structure,
+                    "the thread group of seed 001 exists as 'mechanical' or 'mechatronic'",
+                    "use one of those (with machine.synchronization 'master-slave' or 'equal-coordinates')",
+                ),
+                job.source,
             )
         return thread_sheet(job, structure)
     if structure not in SKIVING_SHEETS:
-        raise ValueError(f"--structure {structure!r}: not a skiving structure; use one of {', '.join(SKIVING_SHEETS)}")
+        raise InputError(
+            Problem("--structure", structure, "not a skiving structure", f"use one of {', '.join(SKIVING_SHEETS)}"),
+            job.source,
+        )
     job = dataclasses.replace(job, machine=machine_constants(job.machine, structure))
     settings, const_names = SKIVING_SHEETS[structure](job)
     geometry, passes, sanity = skiving_geometry(job)
@@ -545,5 +559,5 @@ def setup_sheet(job: Job, structure: str | None = None) -> SetupSheet:
     if structure == "mechatronic":
         notes.append("ky follows c2 ks T / t_TV (divider law f_out = f_ref / k); seed 000 prints ks t_TV / (c2 T)")
     return SetupSheet(
-        structure, "gear", settings, _skiving_constants(job, const_names), geometry, passes, sanity, notes
+        structure, "skiving", settings, _skiving_constants(job, const_names), geometry, passes, sanity, notes
     )

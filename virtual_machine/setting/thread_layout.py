@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+from cutting.errors import InputError, Problem
 from machine_models.parts import MM
 from machine_models.thread_lathe import ThreadLatheParams, ThreadLayout
 from virtual_machine.setting.sheet import thread_sheet
@@ -16,13 +17,18 @@ from virtual_machine.setting.sheet import thread_sheet
 def thread_form(job) -> str:
     """``mechanical``, ``master-slave`` or ``equal-coordinates`` from the job's [machine] structure/synchronization."""
     m = job.machine
-    if m["structure"] == "mechanical":
+    if m.structure == "mechanical":
         return "mechanical"
-    if m["structure"] == "mechatronic":
-        return m["synchronization"]
-    raise ValueError(
-        f"machine.structure = {m['structure']!r}: the thread group of seed 001 exists as 'mechanical' or "
-        "'mechatronic' (with machine.synchronization 'master-slave' or 'equal-coordinates')"
+    if m.structure == "mechatronic":
+        return m.synchronization
+    raise InputError(
+        Problem(
+            "machine.structure",
+            m.structure,
+            "the thread group of seed 001 exists as 'mechanical' or 'mechatronic'",
+            "use one of those (with machine.synchronization 'master-slave' or 'equal-coordinates')",
+        ),
+        job.source,
     )
 
 
@@ -38,19 +44,17 @@ def thread_layout(job, params: ThreadLatheParams, sheet=None) -> ThreadLayout:
     n_sp = sheet.geometry["spindle_speed_rpm"] * 2 * math.pi / 60
     chain = feed = None
     if form == "mechanical":
-        spindle_ratio = m["c3"] * st["iv"].realised
-        chain = hand * st["ix"].realised * m["i01"]
-        motor = m["motor_speed"] * 2 * math.pi / 60
+        spindle_ratio = m.c3 * st["iv"].realised
+        chain = hand * st["ix"].realised * m.i01
+        motor = m.motor_speed * 2 * math.pi / 60
         speed = motor * spindle_ratio
     else:
         spindle_ratio = params.spindle_drive.ratio
-        feed = m["i0"] if form == "master-slave" else m["i01"]
+        feed = m.i0 if form == "master-slave" else m.i01
         if form == "master-slave":
             speed = n_sp  # the master is a speed drive: no setting rounds its speed
         else:
-            speed = (
-                2 * math.pi * m["reference_frequency"] / (st["kv"].realisation["integer"] * m["command_pulses_per_rev"])
-            )
+            speed = 2 * math.pi * m.reference_frequency / (st["kv"].realisation["integer"] * m.command_pulses_per_rev)
         motor = speed / spindle_ratio
     length = t["length"] * MM
     lead = t["lead"] * MM
@@ -60,7 +64,7 @@ def thread_layout(job, params: ThreadLatheParams, sheet=None) -> ThreadLayout:
         form,
         hand,
         lead,
-        m["lead_screw_pitch"] * MM / (2 * math.pi),
+        m.lead_screw_pitch * MM / (2 * math.pi),
         spindle_ratio,
         chain,
         feed,

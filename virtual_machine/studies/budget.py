@@ -34,7 +34,6 @@ from metrology import tolerances as iso
 from virtual_machine.studies.spec import Study, Vary
 
 PARAMETERS = iso.PARAMETERS
-SLOPES = ("f_Halpha", "f_Hbeta")
 Z95 = 1.6448536269514722  # one-sided 95 % of a normal distribution
 
 

@@ -4,12 +4,12 @@ filled the store) is taken from it instead of run again.
 The store is a directory (a study file's ``cache = "DIR"``, relative to the study file, or ``pipeline.run(...,
 cache=DIR)``) of ``<key>.json`` files, each the result a study worker returns for a case (status, error, wall time,
 measurement document: see :func:`virtual_machine.studies.runner.run_case`) with the job it ran. The key is the
-sha256 of the job's content (:func:`job_content`: the keys and values, whatever their order, comments or layout), so
-a one-at-a-time study's base case and the base job run by another study, or the job file itself, share an entry.
+sha256 of skive's version (:func:`virtual_machine.version.skive_version`: its release and the fingerprint of its code
+and data) and the job's content (:func:`job_content`: the keys and values, whatever their order, comments or layout),
+so a one-at-a-time study's base case and the base job run by another study, or the job file itself, share an entry,
+and a result of other code is never served: after an upgrade, or any change to the code, the case runs again.
 Only cases that finished ("ok") are stored: a failure may be the worker's, not the job's. An entry is written
 atomically (a reader never sees half of it), so studies on several machines may share one directory.
-
-Like a resumed study's finished cases, the entries are trusted: empty the directory after changing skive.
 """
 
 from __future__ import annotations
@@ -22,6 +22,8 @@ from pathlib import Path
 from typing import Any
 
 import tomli_w
+
+from virtual_machine.version import skive_version
 
 
 def job_content(job_text: str) -> str:
@@ -37,19 +39,23 @@ def job_content(job_text: str) -> str:
     return tomli_w.dumps(ordered(tomllib.loads(job_text)))
 
 
-def content_key(job_text: str) -> str:
-    """The store's key of a job: the sha256 of its canonical content."""
-    return hashlib.sha256(job_content(job_text).encode()).hexdigest()
+def content_key(job_text: str, version: str | None = None) -> str:
+    """The store's key of a job run by skive ``version`` (default: this one): the sha256 of the version and the
+    job's canonical content."""
+    version = skive_version() if version is None else version
+    return hashlib.sha256(f"{version}\n{job_content(job_text)}".encode()).hexdigest()
 
 
 class CaseCache:
-    """The finished cases in ``directory`` (created when the first case is stored)."""
+    """The finished cases in ``directory`` (created when the first case is stored) that skive ``version`` (default:
+    this one) made."""
 
-    def __init__(self, directory: str | Path) -> None:
+    def __init__(self, directory: str | Path, version: str | None = None) -> None:
         self.directory = Path(directory)
+        self.version = skive_version() if version is None else version
 
     def path(self, job_text: str) -> Path:
-        return self.directory / f"{content_key(job_text)}.json"
+        return self.directory / f"{content_key(job_text, self.version)}.json"
 
     def get(self, job_text: str) -> dict[str, Any] | None:
         """The stored result of this job (status, error, wall_s, measurement), or None."""
@@ -59,7 +65,9 @@ class CaseCache:
         except (FileNotFoundError, json.JSONDecodeError):
             return None
         result = entry.get("result")
-        if entry.get("key") != path.stem or not isinstance(result, dict) or result.get("status") != "ok":
+        if entry.get("key") != path.stem or entry.get("version") != self.version:
+            return None
+        if not isinstance(result, dict) or result.get("status") != "ok":
             return None
         return result
 
@@ -70,7 +78,7 @@ class CaseCache:
         self.directory.mkdir(parents=True, exist_ok=True)
         path = self.path(job_text)
         kept = {k: result[k] for k in ("status", "error", "wall_s", "measurement")}
-        entry = {"key": path.stem, "job": job_content(job_text), "result": kept}
+        entry = {"key": path.stem, "version": self.version, "job": job_content(job_text), "result": kept}
         tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp")
         tmp.write_text(json.dumps(entry))
         tmp.replace(path)

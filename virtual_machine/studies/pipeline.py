@@ -34,7 +34,7 @@ def gear_data(study: Study) -> tuple[int, float, float, float, int]:
     """(z, mn, b, beta_deg, k_sector) of the base job's gear: what the ISO 1328-1 tolerances need."""
     job = parse_job(study.base_data, str(study.base_path))
     g = job.gear
-    k = (job.measurement or {}).get("sector_teeth") or iso.default_sector_pitches(g.teeth)
+    k = job.measurement.get("sector_teeth") or iso.default_sector_pitches(g.teeth)
     return g.teeth, g.mn, g.face_width, math.degrees(g.beta), k
 
 

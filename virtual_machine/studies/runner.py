@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from cutting.errors import SkiveError
 from virtual_machine.studies.cache import CaseCache
 from virtual_machine.studies.design import Case
 from virtual_machine.studies.spec import Study
@@ -70,13 +71,15 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
         out = Path(tmp) / "out"
         try:
             parsed = load_job(job)
-            doc = process_for(parsed).run(parsed, out, workers=1, reporter=Reporter(quiet=True)).data
+            process = process_for(parsed)
+            one = {"workers": 1} if process.takes("run", "workers") else {}  # a worker runs one removal process
+            doc = process.perform("run", parsed, out, reporter=Reporter(quiet=True), **one).data
             status, error = "ok", ""
         except Exception as exc:  # a failing case is a result of the study, not the end of it
             status, error = "failed", f"{type(exc).__name__}: {exc}"
             kept = out / "measurement.json"  # an unmeasurable gear keeps the run's facts
             doc = json.loads(kept.read_text()) if kept.is_file() else {}
-            if not isinstance(exc, expected_failures()):  # a defect, not the machine: keep where it happened
+            if not isinstance(exc, SkiveError):  # a defect, not the machine or the job: keep where it happened
                 error += "\n" + traceback.format_exc(limit=6)
             if str(out) in error:  # the scratch directory is gone: name what the study keeps instead
                 error = error.replace(str(out) + "/", "") + (
@@ -85,17 +88,6 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
                 )
             error = error.replace(str(job), f"cases/{case_id}/job.toml")  # the job as the study keeps it
     return {"id": case_id, "status": status, "error": error, "wall_s": time.perf_counter() - t0, "measurement": doc}
-
-
-def expected_failures() -> tuple[type[Exception], ...]:
-    """What a machine or a job can do to a case: bad input, a diverged simulation, lost synchronism, a gear the
-    measuring machine cannot measure."""
-    from cutting.errors import InputError
-    from virtual_machine.processes.skiving.run import UnmeasurableGearError
-    from virtual_machine.runtime.integrator import SimulationDivergedError
-    from virtual_machine.runtime.machine_run import LostSynchronismError
-
-    return (InputError, SimulationDivergedError, LostSynchronismError, UnmeasurableGearError)
 
 
 def measured_row(doc: dict[str, Any]) -> dict[str, Any]:

@@ -34,6 +34,7 @@ from virtual_machine.job import (
     parse_job,
     read_toml,
 )
+from virtual_machine.job.kinds import GRADED
 
 METHODS = ("one-at-a-time", "grid", "monte-carlo")
 DISTRIBUTIONS = ("normal", "uniform")
@@ -125,23 +126,19 @@ def base_value(data: dict[str, Any], key: str) -> Any:
         pass
     section, _, rest = key.partition(".")
     if key == "machine.size":  # the base job's own size, or the one its gear gets by default
-        from virtual_machine.runtime.machine_run import machine_size
+        from virtual_machine.setting.machine_layout import machine_size
 
         return machine_size(parse_job(data))
     if key.startswith(MODEL_PREFIX):
-        from machine_models.parameters import SkivingMachineParams, override
-        from virtual_machine.runtime.machine_run import machine_params
+        from machine_models.parameters import SkivingMachineParams, parameter
+        from virtual_machine.setting.machine_layout import machine_params
 
-        name = key[len(MODEL_PREFIX) :]
         params = machine_params(parse_job(data))  # the base job's size and model (the job was parsed before)
         try:
-            override(params, {name: None})  # names only: says which part of the name is wrong
+            return parameter(params, key[len(MODEL_PREFIX) :])
         except KeyError as exc:
             names = ", ".join(f.name for f in fields(SkivingMachineParams))
             raise InputError(Problem(key, None, str(exc.args[0]), f"valid parameters: {names}")) from None
-        head, _, tail = name.partition(".")
-        value = getattr(params, head)
-        return getattr(value, tail) if tail else value
     sections = {**SECTIONS_GEAR, **OPTIONAL_SECTIONS}
     if section not in sections:
         valid = ", ".join(sections)
@@ -188,14 +185,61 @@ def load_study(path: str | Path) -> Study:
     if cache is not None and not (isinstance(cache, str) and cache):
         problems.append(Problem("cache", cache, "must be a directory path", 'e.g. cache = "../cases"'))
         cache = None
+    base_path, base_data = _base_job(path, data, problems, source)
+    varies = _varies(data.get("vary", []), method, base_data, problems)
+    if problems:
+        raise InputError(problems, source)
+    return Study(
+        path,
+        base_path,
+        base_data,
+        method,
+        varies,
+        samples if method == "monte-carlo" else 0,
+        seed,
+        (path.parent / cache).resolve() if cache else None,
+    )
+
+
+def _base_job(path: Path, data: dict[str, Any], problems: list[Problem], source: str) -> tuple[Path, dict[str, Any]]:
+    """The base job's path and TOML; InputError (with the study's ``problems`` so far) when it is missing, not a
+    valid job, or not a gear the budget can grade."""
     if "base" not in data or not isinstance(data["base"], str):
         raise InputError(
             [*problems, Problem("base", data.get("base"), "missing", 'e.g. base = "../jobs/default.toml"')], source
         )
     base_path = (path.parent / data["base"]).resolve()
+    if not base_path.is_file():
+        raise InputError(
+            [
+                *problems,
+                Problem(
+                    "base",
+                    data["base"],
+                    f"no job file at {base_path} (the path is relative to the study file's folder)",
+                    f"give the path of a .toml job file relative to {path.resolve().parent}, "
+                    'e.g. base = "../jobs/default.toml"',
+                ),
+            ],
+            source,
+        )
     base_data = read_toml(base_path)
-    parse_job(base_data, str(base_path))  # the base job itself must be valid
-    entries = data.get("vary", [])
+    base_job = parse_job(base_data, str(base_path))  # the base job itself must be valid
+    if base_job.kind not in GRADED:
+        raise InputError(
+            Problem(
+                "base",
+                data["base"],
+                f"a study budgets a gear's ISO 1328-1 deviations; the base job is a {base_job.kind} job",
+                "use a skiving or form-milling job as the base",
+            ),
+            source,
+        )
+    return base_path, base_data
+
+
+def _varies(entries: Any, method: str, base_data: dict[str, Any], problems: list[Problem]) -> tuple[Vary, ...]:
+    """The study's [[vary]] entries, each checked against the base job (problems appended)."""
     if not isinstance(entries, list) or not entries:
         problems.append(Problem("vary", entries, "the study varies nothing", "add [[vary]] tables with key = ..."))
         entries = []
@@ -219,18 +263,7 @@ def load_study(path: str | Path) -> Study:
         vary = _vary(entry, where, method, base_data, problems)
         if vary is not None:
             varies.append(vary)
-    if problems:
-        raise InputError(problems, source)
-    return Study(
-        path,
-        base_path,
-        base_data,
-        method,
-        tuple(varies),
-        samples if method == "monte-carlo" else 0,
-        seed,
-        (path.parent / cache).resolve() if cache else None,
-    )
+    return tuple(varies)
 
 
 def _vary(entry: dict, where: str, method: str, base_data: dict, problems: list[Problem]) -> Vary | None:

@@ -10,12 +10,14 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import ClassVar
 
 from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, reporter_or_default, written
+from virtual_machine.processes.options import RecordedOptions, StageOptions
 
 FILES = ("coupling.stl", "measurement.json", "report.html")
 
@@ -23,21 +25,21 @@ FILES = ("coupling.stl", "measurement.json", "report.html")
 class FaceContour(Process):
     kind = "face_contour"
     title = "face contour (continuous indexing)"
+    stages: ClassVar[dict[str, type[StageOptions]]] = {
+        "setup": StageOptions,
+        "simulate": StageOptions,
+        "cut": StageOptions,
+        "run": RecordedOptions,
+    }
 
-    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+    def setup(self, job: Job, options: StageOptions | None = None) -> Product:
         from cutting.face_contour.slots import setting_sheet
         from virtual_machine.processes.face_contour.stages import format_setting_sheet, tool_speed
 
         return Product("setup", finite(setting_sheet(job.coupling, tool_speed(job))), format_setting_sheet(job))
 
     def simulate(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        duration: float | None = None,
-        rrd: Path | None = None,
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: StageOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.processes.face_contour.stages import format_simulation, simulate_face_job
 
@@ -47,15 +49,7 @@ class FaceContour(Process):
         return Product("simulate", summary, format_simulation(summary), written(out, "simulation.json"), out)
 
     def cut(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        edge: str | None = None,
-        workers: int | None = None,
-        trajectory: Path | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: StageOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.processes.face_contour.stages import cut_face_job, format_result
 
@@ -65,16 +59,11 @@ class FaceContour(Process):
         return Product("cut", doc, text, written(out, *FILES), out)
 
     def run(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        rrd: Path | None = None,
-        workers: int | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: RecordedOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.processes.face_contour.stages import format_result, run_face_job
+
+        rrd = self._options("run", options).rrd
 
         with reporter_or_default(reporter) as rep:
             doc = run_face_job(job, Path(job.source), out, None, rep.stage, rrd)

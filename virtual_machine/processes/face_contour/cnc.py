@@ -1,5 +1,6 @@
-"""The CNC of the face-contour machine (seed 004, continuous indexing), its simulation loop, and the cut and the
-measurement of the motion the machine really makes, with the geometry of :mod:`cutting.face_contour.slots`.
+"""The CNC of the face-contour machine (seed 004, continuous indexing), its task and load hook on the machine loop,
+and the cut and the measurement of the motion the machine really makes, with the geometry of
+:mod:`cutting.face_contour.slots`.
 
 **Electronic gearbox** (:class:`virtual_machine.controllers.face_gearbox.ElectronicGearbox`: reference generator 14
 -> head; divider 7 (1/m) -> summator 9 with the cyclic-ratio modulation -> work; x N -> eccentric; the infeed's S per
@@ -13,13 +14,14 @@ friction therefore show between tip and workpiece, not at the encoders.
 recorded pass) with every axis where the programme has it then and every stage relaxed: the plunge passes before
 it lie above the final ones (the xy motion does not depend on the feed), so they cut nothing the final passes
 leave. It runs up, and records, at the servo rate, the element tips' poses in the workpiece frame (sites
-``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest; each
-tick's physics with the divergence and runaway checks of :class:`virtual_machine.runtime.integrator.Integrator`.
+``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest: the
+task :class:`FaceCnc` on the machine loop (:mod:`virtual_machine.runtime.loop`), whose physics has the divergence and
+runaway checks of :class:`virtual_machine.runtime.integrator.Integrator`.
 
 **Cutting forces** (``load``, :mod:`cutting.face_contour.forces`): checked before the run against the motors
-(:func:`check_cutting_load`: a feed the head motor cannot cut is refused, naming the feed that would do), then fed
-back at every tick (:class:`ForceFeedback`, ``mj_applyFT`` at the element tips on the head and, reversed, on the
-workpiece); the passes record the forces and the work and head drives' twists.
+(:func:`virtual_machine.reach.face.check_cutting_load`: a feed the head motor cannot cut is refused, naming the feed
+that would do), then fed back at every tick (:class:`ForceFeedback`, the machine's load hook: at the element tips on
+the head and, reversed, on the workpiece); the passes record the forces and the work and head drives' twists.
 
 **Cut and measure** the recorded motion: :func:`cut_recorded` sweeps the elements' plates (the plate corners of
 :func:`cutting.face_contour.slots.plate_corners`, here from the recorded frames) as hulls through the face blank;
@@ -40,8 +42,7 @@ import mujoco
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from cutting.errors import InputError, Problem
-from cutting.face_contour.forces import FaceLoad, sizing
+from cutting.face_contour.forces import FaceLoad
 from cutting.face_contour.slots import (
     SWEEP_TOLERANCE,
     FaceCoupling,
@@ -69,24 +70,24 @@ from machine_models.parts import tendon_coefs
 from metrology.face_slots import SlotMeasure, bottom_form, measuring_radii, side_lines
 from virtual_machine.controllers.cascade import CascadeServo, ServoAxis
 from virtual_machine.controllers.face_gearbox import ElectronicGearbox
-from virtual_machine.processes.face_contour.reach import check_face_reach
+from virtual_machine.reach.face import check_cutting_load, check_face_reach
 from virtual_machine.runtime.integrator import (
     BAD_ACCELERATION_OR_SPEED,
     Integrator,
     divergence_message,
     servo_substeps,
 )
+from virtual_machine.runtime.loop import MachineLoop, ToolLoad
 from virtual_machine.setting.machine_layout import face_layout
 
 __all__ = [
     "AXES",
-    "CUT_TORQUE_SHARE",
+    "FaceCnc",
     "FaceContourRecord",
     "FacePassRecord",
     "FaceServo",
     "FaceTuning",
     "ForceFeedback",
-    "check_cutting_load",
     "cut_recorded",
     "drive_twists",
     "final_turn",
@@ -324,77 +325,39 @@ def _check_held_speed(c: FaceCoupling, servo: FaceServo, omega: float, tool_rpm:
             )
 
 
-#: share of a motor's peak torque the cutting load may take (the rest: the servo's acceleration, friction)
-CUT_TORQUE_SHARE = 0.8
-
-
-def check_cutting_load(c: FaceCoupling, load: FaceLoad, params: FaceMachineParams) -> dict[str, dict[str, float]]:
-    """The motors' torques under the cycle's heaviest pass (:func:`cutting.face_contour.forces.sizing`: the head
-    torque on MH, the work's on MA, the thrust on MZ); a motor the cut would take beyond CUT_TORQUE_SHARE of its
-    peak refuses the job before the run (InputError on ``coupling.feed``, naming the motor, the torque needed and the
-    feed that would do). The motors' other loads (friction, the slide's unbalanced weight, the servo's
-    acceleration) take the rest of the peak. Returns the sizing."""
-    lead = params.screw_pitch / (2 * math.pi)
-    motors = {
-        "MH": (abs(params.head_drive.ratio), params.h_motor_torque),
-        "MA": (abs(params.work_drive.ratio), params.a_motor_torque),
-        "MZ": (abs(params.z_drive.ratio) * lead, params.z_motor_torque),
-    }
-    size = sizing(c, load.material, load.window, motors, CUT_TORQUE_SHARE)
-    problems = [
-        Problem(
-            "coupling.feed",
-            c.S,
-            f"the heaviest pass (layer m S = {c.m * c.S:.4g} mm, F_c {row['F_c_N']:.0f} N, thrust "
-            f"{row['thrust_N']:.0f} N in {load.material.key}) needs {row['needed_N_m']:.1f} N m of {name}, beyond "
-            f"{CUT_TORQUE_SHARE:.0%} of its {row['peak_N_m']:g} N m peak",
-            f"a feed of {row['feed_mm']:.4g} mm per tool revolution or less, or a stronger "
-            f"machine.model.{name[1].lower()}_motor_torque",
-        )
-        for name, row in size.items()
-        if "feed_mm" in row
-    ]
-    if problems:
-        raise InputError(problems)
-    return size
-
-
 class ForceFeedback:
-    """The cutting forces fed back into the physics (as form milling does): each servo tick, at the head's real
-    angle, every element's force from ``load`` acts at its tip (site ``element_frame*``) on the tool head and,
-    reversed, on the workpiece (``blank_frame``'s body), through ``mujoco.mj_applyFT`` into ``qfrc_applied``, held
-    over the tick's physics sub-steps as their mean over the tick's head angles (the impulse right at the entry
-    step); ``last`` the forces of the tick (E, 3) in the workpiece frame [N]."""
+    """The face-contour machine's load hook (as form milling's): each servo tick, at the head's real angle, every
+    element's force from ``load`` acts at its tip (site ``element_frame*``) on the tool head and, reversed, on the
+    workpiece (``blank_frame``'s body), held over the tick's physics sub-steps as their mean over the tick's head
+    angles (the impulse right at the entry step); ``last`` the forces of the tick (E, 3) in the workpiece frame [N].
+    The task hands it the tick's head angles (:meth:`at`) before the loop asks for the loads."""
+
+    every_substep = False
 
     def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, load: FaceLoad, sites: list[int], site_b: int):
         self.model, self.data, self.load = model, data, load
         self.sites, self.site_b = sites, site_b
         self.body_t = [int(model.site_bodyid[s]) for s in sites]
-        self.body_b = int(model.site_bodyid[site_b])
         self.last = np.zeros((len(sites), 3))
         self.zero3 = np.zeros(3)
-        self.on = False
+        self._phi = self._dphi = 0.0
 
-    def apply(self, phi: float, dphi: float) -> None:
-        """Apply the mean forces over the tick's head angles phi..phi + dphi [rad]."""
+    def at(self, phi: float, dphi: float) -> None:
+        """The tick's head angles: phi..phi + dphi [rad]."""
+        self._phi, self._dphi = phi, dphi
+
+    def __call__(self, t: float, dt: float) -> list[ToolLoad]:
+        """The mean forces over the tick's head angles, on the element tips."""
         m, d = self.model, self.data
-        f = self.load.at(phi, dphi)
+        f = self.load.at(self._phi, self._dphi)
         if f is None:
-            if self.on:
-                d.qfrc_applied[:] = 0.0
-                self.last[:] = 0.0
-                self.on = False
-            return
-        mujoco.mj_kinematics(m, d)  # mj_applyFT takes the present kinematics (after mj_step they are stale)
-        d.qfrc_applied[:] = 0.0
+            self.last[:] = 0.0
+            return []
+        mujoco.mj_kinematics(m, d)  # mj_applyFT takes the present kinematics (after a physics step they are stale)
         rb = d.site_xmat[self.site_b].reshape(3, 3)
-        for j, s in enumerate(self.sites):
-            fw = rb @ f[j]
-            point = d.site_xpos[s]
-            mujoco.mj_applyFT(m, d, fw, self.zero3, point, self.body_t[j], d.qfrc_applied)
-            mujoco.mj_applyFT(m, d, -fw, self.zero3, point, self.body_b, d.qfrc_applied)
+        out = [ToolLoad(rb @ f[j], self.zero3, d.site_xpos[s].copy(), self.body_t[j]) for j, s in enumerate(self.sites)]
         self.last[:] = f
-        self.on = True
+        return out
 
 
 def drive_twists(model: mujoco.MjModel) -> Callable[[np.ndarray], np.ndarray]:
@@ -424,7 +387,7 @@ def simulate_face_contour(
     head at ``tool_rpm`` (at M; ``hold_speed``: its speed by eq. 16 all round, so that the tip's speed under the
     eccentric stays that at M), and record the final pass over each of ``slots``. The run starts at rest ``run_in`` tool
     turns before the first of these passes (or at ``start_turn``) and ends after the last. Raises ValueError for bad
-    inputs and :class:`virtual_machine.runtime.integrator.SimulationDivergedError` when the integration blows up or
+    inputs and :class:`cutting.errors.SimulationDivergedError` when the integration blows up or
     a servo runs away (the message names what to change). ``load``: the cutting forces
     (:class:`cutting.face_contour.forces.FaceLoad`), fed back at every tick (:class:`ForceFeedback`) after a check
     that the motors can take the cycle's heaviest pass (:func:`check_cutting_load`, InputError if not); none: the
@@ -442,9 +405,7 @@ def simulate_face_contour(
         raise ValueError(f"slots = {slots}: each slot once")
     layout = face_layout(coupling)
     model = build_face_machine_spec(layout, params).compile()  # raises ValueError naming bad parameters
-    h = model.opt.timestep
-    substeps = servo_substeps(h, tuning.servo_rate)
-    dt = substeps * h
+    servo_substeps(model.opt.timestep, tuning.servo_rate)  # the servo period a whole number of time steps
     omega = tool_rpm * 2 * math.pi / 60
     window = pass_window(coupling, tuning.window_margin)
     turns = {k: final_turn(coupling, k, window) for k in slots}
@@ -463,60 +424,157 @@ def simulate_face_contour(
     egb = ElectronicGearbox(
         coupling, start_turn, omega, tuning.pulses_per_rev, tuning.infeed_resolution, tuning.ramp, hold_speed, master
     )
-    pos, _, _ = egb.command(0.0, dt)
-    eccentric = layout.eccentric
-    axes = {"A": pos[_A], "H": pos[_H] - pos[_E], "Z": pos[_Z]} | ({"E": pos[_E]} if eccentric else {})
-    axes |= {"Y": pos[_Y]} if layout.work_setting else {}
-    data = mujoco.MjData(model)
-    data.qpos[:] = relaxed_qpos(model, axes)
-    servo = FaceServo(model, data, params, tuning, pos)
-
+    cnc = FaceCnc(coupling, layout, model, params, tuning, egb, window, turns, slots, tool_rpm, start_turn, progress)
     if hold_speed and coupling.eccentric_on:
-        _check_held_speed(coupling, servo, omega, tool_rpm)
+        _check_held_speed(coupling, cnc.servo, omega, tool_rpm)
+    hook = None
     if load is not None:
         check_cutting_load(coupling, load, params)
+        hook = cnc.feedback = ForceFeedback(model, cnc.data, load, cnc.sites, cnc.site_b)
+    MachineLoop(cnc.integrator, cnc, hook, int(model.site_bodyid[cnc.sites[0]]), cnc.body_b).run()
+    return cnc.record()
 
-    qa = {n: int(model.joint(n).qposadr[0]) for n in ("A", "H", "Z")}
-    qe = int(model.joint("E").qposadr[0]) if eccentric else -1
-    qy = int(model.joint("Y").qposadr[0]) if layout.work_setting else -1
-    site_b = int(model.site("blank_frame").id)
-    sites = [int(model.site("element_frame" if j == 0 else f"element_frame_{j}").id) for j in range(coupling.elements)]
-    xpos, xmat = data.site_xpos, data.site_xmat
-    feedback = ForceFeedback(model, data, load, sites, site_b) if load is not None else None
-    twists = drive_twists(model)
-    extras: list[np.ndarray] = []  # per recorded tick: the forces (E x 3, with a load), the two twists
-    integrator = Integrator(
-        model,
-        data,
-        substeps,
-        qa["Z"],
-        lambda t: _diagnose(layout, params, t),
-        BAD_ACCELERATION_OR_SPEED,
-        servo.error,
-        tuning.runaway,
-        lambda t: _runaway(servo, tuning, tool_rpm, h, t),
-    )
-    order = sorted(slots, key=turns.__getitem__)
-    windows = [(k, 2 * math.pi * turns[k] + window[0], 2 * math.pi * turns[k] + window[1]) for k in order]
-    phi_end = windows[-1][2] + 0.02
-    total = phi_end - egb.phi0
-    n_slot = 0
-    rows: list[np.ndarray] = []
-    passes: list[FacePassRecord] = []
-    traces: list[np.ndarray] = []
-    n_el = coupling.elements
-    to_arcsec = np.array([1 / ARCSEC, 1 / ARCSEC, 1 / ARCSEC, 1e6, 1e6])
-    tick, wall0 = 0, time.perf_counter()
 
-    def close_pass() -> None:
-        k = windows[n_slot][0]
-        r = np.array(rows)  # (n, 4 + 9 E + 4): t, phi, phi_cmd, a; per element tip, edge, radial; errors
-        n = len(r)
+class FaceCnc:
+    """The face-contour machine's task on the machine loop: before each tick the electronic gearbox's command (with
+    the head's encoder when the slaves follow it), the servo, and inside a recorded pass the element tips' poses at
+    the tick's start and the traces; after it the gearbox's counters, the cut's forces of the tick and the
+    progress. The program ends a little after the last recorded pass."""
+
+    def __init__(
+        self,
+        coupling: FaceCoupling,
+        layout: FaceMachineLayout,
+        model: mujoco.MjModel,
+        params: FaceMachineParams,
+        tuning: FaceTuning,
+        egb: ElectronicGearbox,
+        window: tuple[float, float],
+        turns: dict[int, int],
+        slots: tuple[int, ...],
+        tool_rpm: float,
+        start_turn: int,
+        progress: Callable[[float], None] | None,
+    ):
+        self.coupling, self.tuning, self.egb, self.turns, self.slots = coupling, tuning, egb, turns, slots
+        self.tool_rpm, self.start_turn, self.progress, self.model = tool_rpm, start_turn, progress, model
+        h = model.opt.timestep
+        substeps = servo_substeps(h, tuning.servo_rate)
+        self.dt = substeps * h
+        pos, _, _ = egb.command(0.0, self.dt)
+        self.eccentric = eccentric = layout.eccentric
+        axes = {"A": pos[_A], "H": pos[_H] - pos[_E], "Z": pos[_Z]} | ({"E": pos[_E]} if eccentric else {})
+        axes |= {"Y": pos[_Y]} if layout.work_setting else {}
+        self.data = data = mujoco.MjData(model)
+        data.qpos[:] = relaxed_qpos(model, axes)
+        self.servo = servo = FaceServo(model, data, params, tuning, pos)
+        self.qa = {n: int(model.joint(n).qposadr[0]) for n in ("A", "H", "Z")}
+        self.qe = int(model.joint("E").qposadr[0]) if eccentric else -1
+        self.qy = int(model.joint("Y").qposadr[0]) if layout.work_setting else -1
+        self.site_b = int(model.site("blank_frame").id)
+        self.body_b = int(model.site_bodyid[self.site_b])
+        self.sites = [
+            int(model.site("element_frame" if j == 0 else f"element_frame_{j}").id) for j in range(coupling.elements)
+        ]
+        self.feedback: ForceFeedback | None = None  # the cut's load hook, when the run has one
+        self.twists = drive_twists(model)
+        self.integrator = Integrator(
+            model,
+            data,
+            substeps,
+            self.qa["Z"],
+            lambda t: _diagnose(layout, params, t),
+            BAD_ACCELERATION_OR_SPEED,
+            servo.error,
+            tuning.runaway,
+            lambda t: _runaway(servo, tuning, tool_rpm, h, t),
+        )
+        order = sorted(slots, key=turns.__getitem__)
+        self.windows = [(k, 2 * math.pi * turns[k] + window[0], 2 * math.pi * turns[k] + window[1]) for k in order]
+        self.phi_end = self.windows[-1][2] + 0.02
+        self.total = self.phi_end - egb.phi0
+        self.n_slot = 0
+        self.rows: list[np.ndarray] = []
+        self.extras: list[np.ndarray] = []  # per recorded tick: the forces (E x 3, with a load), the two twists
+        self.passes: list[FacePassRecord] = []
+        self.traces: list[np.ndarray] = []
+        self.to_arcsec = np.array([1 / ARCSEC, 1 / ARCSEC, 1 / ARCSEC, 1e6, 1e6])
+        self.tick, self.wall0 = 0, time.perf_counter()
+        self.head_dofs = [int(model.joint(j).dofadr[0]) for j in head_angle_joints(model)]
+        self.w_prev: float | None = None
+        self._t = self._phi_cmd = 0.0  # the tick's start and its head command
+        self._recorded = False  # this tick's row is in a recorded pass
+        self._twist: np.ndarray | None = None
+
+    def _phi(self) -> float:
+        """The head's absolute angle now [rad]."""
+        qpos = self.data.qpos
+        return qpos[self.qa["H"]] + (qpos[self.qe] if self.eccentric else 0.0)
+
+    def before_tick(self) -> bool:
+        data, egb, servo = self.data, self.egb, self.servo
+        t = self._t = data.time
+        head = None
+        if egb.master == "head":  # the spindle encoder: angle at the command resolution, speed, its change a tick
+            w_now = float(sum(data.qvel[k] for k in self.head_dofs))
+            dw = 0.0 if self.w_prev is None else (w_now - self.w_prev) / self.dt
+            head = (round(self._phi() / egb.rad) * egb.rad, w_now, dw)
+            self.w_prev = w_now
+        cmd_pos, cmd_vel, cmd_acc = egb.command(t, self.dt, head)
+        phi_cmd = self._phi_cmd = cmd_pos[_H]
+        if phi_cmd > self.phi_end:
+            return False
+        servo.update(self.dt, cmd_pos, cmd_vel, cmd_acc)
+        phi = self._phi()
+        if self.feedback is not None:
+            self.feedback.at(phi, cmd_vel[_H] * self.dt)  # the tick's head angles, for the load hook
+        self._recorded = False
+        windows = self.windows
+        if self.n_slot < len(windows) and phi_cmd >= windows[self.n_slot][1]:
+            if phi_cmd <= windows[self.n_slot][2]:
+                self._record_tick(t, phi, phi_cmd)
+            else:
+                self._close_pass()
+                self.n_slot += 1
+        if self.tick % self.tuning.trace_every == 0:
+            self._trace(t, phi, phi_cmd)
+        return True
+
+    def after_tick(self) -> None:
+        if self._recorded:  # the tick's forces (the hook's, of this tick) beside the twists at its start
+            forces = self.feedback.last.ravel() if self.feedback is not None else []
+            self.extras.append(np.concatenate([forces, self._twist]))
+        self.tick += 1
+        self.egb.update(self.dt, self._t)
+        if self.progress is not None and self.tick % 500 == 0:
+            self.progress(min((self._phi_cmd - self.egb.phi0) / self.total, 0.999))
+
+    def _record_tick(self, t: float, phi: float, phi_cmd: float) -> None:
+        """The element tips' poses in the workpiece frame at the tick's start (after a physics step site poses are
+        stale)."""
+        data = self.data
+        mujoco.mj_kinematics(self.model, data)
+        xpos, xmat, site_b = data.site_xpos, data.site_xmat, self.site_b
+        rb = xmat[site_b].reshape(3, 3)
+        row = [np.array([t, phi, phi_cmd, data.qpos[self.qa["A"]]])]
+        for s in self.sites:
+            rs = rb.T @ xmat[s].reshape(3, 3)
+            row += [rb.T @ (xpos[s] - xpos[site_b]) * 1e3, rs[:, 0], rs[:, 2]]
+        row.append(self.servo.error.copy())
+        self.rows.append(np.concatenate(row))
+        self._twist = self.twists(data.qpos)
+        self._recorded = True
+
+    def _close_pass(self) -> None:
+        k = self.windows[self.n_slot][0]
+        r = np.array(self.rows)  # (n, 4 + 9 E + 4): t, phi, phi_cmd, a; per element tip, edge, radial; errors
+        n, n_el = len(r), self.coupling.elements
         poses = r[:, 4 : 4 + 9 * n_el].reshape(n, n_el, 3, 3).transpose(1, 0, 2, 3)
-        passes.append(
+        extras = np.array(self.extras)
+        self.passes.append(
             FacePassRecord(
                 slot=int(k),
-                turn=int(turns[k]),
+                turn=int(self.turns[k]),
                 t=r[:, 0].copy(),
                 phi=r[:, 1].copy(),
                 phi_cmd=r[:, 2].copy(),
@@ -524,98 +582,65 @@ def simulate_face_contour(
                 tip=poses[:, :, 0].copy(),
                 edge=poses[:, :, 1].copy(),
                 radial=poses[:, :, 2].copy(),
-                following_error=r[:, 4 + 9 * n_el :] * to_arcsec,
-                force=np.array(extras)[:, :-2].reshape(n, n_el, 3).transpose(1, 0, 2) if feedback else None,
-                twist=np.array(extras)[:, -2:],
+                following_error=r[:, 4 + 9 * n_el :] * self.to_arcsec,
+                force=extras[:, :-2].reshape(n, n_el, 3).transpose(1, 0, 2) if self.feedback else None,
+                twist=extras[:, -2:],
             )
         )
-        rows.clear()
-        extras.clear()
+        self.rows.clear()
+        self.extras.clear()
 
-    head_dofs = [int(model.joint(j).dofadr[0]) for j in head_angle_joints(model)]
-    w_prev = None
-    while True:
-        t = data.time
-        head = None
-        if egb.master == "head":  # the spindle encoder: angle at the command resolution, speed, its change a tick
-            angle = data.qpos[qa["H"]] + (data.qpos[qe] if eccentric else 0.0)
-            w_now = float(sum(data.qvel[k] for k in head_dofs))
-            head = (round(angle / egb.rad) * egb.rad, w_now, 0.0 if w_prev is None else (w_now - w_prev) / dt)
-            w_prev = w_now
-        cmd_pos, cmd_vel, cmd_acc = egb.command(t, dt, head)
-        phi_cmd = cmd_pos[_H]
-        if phi_cmd > phi_end:
-            break
-        servo.update(dt, cmd_pos, cmd_vel, cmd_acc)
-        phi = data.qpos[qa["H"]] + (data.qpos[qe] if eccentric else 0.0)
-        if feedback is not None:
-            feedback.apply(phi, cmd_vel[_H] * dt)
-        if n_slot < len(windows) and phi_cmd >= windows[n_slot][1]:
-            if phi_cmd <= windows[n_slot][2]:
-                mujoco.mj_kinematics(model, data)  # the state at this tick (site poses after mj_step are stale)
-                rb = xmat[site_b].reshape(3, 3)
-                row = [np.array([t, phi, phi_cmd, data.qpos[qa["A"]]])]
-                for s in sites:
-                    rs = rb.T @ xmat[s].reshape(3, 3)
-                    row += [rb.T @ (xpos[s] - xpos[site_b]) * 1e3, rs[:, 0], rs[:, 2]]
-                row.append(servo.error.copy())
-                rows.append(np.concatenate(row))
-                extras.append(np.concatenate([feedback.last.ravel() if feedback else [], twists(data.qpos)]))
-            else:
-                close_pass()
-                n_slot += 1
-        if tick % tuning.trace_every == 0:
-            q = np.array([data.qpos[qa["A"]], phi, data.qpos[qe] if eccentric else 0.0, data.qpos[qa["Z"]]])
-            ideal_a = float(workpiece_angle(coupling, phi))
-            ideal_z = -min(egb.feed_per_turn * phi / (2 * math.pi), coupling.depth * 1e-3)
-            sync = [
-                (q[0] - ideal_a) / ARCSEC,
-                (q[2] - coupling.eccentric_ratio * phi) / ARCSEC if eccentric else 0.0,
-                (q[3] - ideal_z) * 1e6,
-            ]
-            y = data.qpos[qy] if qy >= 0 else 0.0
-            cross = [y * 1e6, (y * 1e3 - float(work_offset(coupling, phi)[0])) * 1e3]  # Y, Y - T (1 - cos q_s phi) [um]
-            traces.append(
-                np.concatenate(
-                    [
-                        [t, phi_cmd],
-                        q,
-                        sync,
-                        servo.torque[:4],
-                        servo.error[:4] * to_arcsec[:4],
-                        cross,
-                        servo.torque[4:],
-                        servo.error[4:] * to_arcsec[4:],
-                    ]
-                )
+    def _trace(self, t: float, phi: float, phi_cmd: float) -> None:
+        data, c, egb, servo = self.data, self.coupling, self.egb, self.servo
+        qa, qe, qy, to_arcsec = self.qa, self.qe, self.qy, self.to_arcsec
+        q = np.array([data.qpos[qa["A"]], phi, data.qpos[qe] if self.eccentric else 0.0, data.qpos[qa["Z"]]])
+        ideal_a = float(workpiece_angle(c, phi))
+        ideal_z = -min(egb.feed_per_turn * phi / (2 * math.pi), c.depth * 1e-3)
+        sync = [
+            (q[0] - ideal_a) / ARCSEC,
+            (q[2] - c.eccentric_ratio * phi) / ARCSEC if self.eccentric else 0.0,
+            (q[3] - ideal_z) * 1e6,
+        ]
+        y = data.qpos[qy] if qy >= 0 else 0.0
+        cross = [y * 1e6, (y * 1e3 - float(work_offset(c, phi)[0])) * 1e3]  # Y, Y - T (1 - cos q_s phi) [um]
+        self.traces.append(
+            np.concatenate(
+                [
+                    [t, phi_cmd],
+                    q,
+                    sync,
+                    servo.torque[:4],
+                    servo.error[:4] * to_arcsec[:4],
+                    cross,
+                    servo.torque[4:],
+                    servo.error[4:] * to_arcsec[4:],
+                ]
             )
-        integrator.step()
-        tick += 1
-        egb.update(dt, t)
-        if progress is not None and tick % 500 == 0:
-            progress(min((phi_cmd - egb.phi0) / total, 0.999))
-    if rows:
-        close_pass()
-    data.qfrc_applied[:] = 0.0
-    if progress is not None:
-        progress(1.0)
-    tr = np.array(traces)
-    return FaceContourRecord(
-        coupling=coupling,
-        tool_rpm=float(tool_rpm),
-        start_turn=int(start_turn),
-        passes=sorted(passes, key=lambda p: slots.index(p.slot)),
-        trace_t=tr[:, 0],
-        trace_phi_cmd=tr[:, 1],
-        trace_q=tr[:, 2:6] * np.array([1.0, 1.0, 1.0, 1e3]),
-        trace_sync=tr[:, 6:9],
-        trace_torque=tr[:, 9:13],
-        trace_error=tr[:, 13:17],
-        trace_cross=tr[:, 17:21],
-        eccentric=eccentric,
-        wall_time=time.perf_counter() - wall0,
-        sim_time=float(data.time),
-    )
+        )
+
+    def record(self) -> FaceContourRecord:
+        if self.rows:
+            self._close_pass()
+        self.data.qfrc_applied[:] = 0.0
+        if self.progress is not None:
+            self.progress(1.0)
+        tr = np.array(self.traces)
+        return FaceContourRecord(
+            coupling=self.coupling,
+            tool_rpm=float(self.tool_rpm),
+            start_turn=int(self.start_turn),
+            passes=sorted(self.passes, key=lambda p: self.slots.index(p.slot)),
+            trace_t=tr[:, 0],
+            trace_phi_cmd=tr[:, 1],
+            trace_q=tr[:, 2:6] * np.array([1.0, 1.0, 1.0, 1e3]),
+            trace_sync=tr[:, 6:9],
+            trace_torque=tr[:, 9:13],
+            trace_error=tr[:, 13:17],
+            trace_cross=tr[:, 17:21],
+            eccentric=self.eccentric,
+            wall_time=time.perf_counter() - self.wall0,
+            sim_time=float(self.data.time),
+        )
 
 
 # ---------------------------------------------------------------------------------------------------- recorded cut

@@ -37,7 +37,7 @@ ARCSEC = math.pi / 180 / 3600
 
 def tool_speed(job: Job) -> float:
     """The head's angular speed [rad/s]."""
-    return job.process["tool_speed"] * 2 * math.pi / 60
+    return job.process.tool_speed * 2 * math.pi / 60
 
 
 def format_setting_sheet(job: Job) -> str:
@@ -47,7 +47,7 @@ def format_setting_sheet(job: Job) -> str:
         f"FACE COUPLING (seed 004): {c.m} slots by continuous indexing, control {c.control!r}",
         f"  setting angle lambda = arcsin(L / (R m)) = {s['setting_angle_deg']:.4f} deg (L {c.L:g}, R {c.R:g} mm)",
         f"  cutting speed |V|: inner end {s['V_inner_mm_s'] * 0.06:.1f}, M {s['V_M_mm_s'] * 0.06:.1f}, outer end "
-        f"{s['V_outer_mm_s'] * 0.06:.1f} m/min at {job.process['tool_speed']:g} rpm; V turns "
+        f"{s['V_outer_mm_s'] * 0.06:.1f} m/min at {job.process.tool_speed:g} rpm; V turns "
         f"{s['V_direction_inner_deg']:+.3f} / {s['V_direction_outer_deg']:+.3f} deg from radial at the ends",
         f"  eccentric: e for a flat slot bottom = {s['flat_bottom_e_mm']:.4f} mm (N = {c.eccentric_ratio})"
         + (f"; set e = {c.e:.4f} mm" if c.eccentric_on else ""),
@@ -96,8 +96,8 @@ def cut_face_job(job: Job, out: Path, stage=None) -> dict[str, Any]:
     """`skive cut`: the ideal kinematics cut and measured; writes coupling.stl and measurement.json."""
     stage = stage or (lambda name: None)
     c: FaceCoupling = job.coupling
-    slots = tuple(range(job.process["slots_cut"]))
-    tol = job.process["sweep_error"]
+    slots = tuple(range(job.process.slots_cut))
+    tol = job.process.sweep_error
     stage("cut: the elements' swept volumes (manifold3d)")
     cut = cut_slots(c, slots, tol)
     stage("measurement: exact and on the solid")
@@ -111,24 +111,24 @@ def cut_face_job(job: Job, out: Path, stage=None) -> dict[str, Any]:
 def machine_params(job: Job):
     from machine_models.face_contour_machine import FaceMachineParams
 
-    return FaceMachineParams().with_overrides(flatten_model(job.machine.get("model")))
+    return FaceMachineParams().with_overrides(flatten_model(job.machine.model))
 
 
 def simulate_face_job(job: Job, progress=None):
     """`skive simulate`: the face-contour machine cuts the slots; the record and its synchronisation figures."""
     from virtual_machine.processes.face_contour.cnc import simulate_face_contour
 
-    slots = tuple(range(job.process["slots_cut"]))
+    slots = tuple(range(job.process.slots_cut))
     load = cutting_load(job)
     record = simulate_face_contour(
         job.coupling,
         machine_params(job),
         slots,
-        job.process["tool_speed"],
+        job.process.tool_speed,
         progress=progress,
-        hold_speed=job.process["head_speed"] == "held",
+        hold_speed=job.process.head_speed == "held",
         load=load,
-        master=job.process["master"],
+        master=job.process.master,
     )
     sync = record.trace_sync
     summary = {
@@ -158,12 +158,12 @@ def cutting_load(job: Job):
     from virtual_machine.processes.face_contour.cnc import pass_window
 
     c: FaceCoupling = job.coupling
-    return FaceLoad(c, material(job.process["material"]), pass_window(c, 0.0))
+    return FaceLoad(c, material(job.process.material), pass_window(c, 0.0))
 
 
 def motor_loads(job: Job, load) -> dict[str, Any]:
     """The motors' torques under the cycle's heaviest pass (the pre-run check's sizing) [N m]."""
-    from virtual_machine.processes.face_contour.cnc import check_cutting_load
+    from virtual_machine.reach.face import check_cutting_load
 
     size = check_cutting_load(job.coupling, load, machine_params(job))
     first = next(iter(size.values()))
@@ -220,9 +220,9 @@ def forces_report(job: Job, record, load, slots: tuple[int, ...]) -> dict[str, A
         c,
         machine_params(job),
         slots,
-        job.process["tool_speed"],
-        hold_speed=job.process["head_speed"] == "held",
-        master=job.process["master"],
+        job.process.tool_speed,
+        hold_speed=job.process.head_speed == "held",
+        master=job.process.master,
     )
     with_f, without_f = measure_recorded(record, slots), measure_recorded(free, slots)
     loaded, unloaded = slot_spacing(c, with_f), slot_spacing(c, without_f)
@@ -260,8 +260,8 @@ def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None, rrd
 
     stage = stage or (lambda name: None)
     c: FaceCoupling = job.coupling
-    slots = tuple(range(job.process["slots_cut"]))
-    tol = job.process["sweep_error"]
+    slots = tuple(range(job.process.slots_cut))
+    tol = job.process.sweep_error
     durations = {}
     t0 = time.perf_counter()
     stage("machine: the face-contour machine cuts the slots (electronic gearbox)")

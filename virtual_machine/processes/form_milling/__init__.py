@@ -12,12 +12,13 @@ A form-milling job has no separate `simulate`: its machine is simulated with its
 from __future__ import annotations
 
 from pathlib import Path
+from typing import ClassVar
 
-from cutting.errors import InputError, Problem
 from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, reporter_or_default, written
+from virtual_machine.processes.options import RecordedOptions, StageOptions
 
 FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png", "*.png")
 
@@ -25,35 +26,27 @@ FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png", "*.png")
 class FormMilling(Process):
     kind = "form_milling"
     title = "form milling (copying method)"
+    stages: ClassVar[dict[str, type[StageOptions]]] = {
+        "setup": StageOptions,
+        "cut": StageOptions,
+        "run": RecordedOptions,
+    }
+    hints: ClassVar[dict[str, str]] = {
+        "simulate": "a form-milling job's machine is simulated with its cut: use `skive run`"
+    }
 
-    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+    def setup(self, job: Job, options: StageOptions | None = None) -> Product:
         from virtual_machine.processes.form_milling.stages import format_plan, plan_job
 
         plan = plan_job(job, checks=0)
         return Product("setup", finite(plan.summary()), format_plan(plan))
 
-    def simulate(self, job: Job, out: Path, **_options) -> Product:
-        raise InputError(
-            Problem("job", "[mill]", "a form-milling job is simulated with its cut", "use `skive run` for it"),
-            job.source,
-        )
-
     def cut(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        edge: str | None = None,
-        workers: int | None = None,
-        trajectory: Path | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: StageOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.output.formatting import format_gear_stl, format_measurement
         from virtual_machine.processes.form_milling.stages import cut_form_job, format_copying
 
-        if trajectory is not None:
-            raise InputError(Problem("--trajectory", str(trajectory), "is for skiving jobs", "use `skive run` instead"))
         with reporter_or_default(reporter) as rep:
             doc = cut_form_job(job, out, rep.stage)
         text = "\n".join(
@@ -66,17 +59,12 @@ class FormMilling(Process):
         return Product("cut", doc, text, written(out, *FILES), out)
 
     def run(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        rrd: Path | None = None,
-        workers: int | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: RecordedOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.output.formatting import format_measurement
         from virtual_machine.processes.form_milling.stages import format_copying, run_form_job
+
+        rrd = self._options("run", options).rrd
 
         rep = reporter_or_default(reporter)
         bars: list = []

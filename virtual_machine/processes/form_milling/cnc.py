@@ -1,4 +1,5 @@
-"""The CNC of the form-milling machine (seed 003, the copying method) and its simulation loop.
+"""The CNC of the form-milling machine (seed 003, the copying method): its program, its task and load hook on the
+machine loop.
 
 A pass mills one tooth space k with the profiled disc mill (or the finger mill, whose axis the right-angle head
 keeps along the space's symmetry line: its passes give no axis, B stays at 0, X Y Z carry its tip centre): retract X
@@ -19,8 +20,9 @@ plus inertia (acceleration) feed-forward, limited to the motor's peak torque wit
 (g: axis motion per motor radian, J: inertia at the motor). Screw and nut compliance, backlash, friction and
 the Z weight therefore show in the relative motion of mill and gear but not at the encoders. Moves are
 minimum-jerk (quintic) point-to-point profiles; the feed ramps up and down with a cycloidal (jerk-limited)
-velocity ramp. The loop is the fixed one of :mod:`virtual_machine.runtime.machine_run`: servo tick, physics sub-steps
-with the divergence and runaway checks (:class:`virtual_machine.runtime.integrator.Integrator`), record.
+velocity ramp. The machine runs on the machine loop (:mod:`virtual_machine.runtime.loop`: the CNC's task
+:class:`FormMillCnc`, the cut's load hook :class:`MillLoad`, the physics sub-steps with the divergence and runaway
+checks).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from virtual_machine.runtime.integrator import (
     divergence_message,
     servo_substeps,
 )
+from virtual_machine.runtime.loop import MachineLoop, ToolLoad
 
 AXES = ("A", "X", "Y", "Z", "B", "S")  # the CNC's axes; A rad, X Y Z m, B S rad
 MOTORS = ("MA", "MX", "MY", "MZ", "MB", "MS")
@@ -343,14 +346,23 @@ def simulate_form_milling(
 ) -> FormMillRecord:
     """Run the passes on the simulated machine (MuJoCo) with the CNC of this module; the spindle at
     ``spindle_rpm`` throughout, the feed at ``feed_mm_min`` [mm/min]. ``progress(fraction)`` is called now and
-    then. Raises ValueError for bad inputs and :class:`virtual_machine.runtime.integrator.SimulationDivergedError`
-    when the integration blows up or a servo runs away (the message names what to change). ``load(pass index, z)``
-    gives the cutting force on the mill [N] (n, 3) in the space's frame (tangential, radial out, axial) at the
-    commanded mill-centre face positions z [mm] of the pass's feed; it acts at the mill's lowest point on the mill
-    and, reversed, on the table (none: the passes cut air); a finger mill's (``layout.finger``) mid-way along its
-    cutting length, and (n, 6) adds a torque [N m] on the mill (same frame; reversed on the table)."""
+    then. Raises ValueError for bad inputs and :class:`cutting.errors.SimulationDivergedError` when the integration
+    blows up or a servo runs away (the message names what to change). ``load(pass index, z)`` gives the cutting
+    force on the mill [N] (n, 3) in the space's frame (tangential, radial out, axial) at the commanded mill-centre
+    face positions z [mm] of the pass's feed; it acts at the mill's lowest point on the mill and, reversed, on the
+    table (none: the passes cut air); a finger mill's (``layout.finger``) mid-way along its cutting length, and
+    (n, 6) adds a torque [N m] on the mill (same frame; reversed on the table)."""
     params = params or FormMillParams()
     tuning = tuning or CncTuning()
+    _check_passes(layout, passes, feed_mm_min, spindle_rpm)
+    cnc = FormMillCnc(layout, passes, params, feed_mm_min, spindle_rpm, tuning, progress)
+    hook = MillLoad(cnc, load) if load is not None else None
+    MachineLoop(cnc.integrator, cnc, hook, cnc.body_m, cnc.body_b).run()
+    return cnc.record()
+
+
+def _check_passes(layout: FormMillLayout, passes: Sequence[MillPass], feed_mm_min: float, spindle_rpm: float) -> None:
+    """ValueError for a run that cannot be: no passes, a feed or speed out of range, a pass off the gear."""
     if not passes:
         raise ValueError("no passes to mill")
     if not (math.isfinite(feed_mm_min) and feed_mm_min > 0):
@@ -362,143 +374,203 @@ def simulate_form_milling(
             raise ValueError(f"MillPass.space = {p.space}: must be an integer in [0, {layout.teeth})")
         if not (math.isfinite(p.z_start) and math.isfinite(p.z_end)) or p.z_start == p.z_end:
             raise ValueError(f"MillPass z_start = {p.z_start}, z_end = {p.z_end}: must be finite and differ")
-    model = build_form_mill_spec(layout, params).compile()
-    h = model.opt.timestep
-    substeps = servo_substeps(h, tuning.servo_rate)
-    dt = substeps * h
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    servo = FormMillServo(model, data, layout, params, tuning)
-    program = _plan(layout, passes, feed_mm_min, dt, tuning)
-    planned = sum(len(s.pos) if s.kind != "settle" else round(tuning.settle_time / dt) for s in program)
 
-    omega = spindle_rpm * 2 * math.pi / 60
-    t_ramp = tuning.spindle_ramp
-    site_b, site_m = int(model.site("blank_frame").id), int(model.site("mill_frame").id)
-    qa = servo.qa
-    integrator = Integrator(
-        model,
-        data,
-        substeps,
-        qa[_Z],
-        lambda t: _diagnose(layout, params, t),
-        BAD_ACCELERATION_OR_SPEED,
-        servo.error[:POSITIONED],  # A X Y Z B: the spindle has no position loop
-        tuning.runaway,
-        lambda t: _runaway(servo, tuning, h, t),
-    )
-    tol = np.asarray(tuning.settle_tolerance)
-    pos, vel, acc = np.zeros(len(AXES)), np.zeros(len(AXES)), np.zeros(len(AXES))
-    traces: list[np.ndarray] = []
-    records: list[PassRecord] = []
-    tick, wall0 = 0, time.perf_counter()
-    dwell = 0.0
-    xpos, xmat = data.site_xpos, data.site_xmat
-    body_m, body_b = int(model.site_bodyid[site_m]), int(model.site_bodyid[site_b])
-    r_mill = layout.mill_radius
-    zero3 = np.zeros(3)
 
-    def step() -> None:
-        nonlocal tick
+class FormMillCnc:
+    """The form-milling machine's task on the machine loop: before each tick the program's command (a servo-rate
+    segment of moves, settling and feeds: :meth:`_commands`), the spindle's run-up, the servo and the traces, and
+    on a feed tick the mill's pose at the tick's start; after it the settling checks and the progress."""
+
+    def __init__(
+        self,
+        layout: FormMillLayout,
+        passes: Sequence[MillPass],
+        params: FormMillParams,
+        feed_mm_min: float,
+        spindle_rpm: float,
+        tuning: CncTuning,
+        progress: Callable[[float], None] | None,
+    ):
+        self.layout, self.passes, self.tuning, self.progress = layout, passes, tuning, progress
+        self.feed_mm_min, self.spindle_rpm = feed_mm_min, spindle_rpm
+        self.model = model = build_form_mill_spec(layout, params).compile()
+        h = model.opt.timestep
+        substeps = servo_substeps(h, tuning.servo_rate)
+        self.dt = substeps * h
+        self.data = data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        self.servo = servo = FormMillServo(model, data, layout, params, tuning)
+        self.program = _plan(layout, passes, feed_mm_min, self.dt, tuning)
+        self.planned = sum(
+            len(s.pos) if s.kind != "settle" else round(tuning.settle_time / self.dt) for s in self.program
+        )
+        self.omega = spindle_rpm * 2 * math.pi / 60
+        self.site_b, self.site_m = int(model.site("blank_frame").id), int(model.site("mill_frame").id)
+        self.body_m, self.body_b = int(model.site_bodyid[self.site_m]), int(model.site_bodyid[self.site_b])
+        self.integrator = Integrator(
+            model,
+            data,
+            substeps,
+            servo.qa[_Z],
+            lambda t: _diagnose(layout, params, t),
+            BAD_ACCELERATION_OR_SPEED,
+            servo.error[:POSITIONED],  # A X Y Z B: the spindle has no position loop
+            tuning.runaway,
+            lambda t: _runaway(servo, tuning, h, t),
+        )
+        self.pos, self.vel, self.acc = np.zeros(len(AXES)), np.zeros(len(AXES)), np.zeros(len(AXES))
+        self.traces: list[np.ndarray] = []
+        self.records: list[PassRecord] = []
+        self.tick = 0
+        self.wall0 = time.perf_counter()
+        self.feed: _Segment | None = None  # the feed segment of this tick (its force row ``feed_row``)
+        self.feed_row = 0
+        self._commands_left = self._commands()
+
+    def before_tick(self) -> bool:
+        """The program's next command, then the spindle, the servo and the traces."""
+        if not next(self._commands_left, False):  # the program has ended
+            return False
+        data, pos, vel, acc = self.data, self.pos, self.vel, self.acc
         t = data.time
+        t_ramp = self.tuning.spindle_ramp
         if t < t_ramp:  # spindle run-up: half cosine of the speed
-            vel[_S] = omega * 0.5 * (1 - math.cos(math.pi * t / t_ramp))
-            acc[_S] = omega * 0.5 * math.pi / t_ramp * math.sin(math.pi * t / t_ramp)
+            vel[_S] = self.omega * 0.5 * (1 - math.cos(math.pi * t / t_ramp))
+            acc[_S] = self.omega * 0.5 * math.pi / t_ramp * math.sin(math.pi * t / t_ramp)
         else:
-            vel[_S], acc[_S] = omega, 0.0
-        servo.update(dt, pos, vel, acc)
-        if tick % tuning.trace_every == 0:
+            vel[_S], acc[_S] = self.omega, 0.0
+        self.servo.update(self.dt, pos, vel, acc)
+        if self.tick % self.tuning.trace_every == 0:
             row = np.empty(24)
             row[0] = t
-            row[1:7] = data.qpos[qa]
+            row[1:7] = data.qpos[self.servo.qa]
             row[7:12], row[12] = pos[:POSITIONED], vel[_S]
-            row[13:19] = servo.torque
-            row[19:24] = servo.error[:POSITIONED]
-            traces.append(row)
-        integrator.step()
-        tick += 1
-        if progress is not None and tick % 500 == 0:
-            progress(min(tick / planned, 0.999))
+            row[13:19] = self.servo.torque
+            row[19:24] = self.servo.error[:POSITIONED]
+            self.traces.append(row)
+        return True
 
-    for seg in program:
-        if seg.kind == "settle":
-            pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[0], 0.0, 0.0
-            t0 = data.time
-            while True:
-                step()
-                waited = data.time - t0
-                settled = (
-                    waited >= tuning.settle_time
-                    and data.time >= t_ramp
-                    and np.all(np.abs(servo.error[:POSITIONED]) < tol)
-                )
-                if settled or waited >= tuning.settle_timeout:
-                    dwell = waited
-                    break
-            continue
-        n = len(seg.pos)
-        if seg.kind == "feed":
-            rec = np.empty((n, 7 + POSITIONED))
-            forces = torques = None
-            if load is not None:  # space frame (tangential, radial, axial) -> machine frame (x radial, y tangential)
-                f = np.asarray(load(seg.index, seg.pos[:, _Z] * 1e3), dtype=float)
-                forces = np.column_stack([f[:, 1], f[:, 0], f[:, 2]])
-                if f.shape[1] == 6:  # a torque on the mill too (the finger's cutting torque about its axis)
-                    torques = np.column_stack([f[:, 4], f[:, 3], f[:, 5]])
-            for k in range(n):
+    def after_tick(self) -> None:
+        self.tick += 1
+        if self.progress is not None and self.tick % 500 == 0:
+            self.progress(min(self.tick / self.planned, 0.999))
+
+    def _commands(self):
+        """The program tick by tick: each step sets the tick's command (and on a feed tick records the mill's pose
+        at the tick's start); a settle segment holds until the axes have settled (read after each tick)."""
+        tuning, data = self.tuning, self.data
+        pos, vel, acc = self.pos, self.vel, self.acc
+        tol = np.asarray(tuning.settle_tolerance)
+        dwell = 0.0
+        for seg in self.program:
+            if seg.kind == "settle":
+                pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[0], 0.0, 0.0
+                t0 = data.time
+                while True:
+                    yield True
+                    waited = data.time - t0
+                    settled = (
+                        waited >= tuning.settle_time
+                        and data.time >= tuning.spindle_ramp
+                        and np.all(np.abs(self.servo.error[:POSITIONED]) < tol)
+                    )
+                    if settled or waited >= tuning.settle_timeout:
+                        dwell = waited
+                        break
+                continue
+            if seg.kind == "feed":
+                yield from self._feed_ticks(seg, dwell)
+                continue
+            for k in range(len(seg.pos)):
                 pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[k], seg.vel[k], seg.acc[k]
-                if forces is not None:
-                    data.qfrc_applied[:] = 0.0
-                    if layout.finger:  # mid-way along the finger's cutting length
-                        point = xpos[site_m] + xmat[site_m].reshape(3, 3)[:, 2] * (layout.mill_width / 2)
-                    else:  # the disc mill's lowest point
-                        point = xpos[site_m] - np.array([r_mill, 0.0, 0.0])
-                    tq = zero3 if torques is None else torques[k]
-                    mujoco.mj_applyFT(model, data, forces[k], tq, point, body_m, data.qfrc_applied)
-                    mujoco.mj_applyFT(model, data, -forces[k], -tq, point, body_b, data.qfrc_applied)
-                # the state at this tick's time (site poses left by mj_step are one sub-step old)
-                mujoco.mj_kinematics(model, data)
-                rb = xmat[site_b].reshape(3, 3)
-                rec[k, 0] = data.time
-                rec[k, 1:4] = rb.T @ (xpos[site_m] - xpos[site_b]) * 1e3
-                rec[k, 4:7] = rb.T @ xmat[site_m].reshape(3, 3)[:, 2]
-                step()
-                rec[k, 7:] = servo.error[:POSITIONED]
-            data.qfrc_applied[:] = 0.0
-            p = passes[seg.index]
-            fe = rec[:, 7:] * np.array(ERROR_UNITS)
-            records.append(
-                PassRecord(
-                    space=int(p.space),
-                    angle=2 * math.pi * p.space / layout.teeth,
-                    t=rec[:, 0].copy(),
-                    centre=rec[:, 1:4].copy(),
-                    axis=rec[:, 4:7].copy(),
-                    commanded=seg.commanded,
-                    following_error=fe,
-                    steady=seg.steady,
-                    dwell=dwell,
-                )
-            )
-            continue
+                yield True
+        if self.progress is not None:
+            self.progress(1.0)
+
+    def _feed_ticks(self, seg: _Segment, dwell: float):
+        """A feed segment: per tick the command and the mill's pose in the gear frame at the tick's start; its
+        PassRecord when it ends."""
+        data, model, pos, vel, acc = self.data, self.model, self.pos, self.vel, self.acc
+        xpos, xmat = data.site_xpos, data.site_xmat
+        site_b, site_m = self.site_b, self.site_m
+        n = len(seg.pos)
+        rec = np.empty((n, 7 + POSITIONED))
+        self.feed = seg
         for k in range(n):
             pos[:POSITIONED], vel[:POSITIONED], acc[:POSITIONED] = seg.pos[k], seg.vel[k], seg.acc[k]
-            step()
-    if progress is not None:
-        progress(1.0)
-    tr = np.array(traces)
-    mm = np.array([1.0, 1e3, 1e3, 1e3, 1.0, 1.0])
-    return FormMillRecord(
-        teeth=int(layout.teeth),
-        feed_mm_min=float(feed_mm_min),
-        spindle_rpm=float(spindle_rpm),
-        passes=records,
-        spaces=np.array([int(p.space) for p in passes]),
-        trace_t=tr[:, 0],
-        trace_q=tr[:, 1:7] * mm,
-        trace_command=tr[:, 7:13] * mm,
-        trace_torque=tr[:, 13:19],
-        trace_error=tr[:, 19:24] * np.array(ERROR_UNITS),
-        wall_time=time.perf_counter() - wall0,
-        sim_time=float(data.time),
-    )
+            self.feed_row = k
+            # the state at this tick's time (site poses after a physics step are one sub-step old)
+            mujoco.mj_kinematics(model, data)
+            rb = xmat[site_b].reshape(3, 3)
+            rec[k, 0] = data.time
+            rec[k, 1:4] = rb.T @ (xpos[site_m] - xpos[site_b]) * 1e3
+            rec[k, 4:7] = rb.T @ xmat[site_m].reshape(3, 3)[:, 2]
+            yield True
+            rec[k, 7:] = self.servo.error[:POSITIONED]
+        self.feed = None
+        p = self.passes[seg.index]
+        fe = rec[:, 7:] * np.array(ERROR_UNITS)
+        self.records.append(
+            PassRecord(
+                space=int(p.space),
+                angle=2 * math.pi * p.space / self.layout.teeth,
+                t=rec[:, 0].copy(),
+                centre=rec[:, 1:4].copy(),
+                axis=rec[:, 4:7].copy(),
+                commanded=seg.commanded,
+                following_error=fe,
+                steady=seg.steady,
+                dwell=dwell,
+            )
+        )
+
+    def record(self) -> FormMillRecord:
+        tr = np.array(self.traces)
+        mm = np.array([1.0, 1e3, 1e3, 1e3, 1.0, 1.0])
+        return FormMillRecord(
+            teeth=int(self.layout.teeth),
+            feed_mm_min=float(self.feed_mm_min),
+            spindle_rpm=float(self.spindle_rpm),
+            passes=self.records,
+            spaces=np.array([int(p.space) for p in self.passes]),
+            trace_t=tr[:, 0],
+            trace_q=tr[:, 1:7] * mm,
+            trace_command=tr[:, 7:13] * mm,
+            trace_torque=tr[:, 13:19],
+            trace_error=tr[:, 19:24] * np.array(ERROR_UNITS),
+            wall_time=time.perf_counter() - self.wall0,
+            sim_time=float(self.data.time),
+        )
+
+
+class MillLoad:
+    """The form-milling machine's load hook: on a feed tick the cutting force (and a finger's torque) of ``load``
+    at the tick's commanded face position, on the mill at its lowest point (a finger's: mid-way along its cutting
+    length), reversed on the table; nothing between the feeds."""
+
+    every_substep = False
+
+    def __init__(self, cnc: FormMillCnc, load: Callable[[int, np.ndarray], np.ndarray]):
+        self.cnc, self.load = cnc, load
+        self._feed: _Segment | None = None
+        self._forces = self._torques = None
+        self._zero3 = np.zeros(3)
+
+    def __call__(self, t: float, dt: float) -> tuple[ToolLoad, ...]:
+        cnc = self.cnc
+        seg = cnc.feed
+        if seg is None:
+            return ()
+        if seg is not self._feed:  # space frame (tangential, radial, axial) -> machine frame (x radial, y tangential)
+            f = np.asarray(self.load(seg.index, seg.pos[:, _Z] * 1e3), dtype=float)
+            self._feed, self._forces = seg, np.column_stack([f[:, 1], f[:, 0], f[:, 2]])
+            # a torque on the mill too (the finger's cutting torque about its axis)
+            self._torques = np.column_stack([f[:, 4], f[:, 3], f[:, 5]]) if f.shape[1] == 6 else None
+        k = cnc.feed_row
+        xpos, site_m, layout = cnc.data.site_xpos, cnc.site_m, cnc.layout
+        if layout.finger:  # mid-way along the finger's cutting length
+            point = xpos[site_m] + cnc.data.site_xmat[site_m].reshape(3, 3)[:, 2] * (layout.mill_width / 2)
+        else:  # the disc mill's lowest point
+            point = xpos[site_m] - np.array([layout.mill_radius, 0.0, 0.0])
+        torque = self._zero3 if self._torques is None else self._torques[k]
+        return (ToolLoad(self._forces[k], torque, point),)

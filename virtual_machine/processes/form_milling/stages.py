@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from cutting.errors import InputError, Problem
+from cutting.errors import InputError, Problem, UnmeasurableError
 from cutting.flank import SIDES, twist_rate
 from cutting.form_milling.copying_path import (
     CHECK_TOLERANCE,
@@ -47,7 +47,6 @@ from metrology.charts import write_charts
 from metrology.cut_measurement import compare, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions, measure_gear
-from metrology.workpiece import UnmeasurableError
 from virtual_machine.job import Job, flatten_model
 from virtual_machine.output.json_file import write_json
 
@@ -63,22 +62,22 @@ def is_finger(job: Job) -> bool:
 def plan_job(job: Job, checks: int = 3) -> CopyingPlan | FingerPlan:
     """The seed's 15 steps for the job (``checks`` rounds of the accuracy check on the ideal machine): the disc
     mill's (:func:`plan_copying`) or the finger mill's (:func:`cutting.form_milling.finger.plan_finger`)."""
-    from virtual_machine.processes.form_milling.reach import check_form_reach
+    from virtual_machine.reach.form_mill import check_form_reach
 
     check_form_reach(job, machine_params(job))  # before a path of that size is planned
     m, p = job.mill, job.process
-    common = {"checks": checks, "check_points": CHECK_POINTS, "path_form": p["path_form"]}
+    common = {"checks": checks, "check_points": CHECK_POINTS, "path_form": p.path_form}
     try:
         if is_finger(job):
-            return plan_finger(job.gear, job.modification, m["clearance"], p["path_points"], m["teeth"], **common)
+            return plan_finger(job.gear, job.modification, m["clearance"], p.path_points, m["teeth"], **common)
         return plan_copying(
             job.gear,
             job.modification,
             m["diameter"],
             m["clearance"],
-            p["path_points"],
+            p.path_points,
             m["teeth"],
-            turned=p["mill_axis"] == "turned",
+            turned=p.mill_axis == "turned",
             **common,
         )
     except ValueError as exc:  # the mill the design asks for cannot be made (no periphery, no tip, an undercut edge)
@@ -243,11 +242,11 @@ def _cut_and_measure(
     """gear.stl by manifold3d (space after space) and the measurement of the exact swept surface."""
     stage("removal: the mill's swept volumes, space after space (manifold3d)")
     t0 = time.perf_counter()
-    tol = job.process["sweep_error"]
+    tol = job.process.sweep_error
     removal = cut_gear(job.gear, plan.mill, passes, tol)
     seconds_cut = time.perf_counter() - t0
     out.mkdir(parents=True, exist_ok=True)
-    stl = write_gear_stl(removal.gear_solid, out / "gear.stl", job.process["stl_tolerance"])
+    stl = write_gear_stl(removal.gear_solid, out / "gear.stl", job.process.stl_tolerance)
     stage("measurement: the exact swept surface and gear.stl")
     t0 = time.perf_counter()
     exact = MilledGear(job.gear, plan.mill, passes, name)
@@ -303,7 +302,7 @@ def machine_layout(job: Job, plan: CopyingPlan):
 def machine_params(job: Job):
     from machine_models.form_mill import FormMillParams
 
-    return FormMillParams().with_overrides(flatten_model(job.machine.get("model")))
+    return FormMillParams().with_overrides(flatten_model(job.machine.model))
 
 
 def cnc_passes(plan: CopyingPlan) -> list:
@@ -378,8 +377,8 @@ def mill_load(job: Job, plan: CopyingPlan | FingerPlan) -> MillLoad | FingerLoad
     """The steady cutting force of each pass (:mod:`cutting.form_milling.forces`) for the job's material and process."""
     p = job.process
     if isinstance(plan, FingerPlan):
-        return FingerLoad(job.gear, plan.mill, material(p["material"]), p["feed"], p["mill_speed"], plan.clearance)
-    return MillLoad(job.gear, plan.mill, material(p["material"]), p["feed"], p["mill_speed"], plan.clearance)
+        return FingerLoad(job.gear, plan.mill, material(p.material), p.feed, p.mill_speed, plan.clearance)
+    return MillLoad(job.gear, plan.mill, material(p.material), p.feed, p.mill_speed, plan.clearance)
 
 
 def load_of(ml: MillLoad | FingerLoad):
@@ -438,18 +437,18 @@ def run_form_job(
     runs = []
     record = poses = None
     lc = np.linspace(form_roll_length(job.gear), roll(job.gear, job.gear.tip_diameter_value), CHECK_POINTS)
-    for it in range(p["machine_iterations"]):
+    for it in range(p.machine_iterations):
         stage(f"machine: the form-milling machine mills every space, run {it + 1}")
         t0 = time.perf_counter()
         ml = mill_load(job, plan)
         record = simulate_form_milling(
-            layout, cnc_passes(plan), params, p["feed"], p["mill_speed"], progress, load=load_of(ml)
+            layout, cnc_passes(plan), params, p.feed, p.mill_speed, progress, load=load_of(ml)
         )
         durations[f"machine run {it + 1}"] = time.perf_counter() - t0
         poses = recorded_poses(plan, record)
         worst, res = machine_check(plan, poses)
         runs.append({"run": it + 1, "max_residual_um": round(worst * 1e3, 4)})
-        if worst < CHECK_TOLERANCE or it == p["machine_iterations"] - 1:
+        if worst < CHECK_TOLERANCE or it == p.machine_iterations - 1:
             break
         for side in SIDES:  # step 15 on the machine: correct the path by what it cut
             dx, dy = correction_from_residual(job.gear, side, lc, res[side])
@@ -528,7 +527,7 @@ def check_motors(job: Job, layout, params, ml: MillLoad | FingerLoad) -> None:
             getattr(params, f"{k}_motor_torque"),
             f"the cutting force needs {v:.2f} N m of motor M{k.upper()} (peak "
             f"{getattr(params, f'{k}_motor_torque'):.2f} N m)",
-            f"lower process.feed (now {job.process['feed']:g} mm/min) or give M{k.upper()} a peak torque above "
+            f"lower process.feed (now {job.process.feed:g} mm/min) or give M{k.upper()} a peak torque above "
             f"{v:.2f} N m",
         )
         for k, v in need.items()
@@ -545,14 +544,15 @@ def _run_facts(job: Job, path: Path, record, durations: dict[str, float]) -> dic
     return {
         "job": {"path": str(path), "sha256": hashlib.sha256(text.encode()).hexdigest(), "kind": job.kind},
         "seed": None,  # nothing random: the same job gives the same gear
-        "machine": {"model": "CNC form-milling machine (machine_models/form_mill.py)", **(job.machine or {})},
+        # the machine and the job's [machine.model] overrides of its parameters
+        "machine": {"model": "CNC form-milling machine (machine_models/form_mill.py)", "overrides": job.machine.model},
         "durations_s": {**{k: round(v, 3) for k, v in durations.items()}, "machine": float(record.sim_time)},
         "mill_deviation_um": {  # recorded - commanded mill centre at constant feed, in the space's frame
             axis: {"mean": float(dev[:, i].mean()), "peak_to_peak": float(np.ptp(dev[:, i]))}
             for i, axis in enumerate(("radial", "tangential", "axial"))
         },
-        "feed_mm_min": job.process["feed"],
-        "mill_rpm": job.process["mill_speed"],
+        "feed_mm_min": job.process.feed,
+        "mill_rpm": job.process.mill_speed,
     }
 
 

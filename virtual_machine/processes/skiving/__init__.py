@@ -1,4 +1,4 @@
-"""Gear skiving (seed 000, the setting sheets S1-S4): the process of a "gear" job.
+"""Gear skiving (seed 000, the setting sheets S1-S4): the process of a "skiving" job.
 
 - setup: the machine setting sheet of the job's structure (:mod:`virtual_machine.setting.sheet`);
 - simulate: the machine runs through the passes without cutting (:mod:`virtual_machine.runtime.machine_run`):
@@ -14,36 +14,48 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import ClassVar
 
 from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, reporter_or_default, written
+from virtual_machine.processes.options import (
+    MachineSimulateOptions,
+    SheetOptions,
+    SkivingCutOptions,
+    SkivingRunOptions,
+    StageOptions,
+)
+from virtual_machine.processes.sheets import sheet_product
 from virtual_machine.setting.plan import SkivingPlan
 
 RUN_FILES = ("gear.stl", "measurement.json", "report.html", "charts/*.png")
 
 
 class Skiving(Process):
-    kind = "gear"
+    kind = "skiving"
     title = "gear skiving"
+    stages: ClassVar[dict[str, type[StageOptions]]] = {
+        "setup": SheetOptions,
+        "simulate": MachineSimulateOptions,
+        "cut": SkivingCutOptions,
+        "run": SkivingRunOptions,
+    }
 
-    def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        return sheet_product(job, structure)
+    def setup(self, job: Job, options: SheetOptions | None = None) -> Product:
+        return sheet_product(job, self._options("setup", options).structure)
 
     def simulate(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        duration: float | None = None,
-        rrd: Path | None = None,
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: MachineSimulateOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.output import motion_io
         from virtual_machine.runtime.machine_run import simulate
 
+        o = self._options("simulate", options)
+        job = o.machine_of(job)
+        duration, rrd = o.duration, o.rrd
         rep = reporter_or_default(reporter)
         plan = SkivingPlan.of(job)
         st = plan.setup
@@ -60,9 +72,9 @@ class Skiving(Process):
         wall = time.perf_counter() - t0
         meta = {
             "job": job.source,
-            "structure": job.machine["structure"],
-            "synchronization": job.machine["synchronization"],
-            "adaptive_correction": job.machine["adaptive_correction"],
+            "structure": job.machine.structure,
+            "synchronization": job.machine.synchronization,
+            "adaptive_correction": job.machine.adaptive_correction,
             "wall_seconds": wall,
         }
         doc = motion_io.save(rec, out, meta, st.gear.teeth)
@@ -75,23 +87,18 @@ class Skiving(Process):
         return Product("simulate", doc, format_simulation(doc, job, wall, out), files + ([rrd] if rrd else []), out)
 
     def cut(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        edge: str | None = None,
-        workers: int | None = None,
-        trajectory: Path | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: SkivingCutOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from cutting.gear_file import write_gear_stl
-        from cutting.skiving.ideal_cut import cut_ideal, default_workers
-        from metrology.charts import finite, write_charts
+        from cutting.skiving.ideal_cut import cut_ideal
+        from metrology.charts import write_charts
         from virtual_machine.job import dexel_spacing
-        from virtual_machine.output.formatting import chip_record, format_gear_stl, format_measurement, format_removal
-        from virtual_machine.processes.skiving.run import measure_written_cut
+        from virtual_machine.output.formatting import format_gear_stl, format_measurement, format_removal
+        from virtual_machine.processes.skiving.run import measure_written_cut, with_mesh_tolerance
 
+        o = self._options("cut", options)
+        edge, workers, trajectory, removal = o.edge, o.workers, o.trajectory, o.removal
+        job = with_mesh_tolerance(job, None if o.mesh_tolerance is None else o.mesh_tolerance * 1e-3)
         rep = reporter_or_default(reporter)
         plan = SkivingPlan.of(job)
         st = plan.setup
@@ -102,26 +109,14 @@ class Skiving(Process):
                 bars[i] = rep.task(f"pass {i + 1}/{len(st.passes)}", total, "passages")
             bars[i].update_to(done)
 
-        kind = edge or job.cutter_options["edge"]
-        motions = list(plan.passes)
-        path = None
-        if job.modification is not None and trajectory is None:
-            from virtual_machine.processes.skiving.modification_path import plan_path
-
-            rep.stage("path for the flank modification (seed 003: radial and tangential corrections, accuracy check)")
-            path = plan_path(job, plan=plan)
-            motions = path.motions
-        if trajectory is not None:
-            from cutting.skiving.sampled_motion import sampled_passes
-            from virtual_machine.output.motion_io import load_trajectory
-
-            motions = sampled_passes(st, load_trajectory(trajectory))
+        kind = edge or job.cutter_options.edge
+        motions, path = _cut_motions(job, plan, trajectory, rep)
         with rep:  # the passes' bars end with the cut
             report = cut_ideal(
                 st,
                 kind,
-                job.process["sweep_error"],
-                job.process["roughing_sweep_error"],
+                job.process.sweep_error,
+                job.process.roughing_sweep_error,
                 progress,
                 workers,
                 motions=motions,
@@ -130,29 +125,10 @@ class Skiving(Process):
             )
         rep.stage("measurement: the exact swept surface and the mesh")
         out.mkdir(parents=True, exist_ok=True)
-        stl = write_gear_stl(report.result.gear, out / "gear.stl", job.process["stl_tolerance"])
+        stl = write_gear_stl(report.result.gear, out / "gear.stl", job.process.stl_tolerance)
         result = measure_written_cut(job, report.edge, motions, report.result, stl, out / "gear.stl")
-        r = report.result
-        result["cut"] = {
-            "edge": kind,
-            "motion": ("ideal" if path is None else "ideal, finishing pass along the modification's path")
-            if trajectory is None
-            else str(trajectory),
-            "sweep_error_um": r.sweep_error * 1e3,
-            "pass_sweep_error_um": [r.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(st.passes))],
-            "sweeps": r.sweeps,
-            "subtractions": r.subtractions,
-            "passages": len(r.chips),
-            "triangles": stl.solid_triangles,
-            "gear_stl": stl.summary(),
-            "workers": workers or default_workers(),
-            "seconds": report.seconds,
-            "pass_seconds": report.pass_seconds,
-            "pass_stock_triangles": report.pass_triangles,
-            "machine_seconds": list(st.pass_times),
-            "removal": report.removal,
-            "chips": [chip_record(c) for c in r.chips],
-        }
+        motion = "ideal" if path is None else "ideal, finishing pass along the modification's path"
+        result["cut"] = _cut_summary(report, stl, kind, motion if trajectory is None else str(trajectory), workers, st)
         if path is not None:
             from virtual_machine.processes.skiving.modification_path import path_summary
 
@@ -169,19 +145,15 @@ class Skiving(Process):
         return Product("cut", doc, "\n".join(lines), files, out)
 
     def run(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        rrd: Path | None = None,
-        workers: int | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: SkivingRunOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.output.formatting import format_measurement
-        from virtual_machine.processes.skiving.run import run_job
+        from virtual_machine.processes.skiving.run import run_job, with_mesh_tolerance
         from virtual_machine.runtime.program import program_duration
 
+        o = self._options("run", options)
+        rrd, workers, removal = o.rrd, o.workers, o.removal
+        job = with_mesh_tolerance(job, None if o.mesh_tolerance is None else o.mesh_tolerance * 1e-3)
         rep = reporter_or_default(reporter)
         plan = SkivingPlan.of(job)
         total = program_duration(plan.setup, passes=plan.passes)
@@ -204,21 +176,54 @@ class Skiving(Process):
         return Product("run", doc, "\n".join(lines), written(out, *RUN_FILES) + ([rrd] if rrd else []), out)
 
 
-def sheet_product(job: Job, structure: str | None = None) -> Product:
-    """The setting sheet of a skiving or thread job (virtual_machine.setting.sheet: seed 000's S1-S4, seed 001's
-    thread group) as the setup stage's product."""
-    from virtual_machine.output.formatting import format_sheet
-    from virtual_machine.setting.sheet import setup_sheet
+def _cut_motions(job: Job, plan: SkivingPlan, trajectory: Path | None, rep: Reporter) -> tuple[list, object | None]:
+    """What `skive cut` cuts along: the ideal passes, the finishing pass along a flank modification's path (and the
+    path), or the passes of a simulated ``trajectory`` file."""
+    if trajectory is not None:
+        from cutting.skiving.sampled_motion import sampled_passes
+        from virtual_machine.output.motion_io import load_trajectory
 
-    sheet = setup_sheet(job, structure)
-    return Product("setup", finite(sheet.to_json()), format_sheet(sheet, job.source))
+        return sampled_passes(plan.setup, load_trajectory(trajectory)), None
+    if job.modification is None:
+        return list(plan.passes), None
+    from virtual_machine.processes.skiving.modification_path import plan_path
+
+    rep.stage("path for the flank modification (seed 003: radial and tangential corrections, accuracy check)")
+    path = plan_path(job, plan=plan)
+    return path.motions, path
+
+
+def _cut_summary(report, stl, edge: str, motion: str, workers: int | None, st) -> dict:
+    """measurement.json's ``cut``: the edge and motion cut along, the removal's figures, gear.stl, the chips."""
+    from cutting.skiving.ideal_cut import default_workers
+    from virtual_machine.output.formatting import chip_record
+
+    r = report.result
+    return {
+        "edge": edge,
+        "motion": motion,
+        "sweep_error_um": r.sweep_error * 1e3,
+        "pass_sweep_error_um": [r.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(st.passes))],
+        "sweeps": r.sweeps,
+        "subtractions": r.subtractions,
+        "passages": len(r.chips),
+        "triangles": stl.solid_triangles,
+        "gear_stl": stl.summary(),
+        "workers": workers or default_workers(),
+        "seconds": report.seconds,
+        "pass_seconds": report.pass_seconds,
+        "pass_stock_triangles": report.pass_triangles,
+        "machine_seconds": list(st.pass_times),
+        "removal": report.removal,
+        "chips": [chip_record(c) for c in r.chips],
+    }
 
 
 def format_simulation(doc: dict, job: Job, wall: float, out: Path) -> str:
     """The simulation's synchronisation error per pass and its periodic parts."""
     lines = [
-        f"\nSIMULATION  {job.source}  ({job.machine['structure']}, {job.machine['synchronization']}, "
-        f"adaptive correction {'on' if job.machine['adaptive_correction'] else 'off'})",
+        f"\nSIMULATION  {job.source}  ({job.machine.structure}, {job.machine.synchronization}, "
+        f"adaptive correction {'on' if job.machine.adaptive_correction else 'off'})",
         f"{doc['machine_seconds']:.2f} s of machine time in {wall:.1f} s wall "
         f"({doc['machine_seconds'] / wall:.1f}x real time)",
         "synchronisation error while cutting (arc on the reference circle, um):",

@@ -28,8 +28,7 @@ from cutting.materials import Material, material
 from cutting.skiving.dexel_cut import removal_summary
 from cutting.skiving.edge import CuttingEdge, make_edge
 from cutting.skiving.holder import check_holder_side
-from cutting.skiving.path_correction import PathCorrection
-from cutting.skiving.removal import (
+from cutting.skiving.passages import (
     Chip,
     CutResult,
     engagement_half_angle,
@@ -38,6 +37,7 @@ from cutting.skiving.removal import (
     passage_count,
     tooth_pose,
 )
+from cutting.skiving.path_correction import PathCorrection
 from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
 from machine_models.parameters import SkivingMachineParams
@@ -144,6 +144,199 @@ class _Stroke:
         return self._rows[: self.n]
 
 
+class CuttingRun:
+    """The skiving machine and its cut together, as a task object: the machine (:class:`MachineRun`, its load hook
+    fed by the ``force`` predictor), the ``removal`` that cuts each passage once the machine has moved through it,
+    and the chips that become the force acting on the machine. :meth:`run` drives them to the end of the program.
+
+    See :func:`cosimulate` for the arguments."""
+
+    def __init__(
+        self,
+        job: Job,
+        params: SkivingMachineParams | None = None,
+        edge_kind: str | None = None,
+        forces: bool = True,
+        servo_substeps: int = 2,
+        snapshots_per_pass: int = 0,
+        workers: int = 1,
+        correction: PathCorrection | None = None,
+        removal: str = "dexel",
+        plan: SkivingPlan | None = None,
+    ):
+        plan = plan_of(job, plan)
+        self.setup = setup = plan.setup
+        self.plans = plans = plan.passes
+        self.edge = edge = make_edge(setup, edge_kind or job.cutter_options.edge)
+        self.lag = max_lag(workers, removal)
+        self.force = ForcePredictor(self.lag)
+        cut = self.force if forces else _no_force  # no force: the work accounting runs alike
+        self.machine = MachineRun(job, params, servo_substeps, correction=correction, plan=plan, cut=cut)
+        check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
+        self.removal = _removal(job, setup, edge, plans, removal, workers)
+        self.removal_kind, self.workers, self.snapshots_per_pass = removal, workers, snapshots_per_pass
+        # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
+        # finest facets of the sweep
+        self.edge_points = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
+        self.pitch = 2 * math.pi / setup.cutter.teeth
+        # each pass's own engagement: a deeper pass engages earlier, and its passages' samples must cover the window
+        self.halves = [engagement_half_angle(p, edge) for p in plans]
+        self.chunk = self.pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
+        self.in_blank = functools.partial(in_blank_envelope, setup.gear)
+        self.material = material(job.process.material)
+        self.sim = CoSimulation(
+            None, self.removal.result, material=self.material, edge=edge, removal=removal, lag=self.lag
+        )
+        self._pending: dict[tuple[int, int], tuple[Samples, float]] = {}
+        self._arrived: dict[tuple[int, int], Chip | None] = {}
+        self._submitted: list[tuple[int, int]] = []
+        self.applied = 0  # chips that have become the force
+        self._stroke: _Stroke | None = None
+        self._seen = 0  # machine rows read so far
+        self.t_cut = 0.0  # wall seconds in the removal (or waiting for its workers)
+
+    def run(self, progress: Callable[[float, int], None] | None = None) -> CoSimulation:
+        """The whole program: the machine a chunk at a time, each chunk's passages cut and their chips applied."""
+        t_start = time.perf_counter()
+        try:
+            while True:
+                alive = self.machine.advance(self.machine.time + self.chunk)
+                self._cut_chunk(alive, progress)
+                if not alive:
+                    break
+            result = self._close()
+        except BaseException:
+            if isinstance(self.removal, ParallelRemoval):
+                self.removal._stop()
+            raise
+        sim = self.sim
+        sim.cut = result
+        machine = self.machine
+        sim.record = machine.record()
+        sim.load_work, sim.actuator_work = machine.loop.load_work, machine.loop.actuator_work
+        sim.load_rows = np.array(machine.load.rows).reshape(-1, 5)
+        if isinstance(self.removal, DexelRemoval):
+            sim.dexel = removal_summary(self.removal.workpiece, self.removal.land_touched)
+        sim.seconds = {
+            "total": time.perf_counter() - t_start,
+            "cut": self.t_cut,  # the removal in this process, or the wait for the workers
+            "physics": machine.timing["physics"],
+            "control": machine.timing["control"],
+            "machine": machine.time,
+            "workers": self.workers,
+        }
+        return sim
+
+    def _cut_chunk(self, alive: bool, progress: Callable[[float, int], None] | None) -> None:
+        """The machine's new rows to the feed stroke they belong to; the passages they complete submitted to the
+        removal, the chips due applied."""
+        rows = self.machine.rows
+        stroke = self._stroke
+        for row in rows[self._seen :]:
+            segment, index = int(row[6]), int(row[7])
+            if segment == FEED:
+                if stroke is None or stroke.index != index:
+                    stroke = _Stroke(index, self.halves[index])
+                stroke.append(row)
+            elif stroke is not None:
+                stroke.ended = True
+        self._seen = len(rows)
+        if stroke is not None and not alive:
+            stroke.ended = True  # the program ends in the last feed stroke
+        self._stroke = stroke
+        if stroke is None or stroke.n < 8:
+            return
+        c0 = time.perf_counter()
+        applied = self.applied
+        for m, samples, t0_stroke in _ready_passages(stroke, self.setup, self.pitch):
+            key = (stroke.index, m)
+            self._pending[key] = (samples, t0_stroke)
+            self.removal.submit(stroke.index, m, samples)
+            self._submitted.append(key)
+            while len(self._submitted) > self.lag:
+                self._apply(self._submitted.pop(0))
+        while stroke.ended and self._submitted:  # the stroke's last chips before the return
+            self._apply(self._submitted.pop(0))
+        if progress is not None and self.applied > applied:
+            progress(self.machine.time, self.applied)
+        if self.snapshots_per_pass:
+            _snapshot(self.sim, self.removal, stroke, self.machine.time, self.snapshots_per_pass, self.plans, self.edge)
+        self.t_cut += time.perf_counter() - c0
+        if stroke.ended:
+            self.force.clear()  # no chip in the return stroke
+            self._stroke = None
+
+    def _apply(self, key: tuple[int, int]) -> None:
+        """The chip of passage ``key`` (waiting for it) becomes the force for the engagements after it. Chips are
+        applied in submission order at a fixed point of the simulation (``lag`` submissions later), never when a
+        worker happens to finish: the run does not depend on the workers' timing."""
+        while key not in self._arrived:
+            self._arrived.update({(i, m): chip for i, m, chip in self.removal.finished(block=True)})
+        chip = self._arrived.pop(key)
+        index, m = key
+        samples, t0_stroke = self._pending.pop(key)
+        self.applied += 1
+        if chip is None or chip.volume <= 0:
+            self.force.clear()  # the tooth took nothing: none of the next engagements is predicted to cut
+            return
+        # the motion the removal cut the passage along (the dexel removal keeps it), else made from the samples
+        motion = self.removal.motions.pop(key, None) if hasattr(self.removal, "motions") else None
+        motion = motion or SampledMotion(self.setup, index, *samples, checked=True)
+        load = engagement_load(
+            tooth_pose(motion, m),
+            self.edge_points,
+            chip.start,
+            chip.end,
+            chip.volume,
+            self.material,
+            self.in_blank,
+            thickness=chip.thickness_mean,
+        ).shifted(t0_stroke)
+        if not len(load.t):  # a sliver at the blank's edge where no edge element is inside the envelope: no force
+            self.force.clear()
+            return
+        self.sim.loads.append(AppliedLoad(index, m, load))
+        # the mesh zone's motion in the blank frame: the cutter centre's turn about and travel along the axis
+        trans = samples[2]
+        ang = np.unwrap(np.arctan2(trans[:, 1], trans[:, 0]))
+        dt = motion.t[-1] - motion.t[0]
+        self.force.update(load, self.pitch / motion.omega0, (ang[-1] - ang[0]) / dt, (trans[-1, 2] - trans[0, 2]) / dt)
+
+    def _close(self) -> CutResult:
+        """The removal's result: the chips in order, the solid checked."""
+        c0 = time.perf_counter()
+        result = self.removal.close()
+        result.chips.sort(key=lambda c: (c.pass_index, c.time))
+        gear = self.setup.gear
+        if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
+            raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
+        if result.gear.genus() != expected_genus(gear):
+            raise RuntimeError(
+                f"the removal left a solid of genus {result.gear.genus()} (a gear has {expected_genus(gear)}): "
+                "report it with the job"
+            )
+        self.t_cut += time.perf_counter() - c0
+        return result
+
+
+def _no_force(t: float, dt: float) -> tuple:
+    return ()
+
+
+def _removal(job: Job, setup, edge: CuttingEdge, plans, removal: str, workers: int):
+    """The removal the run cuts with: the dexel workpiece, or the manifold reference inline or in ``workers``
+    processes."""
+    if removal == "dexel":
+        return DexelRemoval(setup.gear, edge, plans, dexel_spacing(job), job.process.sweep_error)
+    if removal != "manifold":
+        raise ValueError(f"removal {removal!r}: use 'dexel' or 'manifold'")
+    n_pass = len(setup.passes)
+    tols = [job.process.sweep_error if i == n_pass - 1 else job.process.roughing_sweep_error for i in range(n_pass)]
+    if workers <= 1:
+        return InlineRemoval(setup.gear, edge, plans, tols)
+    return ParallelRemoval(setup.gear, edge, plans, tols, workers)
+
+
 def cosimulate(
     job: Job,
     params: SkivingMachineParams | None = None,
@@ -163,157 +356,13 @@ def cosimulate(
     each pass (the last at its end), for the recording. ``workers`` > 1 cuts in that many processes; the machine
     then runs at most :func:`max_lag` passages ahead of the finished chips. ``correction``: the finishing pass's
     path corrections of a flank modification (virtual_machine/processes/skiving/modification_path.py), made by the
-    CNC. ``removal``:
-    "dexel" (the default: the dexel workpiece, cut a few passages at a time in this process; ``workers`` is moot)
-    or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes). ``plan``: the job's
-    setup, ideal passes and setting sheets if an earlier stage made them."""
-    plan = plan_of(job, plan)
-    setup = plan.setup
-    kind = edge_kind or job.cutter_options["edge"]
-    edge = make_edge(setup, kind)
-    plans = plan.passes
-    n_pass = len(setup.passes)
-    tols = [
-        job.process["sweep_error"] if i == n_pass - 1 else job.process["roughing_sweep_error"] for i in range(n_pass)
-    ]
-    mat = material(job.process["material"])
-    run = MachineRun(job, params, servo_substeps, correction=correction, plan=plan)  # refuses what the machine can't
-    check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
-    lag = max_lag(workers, removal)
-    predictor = ForcePredictor(lag)
-    run.load = predictor if forces else (lambda t, dt: ())  # no force, but the work accounting runs alike
-    if removal == "dexel":
-        cutter = DexelRemoval(setup.gear, edge, plans, dexel_spacing(job), job.process["sweep_error"])
-    elif removal == "manifold":
-        cutter = (
-            InlineRemoval(setup.gear, edge, plans, tols)
-            if workers <= 1
-            else ParallelRemoval(setup.gear, edge, plans, tols, workers)
-        )
-    else:
-        raise ValueError(f"removal {removal!r}: use 'dexel' or 'manifold'")
-    removal_kind, removal = removal, cutter
-    # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
-    # finest facets of the sweep
-    edge_pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
-    pitch = 2 * math.pi / setup.cutter.teeth
-    # each pass's own engagement: a deeper pass engages earlier, and its passages' samples must cover the window
-    halves = [engagement_half_angle(p, edge) for p in plans]
-    chunk = pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
-    in_blank = functools.partial(in_blank_envelope, setup.gear)
-    sim = CoSimulation(None, removal.result, material=mat, edge=edge, removal=removal_kind, lag=lag)
-    pending: dict[tuple[int, int], tuple[Samples, float]] = {}
-    count = [0]
-
-    arrived: dict[tuple[int, int], Chip | None] = {}
-    submitted: list[tuple[int, int]] = []
-
-    def apply(key: tuple[int, int]) -> None:
-        """The chip of passage ``key`` (waiting for it) becomes the prediction for the engagements after it.
-        Chips are applied in submission order at a fixed point of the simulation (``lag`` submissions later),
-        never when a worker happens to finish: the run does not depend on the workers' timing."""
-        while key not in arrived:
-            arrived.update({(i, m): chip for i, m, chip in removal.finished(block=True)})
-        chip = arrived.pop(key)
-        index, m = key
-        samples, t0_stroke = pending.pop(key)
-        count[0] += 1
-        if chip is None or chip.volume <= 0:
-            predictor.clear()  # the tooth took nothing: none of the next engagements is predicted to cut
-            return
-        # the motion the removal cut the passage along (the dexel removal keeps it), else made from the samples
-        motion = removal.motions.pop(key, None) if hasattr(removal, "motions") else None
-        motion = motion or SampledMotion(setup, index, *samples, checked=True)
-        load = engagement_load(
-            tooth_pose(motion, m),
-            edge_pts,
-            chip.start,
-            chip.end,
-            chip.volume,
-            mat,
-            in_blank,
-            thickness=chip.thickness_mean,
-        ).shifted(t0_stroke)
-        if not len(load.t):  # a sliver at the blank's edge where no edge element is inside the envelope: no force
-            predictor.clear()
-            return
-        sim.loads.append(AppliedLoad(index, m, load))
-        # the mesh zone's motion in the blank frame: the cutter centre's turn about and travel along the axis
-        trans = samples[2]
-        ang = np.unwrap(np.arctan2(trans[:, 1], trans[:, 0]))
-        dt = motion.t[-1] - motion.t[0]
-        predictor.update(load, pitch / motion.omega0, (ang[-1] - ang[0]) / dt, (trans[-1, 2] - trans[0, 2]) / dt)
-
-    t_wait = 0.0
-    seen = 0
-    current: _Stroke | None = None
-    t_start = time.perf_counter()
-    try:
-        while True:
-            alive = run.advance(run.time + chunk)
-            rows = run.rows
-            for row in rows[seen:]:
-                segment, index = int(row[6]), int(row[7])
-                if segment == FEED:
-                    if current is None or current.index != index:
-                        current = _Stroke(index, halves[index])
-                    current.append(row)
-                elif current is not None:
-                    current.ended = True
-            seen = len(rows)
-            if current is not None and not alive:
-                current.ended = True  # the program ends in the last feed stroke
-            if current is not None and current.n >= 8:
-                c0 = time.perf_counter()
-                applied = count[0]
-                for m, samples, t0_stroke in _ready_passages(current, setup, pitch):
-                    pending[current.index, m] = (samples, t0_stroke)
-                    removal.submit(current.index, m, samples)
-                    submitted.append((current.index, m))
-                    while len(submitted) > lag:
-                        apply(submitted.pop(0))
-                while current.ended and submitted:  # the stroke's last chips before the return
-                    apply(submitted.pop(0))
-                if progress is not None and count[0] > applied:
-                    progress(run.time, count[0])
-                if snapshots_per_pass:
-                    _snapshot(sim, removal, current, run.time, snapshots_per_pass, plans, edge)
-                t_wait += time.perf_counter() - c0
-                if current.ended:
-                    predictor.clear()  # no chip in the return stroke
-                    current = None
-            if not alive:
-                break
-        sim.record = run.record()
-        sim.load_work, sim.actuator_work = run.load_work, run.actuator_work
-        sim.load_rows = np.array(run.load_rows).reshape(-1, 5)
-        c0 = time.perf_counter()
-        result = removal.close()
-    except BaseException:
-        if isinstance(removal, ParallelRemoval):
-            removal._stop()
-        raise
-    result.chips.sort(key=lambda c: (c.pass_index, c.time))
-    sim.cut = result
-    if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
-        raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
-    if result.gear.genus() != expected_genus(setup.gear):
-        raise RuntimeError(
-            f"the removal left a solid of genus {result.gear.genus()} (a gear has "
-            f"{expected_genus(setup.gear)}): report it with the job"
-        )
-    t_wait += time.perf_counter() - c0
-    if isinstance(removal, DexelRemoval):
-        sim.dexel = removal_summary(removal.workpiece, removal.land_touched)
-    sim.seconds = {
-        "total": time.perf_counter() - t_start,
-        "cut": t_wait,  # the removal in this process, or the wait for the workers
-        "physics": run.timing["physics"],
-        "control": run.timing["control"],
-        "machine": run.time,
-        "workers": workers,
-    }
-    return sim
+    CNC. ``removal``: "dexel" (the default: the dexel workpiece, cut a few passages at a time in this process;
+    ``workers`` is moot) or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes).
+    ``plan``: the job's setup, ideal passes and setting sheets if an earlier stage made them."""
+    run = CuttingRun(
+        job, params, edge_kind, forces, servo_substeps, snapshots_per_pass, workers, correction, removal, plan
+    )
+    return run.run(progress)
 
 
 #: passages the machine runs ahead of the dexel removal's newest chip: none. The chips and the cut would not depend

@@ -27,16 +27,8 @@ from cutting.skiving.dexel_lines import DexelSpacing, gear_phase
 from cutting.skiving.dexel_solid import dexel_solid
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_sweep import PassTable
-from cutting.skiving.removal import (
-    Chip,
-    CutResult,
-    PassCutter,
-    Stock,
-    blank_window_of,
-    engagement_half_angle,
-    from_arrays,
-    to_arrays,
-)
+from cutting.skiving.passages import Chip, CutResult, blank_window_of, engagement_half_angle
+from cutting.skiving.removal import PassCutter, Stock, from_arrays, to_arrays
 from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.sweep import outline_points, simplify_outline
 from cutting.skiving.trajectory import PassMotion

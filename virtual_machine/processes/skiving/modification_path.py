@@ -101,7 +101,7 @@ def plan_path(
         raise ValueError("the job has no [modification]: nothing to plan")
     plan = plan_of(job, plan)
     st = plan.setup
-    edge = make_edge(st, job.cutter_options["edge"])
+    edge = make_edge(st, job.cutter_options.edge)
     passes = list(plan.passes)
     finishing = passes[-1]
     opt = MeasureOptions.from_job(job.measurement, job.modification)

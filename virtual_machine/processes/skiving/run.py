@@ -9,28 +9,25 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import platform
 import time
 from collections.abc import Callable, Sequence
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from cutting.errors import InputError, Problem
+from cutting.errors import InputError, Problem, UnmeasurableError, UnmeasurableGearError
 from cutting.gear_file import GearFile, write_gear_stl
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.ideal_cut import default_workers
-from cutting.skiving.removal import CutResult
+from cutting.skiving.passages import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
 from cutting.skiving.trajectory import PassMotion
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions
-from metrology.workpiece import UnmeasurableError
 from virtual_machine.job import Job, load_job
 from virtual_machine.output.formatting import format_sheet
 from virtual_machine.output.json_file import write_json
@@ -38,19 +35,10 @@ from virtual_machine.output.motion_io import summary
 from virtual_machine.output.report import run_chart, write_report
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
 from virtual_machine.setting.plan import SkivingPlan, plan_of
+from virtual_machine.version import versions
 
 #: blank snapshots per pass in the recording (manifold removal; the dexel removal makes its solid once per pass)
 SNAPSHOTS_PER_PASS = 3
-
-
-def versions() -> dict[str, str]:
-    out = {"python": platform.python_version()}
-    for dist in ("skive", "mujoco", "manifold3d", "numpy", "trimesh", "rerun-sdk"):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            out[dist] = "not installed"
-    return out
 
 
 def run_job(
@@ -92,7 +80,7 @@ def run_job(
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
-    stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process["stl_tolerance"])
+    stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process.stl_tolerance)
     mesh = stl.mesh
     # the truth: the exact swept surface of the motion the machine made; the mesh measured beside it
     motions = sampled_passes(plan.setup, sim.record.passes)
@@ -164,10 +152,6 @@ def measure_written_cut(
     return measurement
 
 
-class UnmeasurableGearError(RuntimeError):
-    """The machine cut a gear the measuring machine cannot measure (a tooth damaged or missing)."""
-
-
 def _unmeasurable(
     exc: Exception, job: Job, path: Path, out: Path, sim: CoSimulation, durations: dict[str, float], stl: GearFile
 ) -> UnmeasurableGearError:
@@ -198,8 +182,8 @@ def with_mesh_tolerance(job: Job, tolerance: float | None) -> Job:
         return job
     if not tolerance > 0:
         raise InputError(Problem("--mesh-tolerance", tolerance * 1e3, "must be positive", "give micrometres > 0"))
-    stl = min(job.process["stl_tolerance"], tolerance)
-    return dataclasses.replace(job, process={**job.process, "sweep_error": tolerance, "stl_tolerance": stl})
+    stl = min(job.process.stl_tolerance, tolerance)
+    return dataclasses.replace(job, process=dataclasses.replace(job.process, sweep_error=tolerance, stl_tolerance=stl))
 
 
 def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, float], stl: GearFile) -> dict:
@@ -213,7 +197,7 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
         "job": {"path": str(path), "sha256": hashlib.sha256(text.encode()).hexdigest(), "kind": job.kind},
         "versions": versions(),
         "seed": None,  # nothing random: the same job gives the same gear
-        "machine": {k: job.machine[k] for k in ("structure", "synchronization", "adaptive_correction")},
+        "machine": {k: getattr(job.machine, k) for k in ("structure", "synchronization", "adaptive_correction")},
         "durations_s": {**{k: round(v, 3) for k, v in durations.items()}, "machine": float(rec.t[-1])},
         "wall_split_s": {k: round(v, 3) for k, v in sim.seconds.items()},
         "synchronisation": summary(rec, job.gear.teeth),
@@ -237,7 +221,7 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
         "iterated on this machine; the deviations are measured against the design (modification_path)",
         "cut": {
             "removal": sim.dexel or {"kind": "manifold"},
-            "edge": job.cutter_options["edge"],
+            "edge": job.cutter_options.edge,
             "passages": len(cut.chips),
             "chip_volume_mm3": float(sum(c.volume for c in cut.chips)),
             "sweeps": cut.sweeps,

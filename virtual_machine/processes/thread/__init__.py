@@ -1,7 +1,7 @@
 """Thread cutting on the lathe (seed 001's thread group): the process of a "thread" job.
 
 - setup: the setting sheet of the thread group (:mod:`virtual_machine.setting.sheet`);
-- simulate: one threading stroke on the lathe (:mod:`virtual_machine.runtime.thread_run`): its lead error;
+- simulate: one threading stroke on the lathe (:mod:`virtual_machine.runtime.lathe_run`): its lead error;
 - run: the same stroke, and the lead of the thread the carriage's path cuts measured as a thread measuring machine
   reports it (its deviation along the thread: mean, peak to peak, drift) in measurement.json.
 """
@@ -10,44 +10,42 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import ClassVar
 
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, written
+from virtual_machine.processes.options import MachineSimulateOptions, RecordedOptions, SheetOptions, StageOptions
 
 
 class ThreadCutting(Process):
     kind = "thread"
     title = "thread cutting"
+    stages: ClassVar[dict[str, type[StageOptions]]] = {
+        "setup": SheetOptions,
+        "simulate": MachineSimulateOptions,
+        "run": RecordedOptions,
+    }
+    hints: ClassVar[dict[str, str]] = {"cut": "use `skive run`: the thread is cut by the lathe's simulated stroke"}
 
-    def setup(self, job: Job, *, structure: str | None = None) -> Product:
-        from virtual_machine.processes.skiving import sheet_product
+    def setup(self, job: Job, options: SheetOptions | None = None) -> Product:
+        from virtual_machine.processes.sheets import sheet_product
 
-        return sheet_product(job, structure)  # the thread group's sheet comes from the same setting sheets
+        # the thread group's sheet comes from the same setting sheets as skiving's
+        return sheet_product(job, self._options("setup", options).structure)
 
     def simulate(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        duration: float | None = None,
-        rrd: Path | None = None,
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: MachineSimulateOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
-        return _stroke(job, out, duration, measurement=False, rrd=rrd)
+        o = self._options("simulate", options)
+        job = o.machine_of(job)
+        return _stroke(job, out, o.duration, measurement=False, rrd=o.rrd)
 
     def run(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        rrd: Path | None = None,
-        workers: int | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: RecordedOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
-        return _stroke(job, out, None, measurement=True, rrd=rrd)
+        return _stroke(job, out, None, measurement=True, rrd=self._options("run", options).rrd)
 
 
 def _stroke(job: Job, out: Path, duration: float | None, measurement: bool, rrd: Path | None = None) -> Product:
@@ -60,10 +58,10 @@ def _stroke(job: Job, out: Path, duration: float | None, measurement: bool, rrd:
     from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
     from virtual_machine.job import flatten_model
     from virtual_machine.output import motion_io
-    from virtual_machine.runtime.thread_run import simulate_thread
+    from virtual_machine.runtime.lathe_run import simulate_thread
     from virtual_machine.setting.thread_layout import thread_layout
 
-    params = override(ThreadLatheParams(), flatten_model(job.machine.get("model")))  # the job's own lathe
+    params = override(ThreadLatheParams(), flatten_model(job.machine.model))  # the job's own lathe
     t0 = time.perf_counter()
     rec = simulate_thread(job, params, duration=duration)
     wall = time.perf_counter() - t0

@@ -10,12 +10,14 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import ClassVar
 
 from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, reporter_or_default, written
+from virtual_machine.processes.options import RecordedOptions, StageOptions
 
 FILES = ("workpiece.stl", "measurement.json", "report.html")
 
@@ -23,22 +25,22 @@ FILES = ("workpiece.stl", "measurement.json", "report.html")
 class VibrationTurning(Process):
     kind = "turning"
     title = "vibration turning"
+    stages: ClassVar[dict[str, type[StageOptions]]] = {
+        "setup": StageOptions,
+        "simulate": StageOptions,
+        "run": RecordedOptions,
+    }
+    hints: ClassVar[dict[str, str]] = {"cut": "use `skive run`: the turned surface comes from the lathe's path"}
 
-    def setup(self, job: Job, *, structure: str | None = None) -> Product:
+    def setup(self, job: Job, options: StageOptions | None = None) -> Product:
         from metrology.turned_surface import turned_surface_summary
         from virtual_machine.processes.turning.stages import format_prediction, ideal_setup
 
-        doc = turned_surface_summary(ideal_setup(job), job.process["revolutions"])
+        doc = turned_surface_summary(ideal_setup(job), job.process.revolutions)
         return Product("setup", finite(doc), format_prediction(job))
 
     def simulate(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        duration: float | None = None,
-        rrd: Path | None = None,
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: StageOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.processes.turning.stages import format_run, simulate_summary
 
@@ -48,16 +50,11 @@ class VibrationTurning(Process):
         return Product("simulate", doc, format_run(doc), written(out, "simulation.json"), out)
 
     def run(
-        self,
-        job: Job,
-        out: Path,
-        *,
-        rrd: Path | None = None,
-        workers: int | None = None,
-        removal: str = "dexel",
-        reporter: Reporter | None = None,
+        self, job: Job, out: Path, options: RecordedOptions | None = None, reporter: Reporter | None = None
     ) -> Product:
         from virtual_machine.processes.turning.stages import format_run, run_turning
+
+        rrd = self._options("run", options).rrd
 
         with reporter_or_default(reporter) as rep:
             doc = run_turning(job, Path(job.source), out, rrd, rep.stage)

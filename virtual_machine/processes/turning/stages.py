@@ -8,7 +8,7 @@ command. The surface and the chip breaks come from :mod:`cutting.turning.vibrati
 (:class:`cutting.turning.vibration.SampledTurning`), its crests are measured by :mod:`metrology.turned_surface`;
 `skive run` also cuts it with manifold3d and measures the solid's crests beside the exact envelope.
 
-The lathe cuts under its cutting forces (:mod:`cutting.turning.forces`, issue 28): at every physics step the chip at
+The lathe cuts under its cutting forces (:mod:`cutting.turning.forces`): at every physics step the chip at
 the spindle's angle, from the path the simulated carriage has made, gives F_c (a torque braking the spindle), F_f
 (pushing the carriage back against the feed through the nut stage) and F_p (radial, which no joint of the model
 takes); the run without them is the comparison (:func:`forces_section`). A spindle motor too weak for the cut
@@ -50,12 +50,12 @@ def ideal_setup(job: Job) -> TurningSetup:
 
 def spindle_speed(job: Job) -> float:
     """Spindle speed [rev/s] of the cutting speed at the workpiece diameter."""
-    return job.process["cutting_speed"] * 1000 / 60 / (math.pi * job.turning["diameter"])
+    return job.process.cutting_speed * 1000 / 60 / (math.pi * job.turning["diameter"])
 
 
 def format_prediction(job: Job) -> str:
     """`skive setup` of a turning job: the geometry the feed and the vibration predict."""
-    s = turned_surface_summary(ideal_setup(job), job.process["revolutions"])
+    s = turned_surface_summary(ideal_setup(job), job.process.revolutions)
     t, v = job.turning, job.vibration
     lines = [
         "VIBRATION TURNING (seed 004) on the lathe of seed 001 (master-slave: the feed follows the spindle's encoder)",
@@ -95,14 +95,14 @@ def _summary_lines(s: dict[str, Any]) -> list[str]:
 
 def lathe_params(job: Job) -> ThreadLatheParams:
     """The job's lathe: its [machine.model] over the defaults."""
-    return override(ThreadLatheParams(), flatten_model(job.machine.get("model")))
+    return override(ThreadLatheParams(), flatten_model(job.machine.model))
 
 
 def turning_forces(job: Job) -> TurningForces:
     """The force model of the job's cut (:mod:`cutting.turning.forces`): its nose, depth and ``process.material``
     (an unknown material raises :class:`InputError` listing the known ones)."""
     try:
-        steel = material(job.process["material"])
+        steel = material(job.process.material)
     except InputError as exc:
         raise InputError(exc.problems, job.source) from None
     return TurningForces(NoseGeometry.of(ideal_setup(job)), steel)
@@ -159,11 +159,11 @@ def simulate_turning(
     run-up on. The simulated path is there in the loop (every earlier turn is recorded before it is needed), so
     the carriage's own deflections feed back into the chips it cuts. Refused (InputError) before the run if the
     spindle motor cannot hold the cut (:func:`check_spindle_holds`)."""
-    from virtual_machine.runtime.lathe_reach import check_lathe_reach
-    from virtual_machine.runtime.thread_run import CuttingLoad, simulate_thread
+    from virtual_machine.reach.lathe import check_lathe_reach
+    from virtual_machine.runtime.lathe_run import CuttingLoad, simulate_thread
     from virtual_machine.setting.thread_layout import thread_layout
 
-    n = job.process["revolutions"]
+    n = job.process.revolutions
     params = params or lathe_params(job)
     duration = params.runup_time + SETTLE + (n + 1) / spindle_speed(job)
     check_lathe_reach(job, params, thread_layout(job, params), duration)  # before the path is sampled
@@ -211,7 +211,7 @@ def simulate_summary(job: Job, forces: bool = True) -> tuple[dict[str, Any], Any
     ``forces`` the lathe cuts under its cutting forces and the same run without them is the comparison
     (:func:`forces_section`)."""
     rec, path = simulate_turning(job, forces=forces)
-    n = min(job.process["revolutions"], path.revolutions)
+    n = min(job.process.revolutions, path.revolutions)
     commanded = ideal_setup(job)
     dev = (path.z - commanded_path(job, path)) * 1e3
     doc = {
@@ -303,7 +303,7 @@ def run_turning(job: Job, path: Path, out: Path, rrd: Path | None = None, stage=
     stage("the turned surface with manifold3d, its crests against the exact envelope")
     t0 = time.perf_counter()
     n = min(20, sampled.revolutions)
-    solid = cut_workpiece(sampled, n, job.process["sweep_error"])
+    solid = cut_workpiece(sampled, n, job.process.sweep_error)
     phis = (np.arange(SOLID_ANGLES) + 0.5) * 2 * math.pi / SOLID_ANGLES
     diffs, rts = [], []
     for phi in phis:
@@ -317,7 +317,7 @@ def run_turning(job: Job, path: Path, out: Path, rrd: Path | None = None, stage=
     durations["solid"] = time.perf_counter() - t0
     doc["solid"] = {
         "revolutions": n,
-        "sweep_error_um": job.process["sweep_error"] * 1e3,
+        "sweep_error_um": job.process.sweep_error * 1e3,
         "Rt_max_um": float(max(rts)) * 1e3,
         "largest_crest_difference_to_envelope_um": float(max(diffs)) * 1e3 if diffs else None,
     }
