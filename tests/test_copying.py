@@ -253,8 +253,8 @@ def form_job(gear: str = "", diameter: float = 50.0, clearance: float = 0.2, mod
 def test_a_form_milling_job_parses():
     j = form_job()
     assert j.kind == "form_milling" and j.mill["diameter"] == 50.0 and j.modification is not None
-    assert j.process["path_form"] == "spline"
-    assert form_job(process="[process]\npath_form = 'bezier'").process["path_form"] == "bezier"
+    assert j.process.path_form == "spline"
+    assert form_job(process="[process]\npath_form = 'bezier'").process.path_form == "bezier"
 
 
 # ---- the seed's single cubic Bezier path (eq. 17) beside the spline ------------------------------------------------

@@ -1,5 +1,5 @@
 """Seed 003's equations 1, 4-6 and 17 (the copying method's initial path, transfer angles, the change to tool
-coordinates and the Bezier path) against cases worked by hand (issue 28's proofs)."""
+coordinates and the Bezier path) against cases worked by hand."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""A helical tooth space by the copying method (issue 28, item 1): the disc mill set over at the helix angle with
+"""A helical tooth space by the copying method: the disc mill set over at the helix angle with
 the envelope profile, checked by the exact swept surface of its screw motion against the nominal helicoid."""
 
 import math

@@ -16,7 +16,7 @@ from cutting.gear import Gear
 from cutting.skiving.edge import make_edge
 from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.ideal_cut import cut_ideal, to_trimesh
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
 from metrology.cut_measurement import measure_cut
 from metrology.datum import check_mesh, establish_datum, measuring_radius

@@ -16,7 +16,7 @@ from cutting.skiving.edge import (
     make_edge,
     tooth_intrusion,
 )
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 
 DEG = math.pi / 180
 PHI = np.linspace(-0.7, 0.7, 4001)  # cutter angles through one tooth passage

@@ -11,9 +11,10 @@ import pytest
 from cutting.flank import flank_normals, flank_points
 from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge, make_edge
+from cutting.skiving.exact_solve import ItemSolver
 from cutting.skiving.exact_sweep import PassTable, SweptVolumes, surface_from_intervals
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.sampled_motion import ideal_samples
-from cutting.skiving.setup import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
 from metrology.measure import MeasureOptions, profile_range
 
@@ -315,7 +316,8 @@ def test_the_compiled_pose_is_the_motions_pose(kind):
 
     sv = finishing(0.2) if kind == "ideal" else sampled(0.2)
     tb, solver = sv.tables[0], sv._solver
-    assert solver is not None
+    # both motions have a compiled pose, so the sweep took the compiled solve, over every passage of its tables
+    assert isinstance(solver, ItemSolver) and len(solver.motion[0]) == sum(len(t.m) for t in sv.tables)
     rng = np.random.default_rng(7)
     g = rng.integers(0, len(tb.m), 300)
     t = rng.uniform(-0.01, tb.motion.duration + 0.01, 300)
@@ -333,7 +335,8 @@ def test_the_compiled_item_solve_gives_the_python_intervals(kind, monkeypatch):
     so the same surface. Measured: ~1e-14 mm."""
     sv = finishing(0.2) if kind == "ideal" else sampled(0.2)
     solver = sv._solver
-    assert solver is not None
+    # both motions have a compiled pose, so the sweep took the compiled solve, over every passage of its tables
+    assert isinstance(solver, ItemSolver) and len(solver.motion[0]) == sum(len(t.m) for t in sv.tables)
     p, u = _flank_lines(sv.gear)
     for reach in (0.02, 0.1):
         points, roots = solver.points, solver.roots_found

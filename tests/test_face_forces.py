@@ -24,14 +24,9 @@ from machine_models.face_contour_machine import FaceMachineParams
 from machine_models.parameters import ARCSEC
 from metrology.face_slots import slot_spacing
 from virtual_machine.job import parse_job
-from virtual_machine.processes.face_contour.cnc import (
-    CUT_TORQUE_SHARE,
-    check_cutting_load,
-    measure_recorded,
-    pass_window,
-    simulate_face_contour,
-)
+from virtual_machine.processes.face_contour.cnc import measure_recorded, pass_window, simulate_face_contour
 from virtual_machine.processes.face_contour.stages import cutting_load, machine_params
+from virtual_machine.reach.face import CUT_TORQUE_SHARE, check_cutting_load
 
 STEEL = material("16MnCr5")  # kc1.1 = 2100 N/mm^2, mc = 0.26
 ASSET = Path(__file__).resolve().parent.parent / "assets" / "jobs" / "face_coupling.toml"
@@ -234,8 +229,8 @@ def test_slaves_on_the_heads_encoder_keep_the_slots_where_the_head_really_is() -
     encoder (seed 001's master-slave) copy what the head does: the spacing error falls below a third of that (-1.0
     arcsec measured) and the bottoms' convexity below half (-23 um); what is left is the slaves' tracking of the
     head's jerk (their 40-60 Hz speed loops). Without forces both masters cut the same flat slots (0.8 um)."""
-    c = FaceCoupling(S=0.002, control="eccentric", e=7.8751)
-    c = replace(c, e=c.flat_bottom_eccentricity())
+    c = FaceCoupling(S=0.002, control="eccentric")
+    c = replace(c, e=c.flat_bottom_eccentricity())  # the setting sheet's e, as the shipped job takes it
     load = FaceLoad(c, STEEL, pass_window(c, 0.0))
     got = {}
     for master in ("generator", "head"):

@@ -1,4 +1,4 @@
-"""A finger-mill job (seed 003's finger mill, issue 28 item 2) through the job, `skive setup`, `skive cut` and the
+"""A finger-mill job (seed 003's finger mill) through the job, `skive setup`, `skive cut` and the
 machine: the job parses and is refused with the key and the fix, the ideal machine's cut measures the design, the
 stiff machine follows the finger's passes, and the force model matches a case worked by hand."""
 
@@ -155,7 +155,7 @@ def test_the_stiff_machine_follows_the_finger_passes(internal, helix):
     passes = stages.cnc_passes(plan)
     chosen = [0, 1, 14]
     rec = simulate_form_milling(
-        layout, [passes[i] for i in chosen], FormMillParams().stiff(), job.process["feed"], job.process["mill_speed"]
+        layout, [passes[i] for i in chosen], FormMillParams().stiff(), job.process.feed, job.process.mill_speed
     )
     poses = stages.recorded_poses(plan, rec)
     for i, got, raw in zip(chosen, poses, rec.passes, strict=True):
@@ -233,10 +233,10 @@ def test_the_finger_force_against_a_case_worked_by_hand():
     assert isinstance(ml, FingerLoad)
     area = quad(lambda r: (2 * math.pi / gear.teeth - 2 * gear.half_thickness_angle(r)) * r, gear.tip_radius,
                 gear.root_radius, epsabs=1e-12)[0]  # fmt: skip
-    c, feed, rpm = job.mill["clearance"], job.process["feed"], job.process["mill_speed"]
+    c, feed, rpm = job.mill["clearance"], job.process.feed, job.process.mill_speed
     strip = c * gear.tooth_depth
     fz = feed / (rpm * job.mill["teeth"])
-    mat = material(job.process["material"])
+    mat = material(job.process.material)
     rm = float(np.mean(plan.mill.rho(np.linspace(0.0, gear.tooth_depth, 201))))
     vc, vf = math.pi * 2 * rm * rpm / 60, feed / 60  # mm/s
     h_left = 2 * fz / math.pi

@@ -1,4 +1,4 @@
-"""The finger mill of the copying method (seed 003, issue 28 item 2): its profile copies the tooth space, its exact
+"""The finger mill of the copying method (seed 003): its profile copies the tooth space, its exact
 swept surface is the involute (internal spur z = 60, external spur mn = 8), measured by the project's metrology; the
 manifold removal takes out the space's volume; bad mills and gears are refused with the fix."""
 
@@ -39,7 +39,7 @@ from metrology.modification import crowning
 from metrology.sections import MeshData
 from metrology.workpiece import flank_deviation
 
-#: issue 28's internal spur: z = 60, m = 2, b = 20 mm
+#: an internal spur: z = 60, m = 2, b = 20 mm
 INTERNAL = Gear(teeth=60, normal_module=2.0, face_width=20.0, internal=True)
 #: a large module external spur: z = 20, mn = 8, b = 16 mm
 LARGE = Gear(teeth=20, normal_module=8.0, face_width=16.0)

@@ -13,9 +13,9 @@ import mujoco
 import numpy as np
 import pytest
 
+from cutting.errors import SimulationDivergedError
 from machine_models.form_mill import FormMillLayout, FormMillParams, build_form_mill, build_form_mill_spec
 from virtual_machine.processes.form_milling.cnc import FormMillRecord, MillPass, PassRecord, simulate_form_milling
-from virtual_machine.runtime.integrator import SimulationDivergedError
 
 #: a small gear: tip radius 22 mm, face 10 mm, 12 teeth; disc mill of 25 mm radius, 8 mm wide
 LAYOUT = FormMillLayout.for_gear(0.022, 0.010, 12, 0.025, 0.008)

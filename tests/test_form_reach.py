@@ -1,4 +1,4 @@
-"""The form-milling machine's reach (virtual_machine/processes/form_milling/reach.py): the shipped jobs are within
+"""The form-milling machine's reach (virtual_machine/reach/form_mill.py): the shipped jobs are within
 it; a clearance that leaves no mill in the space, a stroke beyond the Z travel, a mill larger than the spindle
 carries and a workpiece larger than the table takes are refused before the plan, naming what would hold them."""
 
@@ -12,8 +12,8 @@ from small_jobs import job_from_text
 
 from cutting.errors import InputError
 from virtual_machine.job import load_job
-from virtual_machine.processes.form_milling.reach import check_form_reach
 from virtual_machine.processes.form_milling.stages import machine_params, plan_job
+from virtual_machine.reach.form_mill import check_form_reach
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 CROWNED = (JOBS / "form_milled_crowned.toml").read_text()

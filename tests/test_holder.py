@@ -9,7 +9,7 @@ from cutting.errors import InputError
 from cutting.gear import Gear
 from cutting.skiving.edge import involute_edge
 from cutting.skiving.holder import check_holder_side
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
 
 DEG = math.pi / 180

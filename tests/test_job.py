@@ -25,12 +25,12 @@ from virtual_machine.job import (
     MACHINE_KEYS,
     PROCESS_KEYS,
     THREAD_KEYS,
-    FaceContourPayload,
-    FormMillingPayload,
+    FaceContourJob,
+    FormMillingJob,
     Job,
-    SkivingPayload,
-    ThreadPayload,
-    TurningPayload,
+    SkivingJob,
+    ThreadJob,
+    TurningJob,
     default_job_path,
     load_job,
     parse_job,
@@ -111,15 +111,29 @@ def problem(err: InputError, key: str):
 
 @pytest.mark.parametrize("make", [spur, internal, internal_spur, thread], ids=lambda f: f.__name__)
 def test_bases_are_valid(make):
-    job = parse_job(make(), SOURCE)
+    data = make()
+    job = parse_job(data, SOURCE)
     assert isinstance(job, Job)
-    assert job.kind == ("thread" if make is thread else "gear")
+    assert job.kind == ("thread" if make is thread else "skiving")
+    if make is thread:  # the file's thread, key by key (a mapping or the typed section)
+        t = job.thread
+        assert all((t[k] if isinstance(t, dict) else getattr(t, k)) == v for k, v in data["thread"].items())
+        return
+    # the job holds the file's gear and cutter, and the shaft angle of the crossing (signed helix angles, right hand
+    # positive): external Sigma = beta2 + beta0, internal Sigma = beta2 - beta0
+    g, c = data["gear"], data["cutter"]
+    assert (job.gear.z, job.gear.mn, job.gear.internal) == (g["teeth"], g["normal_module"], g.get("internal", False))
+    assert job.cutter.z == c["teeth"]
+    beta2, beta0 = math.radians(g["helix_angle"]), math.radians(c["helix_angle"])
+    assert (job.gear.helix_angle, job.cutter.helix_angle) == pytest.approx((beta2, beta0), abs=1e-12)
+    sigma = beta2 - beta0 if job.gear.internal else beta2 + beta0
+    assert job.skiving.shaft_angle == pytest.approx(sigma, abs=1e-12)
 
 
 def test_spur_base_tooth_depth_is_4_5_mm():
     job = parse_job(spur(), SOURCE)
     assert job.skiving.full_depth == pytest.approx(4.5, abs=1e-9)
-    assert sum(job.process["passes"]) == pytest.approx(4.5)
+    assert sum(job.process.passes) == pytest.approx(4.5)
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -235,7 +249,7 @@ def test_optional_keys_get_their_defaults():
     assert job.gear.beta == 0.0
     assert job.gear.x == 0.0
     assert job.gear.internal is False
-    assert job.machine["structure"] == "mechatronic"
+    assert job.machine.structure == "mechatronic"
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -283,7 +297,7 @@ def test_nan_is_refused():
 def test_integers_are_accepted_where_numbers_are():
     job = parse_job(spur(gear__normal_module=2, process__tool_speed=2500, process__passes=[2, 1.5, 0.8, 0.2]), SOURCE)
     assert job.gear.mn == 2.0
-    assert isinstance(job.process["tool_speed"], float)
+    assert isinstance(job.process.tool_speed, float)
 
 
 @pytest.mark.parametrize(
@@ -353,10 +367,18 @@ def test_non_positive_size_thread(dotted, value):
     refused(thread(**{f"{section}__{key}": value}), dotted, value, ("must be > 0",))
 
 
-@pytest.mark.parametrize("passes", [[2.0, 0.0, 1.5], [2.0, -0.5, 1.5], [0], [-1.0]])
-def test_pass_of_zero_or_negative(passes):
-    err = refused(spur(process__passes=passes), "process.passes", passes, ("must be > 0 mm", "drop zero or negative"))
+@pytest.mark.parametrize("passes", [[2.0, -0.5, 1.5], [0], [0.0, 2.0], [-1.0]])
+def test_pass_of_zero_first_or_negative(passes):
+    err = refused(spur(process__passes=passes), "process.passes", passes, ("must be > 0 mm", "spring pass"))
     assert err.keys == ["process.passes"]
+
+
+def test_a_spring_pass_repeats_the_final_centre_distance():
+    """A 0 increment after the first pass is a spring pass: the cutter goes over the finished flanks again at the same
+    centre distance (shops finish so); the job's depth and its passes' centre distances are those without it."""
+    with_spring = parse_job(spur(process__passes=[2.25, 0.0]), "spring.toml").skiving
+    plain = parse_job(spur(process__passes=[2.25]), "plain.toml").skiving
+    assert with_spring.pass_centre_distances == (plain.pass_centre_distances[0],) * 2
 
 
 @pytest.mark.parametrize(
@@ -507,7 +529,10 @@ def test_cutter_tip_interference_with_internal_gear():
 def test_smaller_cutter_in_internal_gear_is_valid():
     job = parse_job(internal_spur(cutter__teeth=40), SOURCE)
     assert job.cutter.z == 40
-    assert job.skiving.final_centre_distance > 0
+    # through the common rack, unshifted: a = r2 - r0 = mn z2 / 2 - mn z0 / (2 cos beta0) = 60 - 42.567 mm
+    assert (job.gear.x, job.cutter.x) == (0.0, 0.0)
+    r2, r0 = 2.0 * 60 / 2, 2.0 * 40 / (2 * math.cos(math.radians(20.0)))
+    assert job.skiving.final_centre_distance == pytest.approx(r2 - r0, abs=1e-9)
 
 
 @pytest.mark.parametrize("z0", [62, 60, 58])
@@ -544,8 +569,8 @@ def test_infeed_deeper_than_the_tooth_internal():
 
 
 def test_infeed_exactly_the_tooth_depth_or_less_is_valid():
-    assert parse_job(spur(process__passes=[4.5]), SOURCE).process["passes"] == [4.5]
-    assert parse_job(spur(process__passes=[2.0, 1.0]), SOURCE).process["passes"] == [2.0, 1.0]
+    assert parse_job(spur(process__passes=[4.5]), SOURCE).process.passes == [4.5]
+    assert parse_job(spur(process__passes=[2.0, 1.0]), SOURCE).process.passes == [2.0, 1.0]
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -585,8 +610,7 @@ def test_thread_job_values():
     assert job.thread["lead"] == 1.75
     assert job.thread["length"] == 30.0
     assert set(job.thread) == set(THREAD_KEYS)
-    with pytest.raises(ValueError, match="thread job"):
-        _ = job.skiving
+    assert not hasattr(job, "skiving") and not hasattr(job, "gear")  # a thread job has no gear and no skiving setup
 
 
 def test_load_job_missing_file(tmp_path):
@@ -637,18 +661,17 @@ def test_shipped_jobs_load(name):
     assert job.source == str(JOBS / name)
     data = tomllib.loads((JOBS / name).read_text(encoding="utf-8"))
     if "thread" in data:
-        assert job.kind == "thread" and job.gear is None
+        assert job.kind == "thread" and not hasattr(job, "gear")
     elif "coupling" in data:  # a face coupling by continuous indexing (seed 004)
         assert job.kind == "face_contour" and job.coupling.m == data["coupling"]["slots"]
     elif "turning" in data:  # vibration turning (seed 004) on the lathe: its feed set up as a lead
-        assert job.kind == "turning" and job.thread["lead"] == job.turning["feed"] and job.gear is None
+        assert job.kind == "turning" and job.thread["lead"] == job.turning["feed"] and not hasattr(job, "gear")
     elif "mill" in data:  # the copying method (seed 003): a gear cut by a profiled disc mill, no skiving setup
-        assert job.kind == "form_milling" and job.cutter is None and job.mill["diameter"] > 0
-        with pytest.raises(ValueError, match="form-milling job"):
-            _ = job.skiving
+        assert job.kind == "form_milling" and job.mill["diameter"] > 0
+        assert not hasattr(job, "cutter") and not hasattr(job, "skiving")
     else:
-        assert job.kind == "gear"
-        assert job.skiving.full_depth == pytest.approx(sum(job.process["passes"]), abs=1e-6)
+        assert job.kind == "skiving"
+        assert job.skiving.full_depth == pytest.approx(sum(job.process.passes), abs=1e-6)
 
 
 def test_the_four_job_files_are_shipped():
@@ -661,7 +684,7 @@ def test_default_job_path_exists_and_loads():
     assert path.resolve() == (JOBS / "default.toml").resolve()
     job = load_job(path)
     assert job.gear.z == 20 and job.gear.face_width == 4.0  # small: skive run in about two minutes, ISO-gradable
-    assert job.machine["structure"] == "mechatronic"
+    assert job.machine.structure == "mechatronic"
 
 
 def test_cutter_body_and_holder_reach_the_setup():
@@ -674,17 +697,17 @@ def test_cutter_body_and_holder_reach_the_setup():
 
 
 # ----------------------------------------------------------------------------------------------------
-# the package: a head every job has plus its kind's payload, one parser per kind
+# the package: a head every job has, the kind's own sections in its Job subclass, one parser per kind
 # ----------------------------------------------------------------------------------------------------
 
-PAYLOADS = {
-    "gear": SkivingPayload,
-    "thread": ThreadPayload,
-    "form_milling": FormMillingPayload,
-    "face_contour": FaceContourPayload,
-    "turning": TurningPayload,
+JOB_CLASSES = {
+    "skiving": SkivingJob,
+    "thread": ThreadJob,
+    "form_milling": FormMillingJob,
+    "face_contour": FaceContourJob,
+    "turning": TurningJob,
 }
-#: what the rest of the code reads off a job (job.gear, job.thread, ...)
+#: the sections some kinds have and others not
 SECTION_NAMES = (
     "gear",
     "cutter",
@@ -702,21 +725,47 @@ SECTION_NAMES = (
 def test_every_kind_has_a_parser_and_a_process():
     from virtual_machine.processes import PROCESSES
 
-    assert set(KINDS) == set(PAYLOADS) == set(PROCESSES)
+    assert set(KINDS) == set(JOB_CLASSES) == set(PROCESSES)
 
 
 @pytest.mark.parametrize("name", SHIPPED)
-def test_the_payload_is_the_kinds_and_the_job_reads_its_sections(name):
-    """job.gear, job.thread, ... read the payload's field; None for a section the kind has not."""
+def test_a_job_has_only_its_kinds_sections(name):
+    """A job is its kind's class: the sections of its kind are its fields, those of other kinds are not there at all
+    (no job.gear that is None for a thread job)."""
     job = load_job(JOBS / name)
-    assert type(job.payload) is PAYLOADS[job.kind]
-    own = {f.name for f in dataclasses.fields(job.payload)}
+    assert type(job) is JOB_CLASSES[job.kind] and job.kind == type(job).kind
+    own = {f.name for f in dataclasses.fields(job)} - {"source", "machine", "process"}
     for section in SECTION_NAMES:
-        expected = getattr(job.payload, section) if section in own else None
-        assert getattr(job, section) is expected, section
+        assert hasattr(job, section) == (section in own), section
 
 
-def test_a_payload_section_is_replaced_through_the_payload():
+@pytest.mark.parametrize("name", SHIPPED)
+def test_machine_and_process_are_parsed_once_into_typed_sections(name):
+    """[machine] and [process] are frozen dataclasses with a field per declared key, the file's values (or the
+    defaults) in the declared types: read as job.process.tool_speed, never as a string lookup."""
+    path = JOBS / name
+    job = load_job(path)
+    raw = tomllib.loads(path.read_text())
+    for section in ("machine", "process"):
+        typed = getattr(job, section)
+        assert dataclasses.is_dataclass(typed) and not isinstance(typed, dict)
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(typed, dataclasses.fields(typed)[0].name, None)
+        for f in dataclasses.fields(typed):
+            key = f.metadata.get("key")
+            given = raw.get(section, {}).get(f.name)
+            if key is None or given is None or isinstance(given, dict):
+                continue
+            value = getattr(typed, f.name)
+            assert value == given and (not isinstance(key.kind, type) or isinstance(value, key.kind)), f.name
+
+
+def test_the_skiving_setup_is_made_once():
+    job = parse_job(spur(), SOURCE)
+    assert job.skiving is job.skiving
+
+
+def test_a_section_is_replaced_on_the_job():
     job = parse_job(thread(), SOURCE)
-    longer = dataclasses.replace(job, payload=dataclasses.replace(job.payload, thread={**job.thread, "length": 40.0}))
+    longer = dataclasses.replace(job, thread={**job.thread, "length": 40.0})
     assert longer.thread["length"] == 40.0 and job.thread["length"] != 40.0 and longer.machine is job.machine

@@ -1,4 +1,4 @@
-"""The lathe's reach (virtual_machine/runtime/lathe_reach.py): a thread or turning job whose spindle speed is above
+"""The lathe's reach (virtual_machine/reach/lathe.py): a thread or turning job whose spindle speed is above
 the lathe's top speed, whose workpiece is over its swing, or whose stroke is beyond the carriage's travel is refused
 before the stroke, naming the limit, both figures and what would hold it; a turning feed wider than the nose's cut
 is refused with the job."""
@@ -16,8 +16,8 @@ from machine_models.parameters import RPM
 from machine_models.thread_lathe import ThreadLatheParams
 from virtual_machine.job import load_job
 from virtual_machine.processes.turning.stages import lathe_params
-from virtual_machine.runtime.lathe_reach import check_lathe_reach
-from virtual_machine.runtime.thread_run import simulate_thread
+from virtual_machine.reach.lathe import check_lathe_reach
+from virtual_machine.runtime.lathe_run import simulate_thread
 from virtual_machine.setting.thread_layout import thread_layout
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"

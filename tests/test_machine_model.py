@@ -1,5 +1,5 @@
 """The generated MJCF machine: compiles, steps without warnings, and its drives show the set backlash and
-compliance (issue 5 proofs: lost motion = backlash within 5 %, static twist = T/k within 2 %)."""
+compliance (lost motion = backlash within 5 %, static twist = T/k within 2 %)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from checks import JOBS
 
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import ARCSEC, DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import MachineLayout, build_spec
@@ -28,7 +28,7 @@ def _layout(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
 
 def _model(job: str = "spur_external", params: SkivingMachineParams | None = None) -> mujoco.MjModel:
     j = load_job(str(JOBS / f"{job}.toml"))
-    return build_spec(_layout(j.skiving, j.machine["lead_screw_pitch"]), params or SkivingMachineParams()).compile()
+    return build_spec(_layout(j.skiving, j.machine.lead_screw_pitch), params or SkivingMachineParams()).compile()
 
 
 def _badqacc(d: mujoco.MjData) -> int:
@@ -52,7 +52,7 @@ def test_every_model_compiles_and_steps_without_warnings(job: str) -> None:
 
 def test_scene_xml_round_trip_has_cutter_and_blank() -> None:
     j = load_job(str(JOBS / "spur_external.toml"))
-    xml = build_spec(_layout(j.skiving, j.machine["lead_screw_pitch"]), SkivingMachineParams()).to_xml()
+    xml = build_spec(_layout(j.skiving, j.machine.lead_screw_pitch), SkivingMachineParams()).to_xml()
     m = mujoco.MjModel.from_xml_string(xml)
     bodies = {m.body(i).name for i in range(m.nbody)}
     assert {"work_spindle", "tool_spindle", "carriage", "radial_slide", "lead_screw"} <= bodies
@@ -132,7 +132,7 @@ def test_nut_axial_compliance() -> None:
         w = d.qvel[m.joint("TV").dofadr[0]]
         d.ctrl[m.actuator("M3").id] = 200.0 * (tv0 - q) - 2.0 * w  # motor holding the screw
         mujoco.mj_step(m, d)
-    pitch = load_job(str(JOBS / "spur_external.toml")).machine["lead_screw_pitch"] * 1e-3
+    pitch = load_job(str(JOBS / "spur_external.toml")).machine.lead_screw_pitch * 1e-3
     stretch = d.qpos[m.joint("P3").qposadr[0]] - pitch / (2 * math.pi) * d.qpos[m.joint("TV").qposadr[0]]
     assert stretch == pytest.approx(force / params.nut_stiffness, rel=0.02)
 
@@ -156,9 +156,9 @@ def test_every_structure_compiles_and_steps_without_warnings(job: str, structure
     from virtual_machine.setting.chains import chain_ratios
 
     j = load_job(str(JOBS / f"{job}.toml"))
-    j = dataclasses.replace(j, machine=dict(j.machine, structure=structure))
+    j = dataclasses.replace(j, machine=dataclasses.replace(j.machine, structure=structure))
     chains = chain_ratios(j) if structure != "mechatronic" else None
-    spec = build_spec(_layout(j.skiving, j.machine["lead_screw_pitch"]), SkivingMachineParams(), structure, chains)
+    spec = build_spec(_layout(j.skiving, j.machine.lead_screw_pitch), SkivingMachineParams(), structure, chains)
     compiled = spec.compile()
     d = mujoco.MjData(compiled)
     mujoco.mj_resetDataKeyframe(compiled, d, compiled.key("home").id)
@@ -177,15 +177,18 @@ def test_every_structure_compiles_and_steps_without_warnings(job: str, structure
 def test_cutting_load_does_the_work_of_the_force_on_the_relative_motion() -> None:
     """The generalized forces of a cutting force F at a point (on the blank, -F on the cutter) do, for any joint
     velocity, the work F . (v_blank - v_cutter) of that point: checked against finite-difference point velocities."""
-    from virtual_machine.runtime.physics import MachinePhysics
+    from virtual_machine.runtime.integrator import Integrator
+    from virtual_machine.runtime.loop import MachineLoop
+    from virtual_machine.runtime.physics import BlankFrameLoad, MachinePhysics
 
     m = _model()
     phys = MachinePhysics(m, SkivingMachineParams())
     d = phys.data
     mujoco.mj_forward(m, d)
     force, point = np.array([120.0, -800.0, 250.0]), np.array([78.0, 6.0, -3.0])  # N, mm in the blank frame
-    d.qfrc_applied[:] = 0.0
-    phys.apply_cutting_load(force, point)
+    hook = BlankFrameLoad(phys, lambda t, dt: [(force, point, np.zeros(3))])  # the skiving machine's load hook
+    loop = MachineLoop(Integrator(m, d, 1, 0, str), None, hook, phys.cutter_body, phys.blank_body)
+    loop.apply_loads(0.0, 1e-3)  # as the machine loop applies it before a tick
     qfrc = d.qfrc_applied.copy()
     rb = d.site_xmat[phys.site_blank].reshape(3, 3).copy()
     p_world = d.site_xpos[phys.site_blank] + rb @ point * 1e-3
@@ -212,9 +215,9 @@ def test_lead_screw_pitch_error_is_the_screws_real_lead() -> None:
     from machine_models.parts import tendon_coefs
 
     job = load_job(str(JOBS / "spur_external.toml"))
-    nominal = job.machine["lead_screw_pitch"] * 1e-3  # m
+    nominal = job.machine.lead_screw_pitch * 1e-3  # m
     params = replace(SkivingMachineParams(), lead_screw_pitch_error=4e-3)
-    m = build_spec(_layout(job.skiving, job.machine["lead_screw_pitch"]), params).compile()
+    m = build_spec(_layout(job.skiving, job.machine.lead_screw_pitch), params).compile()
     assert tendon_coefs(m, "nut")["TV"] == pytest.approx(-nominal * 1.004 / (2 * math.pi), rel=1e-12)
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, 0)

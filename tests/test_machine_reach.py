@@ -1,4 +1,4 @@
-"""The machine's reach (virtual_machine/processes/skiving/machine_reach.py): a job whose tool spindle or table speed
+"""The machine's reach (virtual_machine/reach/skiving.py): a job whose tool spindle or table speed
 is above its machine's top speed, or whose stroke is beyond the carriage's travel, is refused before the run, naming
 the element, both figures and what would hold it; every shipped skiving job is within its default machine's reach."""
 
@@ -13,8 +13,9 @@ from cutting.errors import InputError
 from machine_models.parameters import RPM, SkivingMachineParams
 from machine_models.sizes import SIZES
 from virtual_machine.job import load_job
-from virtual_machine.processes.skiving.machine_reach import check_machine_reach, machine_reach
-from virtual_machine.runtime.machine_run import MachineRun, machine_params, machine_size
+from virtual_machine.reach.skiving import check_skiving_reach, machine_reach
+from virtual_machine.runtime.machine_run import MachineRun
+from virtual_machine.setting.machine_layout import machine_params, machine_size
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 DEFAULT = (JOBS / "default.toml").read_text()
@@ -24,7 +25,7 @@ def _skiving_jobs() -> list[Path]:
     out = []
     for path in sorted([*JOBS.glob("*.toml"), *(JOBS / "scenarios").glob("*.toml")]):
         job = load_job(path)
-        if job.gear is not None and job.cutter is not None:  # a skiving job (not thread, form milling, face, turning)
+        if job.kind == "skiving":  # not thread, form milling, face, turning
             out.append(path)
     return out
 
@@ -56,7 +57,7 @@ def test_what_the_default_job_needs_by_hand() -> None:
 @pytest.mark.parametrize("path", _skiving_jobs(), ids=lambda p: p.stem)
 def test_every_shipped_skiving_job_is_within_its_machine(path: Path) -> None:
     job = load_job(path)
-    reach = check_machine_reach(job, machine_params(job), machine_size(job))
+    reach = check_skiving_reach(job, machine_params(job), machine_size(job))
     assert all(r.holds for r in reach)
 
 
@@ -78,7 +79,7 @@ def test_a_tool_speed_above_the_spindles_top_speed_is_refused_before_the_run(tmp
         f"\n[machine.model]\ntool_speed_limit = {9000 * RPM}\nwork_speed_limit = {7000 * RPM}\n"
     )
     job = job_from_text(tmp_path, faster)
-    assert all(r.holds for r in check_machine_reach(job, machine_params(job), machine_size(job)))
+    assert all(r.holds for r in check_skiving_reach(job, machine_params(job), machine_size(job)))
 
 
 def test_a_stroke_beyond_the_carriages_travel_is_refused_naming_the_size_that_holds_it(tmp_path: Path) -> None:
@@ -98,7 +99,7 @@ def test_a_stroke_beyond_the_carriages_travel_is_refused_naming_the_size_that_ho
     assert "exceeds the travel 1,000 mm" in problem.reason and "carriage P3" in problem.reason
     assert problem.hint.startswith('use machine.size = "medium", or a narrower gear.face_width')
     medium = job_from_text(tmp_path, text.replace('size = "small"', 'size = "medium"'))
-    assert all(r.holds for r in check_machine_reach(medium, machine_params(medium), "medium"))
+    assert all(r.holds for r in check_skiving_reach(medium, machine_params(medium), "medium"))
 
 
 def test_a_limit_must_be_positive(tmp_path: Path) -> None:
@@ -108,7 +109,7 @@ def test_a_limit_must_be_positive(tmp_path: Path) -> None:
     # and at 3000 rpm the same face has no size: the hint says so
     job = job_from_text(tmp_path, DEFAULT.replace("face_width = 4.0", "face_width = 1200.0"))
     with pytest.raises(InputError) as err:
-        check_machine_reach(job, machine_params(job), "small")
+        check_skiving_reach(job, machine_params(job), "small")
     assert "(no larger machine size reaches it)" in err.value.problems[0].hint
 
 
@@ -119,7 +120,7 @@ def test_a_gear_beyond_its_machines_class_is_refused_naming_the_size_that_takes_
         tmp_path, text.replace('structure = "mechatronic"', 'structure = "mechatronic"\nsize = "small"')
     )
     with pytest.raises(InputError) as err:
-        check_machine_reach(job, machine_params(job), "small")
+        check_skiving_reach(job, machine_params(job), "small")
     workpiece, module = err.value.problems
     assert "workpiece's 84 mm diameter exceeds what it takes, 80 mm" in workpiece.reason, workpiece.reason
     assert "module 2 mm exceeds what it is built for, 1.5 mm" in module.reason, module.reason
@@ -128,6 +129,6 @@ def test_a_gear_beyond_its_machines_class_is_refused_naming_the_size_that_takes_
     large = text.replace("normal_module = 2.0", "normal_module = 9.0")
     job = job_from_text(tmp_path, large)
     with pytest.raises(InputError) as err:
-        check_machine_reach(job, machine_params(job), machine_size(job))
+        check_skiving_reach(job, machine_params(job), machine_size(job))
     modules = [p for p in err.value.problems if "module 9 mm" in p.reason]
     assert modules and "(no larger machine size reaches it)" in modules[0].hint

@@ -1,5 +1,5 @@
 """Machine sizes (machine_models/sizes.py) and the cutting-load check before a run
-(virtual_machine/processes/skiving/cutting_load.py):
+(virtual_machine/reach/skiving_load.py):
 every size is a valid machine that MuJoCo steps cleanly, the default size follows the gear, [machine.model]
 overrides act on top of the size, a bad size is refused naming the valid ones, the torque estimate agrees with a
 case worked by hand and with what the co-simulation measures, and a job too heavy for its machine is refused
@@ -8,6 +8,7 @@ before the run, naming the motor and the torque it needs."""
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import tomllib
 from pathlib import Path
@@ -15,6 +16,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from scipy.integrate import quad
 from small_jobs import job_from_text, small_job
 
 from cutting.errors import InputError
@@ -24,15 +26,15 @@ from machine_models.parameters import SkivingMachineParams
 from machine_models.sizes import SIZE_NAMES, SIZES, size_for
 from machine_models.skiving_machine import build_spec
 from virtual_machine.job import flatten_model, load_job, parse_job
-from virtual_machine.processes.skiving.cutting_load import (
+from virtual_machine.reach.skiving_load import (
     MARGIN,
     check_machine_holds,
     motor_loads,
     pass_loads,
     space_area,
 )
-from virtual_machine.runtime.machine_run import MachineRun, machine_params, machine_size
-from virtual_machine.setting.machine_layout import skiving_layout, workpiece_diameter
+from virtual_machine.runtime.machine_run import MachineRun
+from virtual_machine.setting.machine_layout import machine_params, machine_size, skiving_layout, workpiece_diameter
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 
@@ -78,7 +80,7 @@ def test_the_small_size_is_the_original_machine_and_every_size_is_valid() -> Non
 @pytest.mark.parametrize("name", ["default", "spur_external", "helical_internal"])
 def test_every_size_compiles_and_steps_without_warnings(size: str, name: str) -> None:
     j = load_job(JOBS / f"{name}.toml")
-    layout = skiving_layout(j.skiving, j.machine["lead_screw_pitch"], ideal_passes(j.skiving)[0])
+    layout = skiving_layout(j.skiving, j.machine.lead_screw_pitch, ideal_passes(j.skiving)[0])
     m = build_spec(layout, SIZES[size].params).compile()
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, m.key("home").id)
@@ -98,7 +100,7 @@ def test_the_default_size_follows_the_gear(tmp_path) -> None:
     small.append(job_from_text(tmp_path, small_job(face_width=4.0)))
     for job in small:
         assert machine_size(job) == "small", job.source
-        assert machine_params(job) == SkivingMachineParams().with_overrides(flatten_model(job.machine.get("model")))
+        assert machine_params(job) == SkivingMachineParams().with_overrides(flatten_model(job.machine.model))
     # spur_external: 84 mm, mn 2 (beyond 80 mm and mn 1.5); helical_internal: its rim 144.7 mm: both medium
     spur, ring = load_job(JOBS / "spur_external.toml"), load_job(JOBS / "helical_internal.toml")
     assert workpiece_diameter(spur.gear) == pytest.approx(84.0)
@@ -123,7 +125,7 @@ def test_overrides_act_on_top_of_the_size(tmp_path) -> None:
     text += "\n[machine.model]\ntool_motor_torque = 900.0\n[machine.model.work_drive]\nbacklash = 1e-4\n"
     job = job_from_text(tmp_path, text)
     p, large = machine_params(job), SIZES["large"].params
-    assert job.machine["size"] == "large" and machine_size(job) == "large"
+    assert job.machine.size == "large" and machine_size(job) == "large"
     assert p.tool_motor_torque == 900.0 and p.work_drive.backlash == 1e-4
     assert p.work_drive.stiffness == large.work_drive.stiffness and p.work_inertia == large.work_inertia
     assert dataclasses.replace(p, tool_motor_torque=large.tool_motor_torque, work_drive=large.work_drive) == large
@@ -153,18 +155,111 @@ def test_a_bad_size_is_an_input_error_naming_the_valid_ones() -> None:
 # ---- the cutting-load estimate -------------------------------------------------------------------------------
 
 
+def _crossed_axes_load(job, depth_before: float, depth_after: float) -> dict[str, float]:
+    """A spur job's pass worked from the gear geometry and the crossed axes alone (nothing of the estimate's code).
+
+    The space: the transverse area between the root circle r_f + delta and the tip circle of the gear with profile
+    shift delta / mn (delta the cutter's shortfall), r (2 pi / z - 2 psi(r)) dr with the involute's half tooth angle
+    psi(r) = pi / (2 z) + 2 x tan(alpha) / z + inv(alpha) - inv(alpha_r), held at its base-circle value below r_b.
+    The engagement: the cutter (helical, z0, beta0: the transverse involute of its end section, the tip at
+    r0 + 1.25 mn) at a = r2 + r0 + delta from the work axis, its axis crossed by Sigma = beta0 about the line of
+    centres: an edge point at radius rho and angle theta from that line is at (a - rho cos theta, rho sin theta cos
+    Sigma, rho sin theta sin Sigma); generating, omega2 r2 = omega0 r0 cos Sigma (omega2 = omega0 z0 / z2). Its
+    speed relative to the work is omega0 n0 x (p - C) - omega2 z x p. Inside the blank (r < r_a, |z| <= b / 2) each
+    edge element dl sweeps |v| dl; the chip V = A s over the swept area is h; Kienzle's force k_c h dl along v with
+    k_c = 2100 h^-0.26 x 1.09 (the rake correction at 0 deg: +1.5 % per degree below +6 deg) gives the spindles'
+    torques F . v_tool / omega0 and -(p x F)_z; their mean over a cutter pitch is z0 / 2 pi times the integral over
+    the engagement, the peak the largest sum of the engagements a pitch apart."""
+    g, c = job.gear, job.cutter
+    z2, z0, mn, alpha = g.z, c.z, g.mn, g.alpha_n
+    full = 2.25 * mn
+
+    def inv(x: float) -> float:
+        return math.tan(x) - x
+
+    rb2 = z2 * mn / 2 * math.cos(alpha)
+
+    def space(delta: float) -> float:
+        x = delta / mn
+        lo = z2 * mn / 2 - 1.25 * mn + delta
+
+        def width(r: float) -> float:
+            psi = math.pi / (2 * z2) + 2 * x * math.tan(alpha) / z2 + inv(alpha) - inv(math.acos(rb2 / max(r, rb2)))
+            return r * (2 * math.pi / z2 - 2 * psi)
+
+        ra = z2 * mn / 2 + mn
+        return quad(width, lo, ra, points=[rb2] if lo < rb2 else None, limit=200)[0] if lo < ra else 0.0
+
+    area = space(full - depth_after) - space(full - depth_before)
+    volume = area * job.skiving.axial_feed
+
+    sigma, beta0 = c.helix_angle, c.helix_angle  # spur gear: Sigma = beta2 + beta0 = beta0
+    alpha_t = math.atan(math.tan(alpha) / math.cos(beta0))
+    r0 = z0 * mn / (2 * math.cos(beta0))
+    rb0, tip = r0 * math.cos(alpha_t), r0 + 1.25 * mn
+    a, ra, half_face = z2 * mn / 2 + r0 + full - depth_after, z2 * mn / 2 + mn, g.face_width / 2
+    rho = np.linspace(rb0, tip, 600)
+    psi = math.pi / (2 * z0) + inv(alpha_t) - np.array([inv(math.acos(rb0 / r)) for r in rho])
+    land = np.linspace(psi[-1], -psi[-1], 80)
+    edge_r = np.concatenate([rho, np.full(len(land), tip), rho[::-1]])  # one flank, the tip land, the other flank
+    edge_t = np.concatenate([psi, land, -psi[::-1]])
+    omega0 = job.skiving.tool_speed * 2 * math.pi / 60
+    omega2 = omega0 * z0 / z2
+    n0, centre, up = np.array([0.0, math.sin(sigma), -math.cos(sigma)]), np.array([a, 0.0, 0.0]), np.array([0, 0, 1.0])
+
+    phis = np.linspace(-0.8, 0.8, 8001)
+    swept, parts = 0.0, []
+    for phi in phis:
+        th = phi + edge_t
+        sin_th = edge_r * np.sin(th)
+        p = np.stack([a - edge_r * np.cos(th), sin_th * math.cos(sigma), sin_th * math.sin(sigma)], -1)
+        mid, dl = (p[1:] + p[:-1]) / 2, np.linalg.norm(np.diff(p, axis=0), axis=1)
+        inside = (np.hypot(mid[:, 0], mid[:, 1]) < ra) & (np.abs(mid[:, 2]) <= half_face)
+        v_tool = omega0 * np.cross(n0, mid - centre)
+        v = v_tool - omega2 * np.cross(up, mid)
+        speed = np.linalg.norm(v, axis=1)
+        swept += float((dl * speed * inside).sum())
+        parts.append((mid, dl * inside, v, speed, v_tool))
+    dphi = phis[1] - phis[0]
+    swept *= dphi / omega0
+    h = volume / swept
+    kc = 2100 * h**-0.26 * 1.09
+    t1, t2, engaged = np.zeros(len(phis)), np.zeros(len(phis)), np.zeros(len(phis), bool)
+    for i, (mid, dl, v, speed, v_tool) in enumerate(parts):
+        force = (kc * h * dl / np.maximum(speed, 1e-12))[:, None] * v  # on the workpiece [N]
+        t1[i] = float((force * v_tool).sum()) / omega0 * 1e-3
+        t2[i] = -float(np.cross(mid, force)[:, 2].sum()) * 1e-3
+        engaged[i] = dl.any()
+    pitch = 2 * math.pi / z0
+    grid = np.linspace(0.0, pitch, 400, endpoint=False)
+    overlap = sum(np.interp(grid + j * pitch, phis, t1, left=0.0, right=0.0) for j in range(-5, 6))
+    return {
+        "area": area,
+        "volume": volume,
+        "h": h,
+        "power": kc * volume * 1e-3 * z0 * job.skiving.tool_speed / 60,
+        "teeth_in_cut": (phis[engaged][-1] - phis[engaged][0]) / pitch,
+        "tool_torque_mean": z0 / (2 * math.pi) * float(t1.sum()) * dphi,
+        "work_torque_mean": z0 / (2 * math.pi) * float(t2.sum()) * dphi,
+        "tool_torque_peak": float(overlap.max()),
+    }
+
+
 def test_the_estimate_by_hand() -> None:
     """Geometry: on a rack-like gear (z2 = 400, mn 1, 20 deg) a tooth space is the basic rack's trapezoid, width
     pi/2 + 2 y tan(20 deg) at height y over the pitch line: full depth (y from -1.25 to +1) A = 2.25 pi/2 +
     tan(20 deg) (1 - 1.25^2) = 3.330 mm^2; with the cutter 0.5 mm short of it (y from -0.75) A = 1.75 pi/2 +
     tan(20 deg) (0.5^2 - 1.25^2) = 2.271 mm^2. The involute spaces of the circle come within 0.5 % of that.
 
-    Load: the default job's first pass (1.75 of 2.25 mm) takes A = 2.463 mm^2 per space, V = A s = 0.493 mm^3 per
-    engagement; over the engaged edge's swept area h = 0.0365 mm, so kc = 2100 h^-0.26 x 1.09 = 5413 N/mm^2 and
-    each chip costs E = kc V = 2.67 J. Every cutter tooth takes one chip per turn: P = E z0 n0 = 2.67 J x 17 x
-    50/s = 2266 W, which the two spindles supply: T1 omega0 + T2 omega2 = P, T1 = 6.46 N m mean at the tool
-    (314 rad/s) with T2 = 0.88 N m on the work (267 rad/s). 2.5 teeth are in the cut; their overlap peaks at
-    7.3 N m."""
+    Load: the default job's first pass (1.75 of 2.25 mm) worked from the gear and the crossed axes alone
+    (:func:`_crossed_axes_load`): A = 2.463 mm^2 per space, V = A s = 0.493 mm^3 per engagement; over the engaged
+    edge's swept area (13.47 mm^2) h = 0.0366 mm, so kc = 2100 h^-0.26 x 1.09 = 5410 N/mm^2 and each chip costs
+    E = kc V = 2.66 J. Every cutter tooth takes one chip per turn: P = E z0 n0 = 2.66 J x 17 x 50/s = 2265 W, which
+    the two spindles supply: T1 omega0 + T2 omega2 = P, T1 = 6.49 N m mean at the tool (314 rad/s) with T2 = 0.85
+    N m on the work (267 rad/s). 2.47 teeth are in the cut; their overlap peaks at 7.30 N m. The estimate takes the
+    edge in elements of <= 0.2 mm and the engagement in 121 steps: within 1 % of these (the work's torque, the small
+    difference of the engagement's entry and exit, within 5 %), the teeth in the cut within its window's margin of
+    one 0.1 deg step either side."""
     rack = Gear(400, 1.0, math.radians(20.0), 0.0, 10.0)
     t = math.tan(math.radians(20.0))
     assert space_area(rack, 0.0) == pytest.approx(2.25 * math.pi / 2 + t * (1 - 1.25**2), rel=0.005)
@@ -174,31 +269,37 @@ def test_the_estimate_by_hand() -> None:
     job = load_job(JOBS / "default.toml")
     setup = job.skiving
     first = pass_loads(setup, "16MnCr5")[0]
-    assert first.area == pytest.approx(2.463, rel=0.01) and first.chip_volume == pytest.approx(0.2 * first.area)
-    assert first.chip_thickness == pytest.approx(0.0365, rel=0.02)
+    hand = _crossed_axes_load(job, 0.0, setup.passes[0])
+    assert hand["area"] == pytest.approx(2.463, abs=5e-4) and hand["h"] == pytest.approx(0.0366, abs=1e-4)
+    assert first.area == pytest.approx(hand["area"], rel=1e-4) and first.chip_volume == pytest.approx(0.2 * first.area)
+    assert first.chip_thickness == pytest.approx(hand["h"], rel=0.01)
     assert first.kc == pytest.approx(2100 * first.chip_thickness**-0.26 * 1.09, rel=1e-9)
     omega0 = setup.tool_speed * 2 * math.pi / 60
     omega2 = abs(setup.speed_ratio) * omega0
     power = first.kc * first.chip_volume * 1e-3 * setup.cutter.teeth * setup.tool_speed / 60
-    assert first.power == pytest.approx(power, rel=1e-9) and power == pytest.approx(2266, rel=0.02)
+    assert first.power == pytest.approx(power, rel=1e-9) and power == pytest.approx(hand["power"], rel=0.01)
     assert first.tool_torque_mean * omega0 + first.work_torque_mean * omega2 == pytest.approx(power, rel=0.005)
-    assert first.tool_torque_mean == pytest.approx(6.46, rel=0.03) and first.work_torque_mean == pytest.approx(
-        0.88, rel=0.1
-    )
-    assert first.teeth_in_cut == pytest.approx(2.5, abs=0.1)
-    assert first.tool_torque_peak == pytest.approx(7.3, rel=0.03)
+    assert first.tool_torque_mean == pytest.approx(hand["tool_torque_mean"], rel=0.01)
+    assert first.work_torque_mean == pytest.approx(hand["work_torque_mean"], rel=0.05)
+    # the estimate's window: its search's last angle inside plus one step (0.1 deg) either side; here 0.0002 rad steps
+    steps = np.array([2 * math.pi / 3600, 1.6 / 8000]) * setup.cutter.teeth / (2 * math.pi)  # in cutter pitches
+    assert -2 * steps[1] <= first.teeth_in_cut - hand["teeth_in_cut"] <= 2 * steps.sum()
+    assert first.tool_torque_peak == pytest.approx(hand["tool_torque_peak"], rel=0.01)
 
 
 @pytest.mark.slow
 def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
     """The small job (z2 18, mn 1, b 4, one full-depth pass) co-simulated on the small machine, forces on, one
-    process: its peak cutting force, tool motor torque and torque about the work axis lie within 0.75-1.33x of the
-    estimate's (measured 1.17x, 0.94x, 1.14x: 1773 vs 1510 N, 9.8 vs 10.5 N m at M1, 3.2 vs 2.9 N m)."""
+    process: its peak cutting force, tool motor torque and torque about the work axis stay within the check's margin
+    of the estimate's: the check refuses a job whose estimate x MARGIN exceeds a motor's peak, so the machine's real
+    peak must not exceed that (measured 0.95x, 0.77x, 0.94x: 1440 vs 1510 N, 8.1 vs 10.5 N m at M1, 2.7 vs 2.9 N m;
+    the 4 mm face is shorter than the engagement zone, so the chips stay below the estimate's steady state, by an
+    amount nothing here bounds)."""
     from virtual_machine.processes.skiving.cosim import cosimulate
     from virtual_machine.runtime.machine_run import SEGMENTS
 
     job = job_from_text(tmp_path, small_job(face_width=4.0, sweep_error=0.02))
-    (est,) = pass_loads(job.skiving, job.process["material"])
+    (est,) = pass_loads(job.skiving, job.process.material)
     m1 = next(m for m in motor_loads(job, machine_params(job), [est]) if m.motor == "M1")
     sim = cosimulate(job, workers=1)
     rows, rec = sim.load_rows, sim.record
@@ -210,7 +311,7 @@ def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
     }
     estimated = {"force": est.force_peak, "M1": m1.torque, "work": est.work_torque_peak}
     ratios = {k: measured[k] / estimated[k] for k in measured}
-    assert all(0.75 <= r <= 1.33 for r in ratios.values()), (ratios, measured, estimated)
+    assert all(0 < r <= MARGIN for r in ratios.values()), (ratios, measured, estimated)
 
 
 def test_a_job_too_heavy_for_its_machine_is_refused_before_the_run(tmp_path) -> None:
@@ -228,11 +329,18 @@ def test_a_job_too_heavy_for_its_machine_is_refused_before_the_run(tmp_path) -> 
     for name, size in (("spur_external", None), ("helical_internal", None), ("spur_external", "small")):
         job = load_job(JOBS / f"{name}.toml")
         if size:
-            job = dataclasses.replace(job, machine=dict(job.machine, size=size))
+            job = dataclasses.replace(job, machine=dataclasses.replace(job.machine, size=size))
         motors = check_machine_holds(job, machine_params(job))
         assert all(m.torque * MARGIN <= m.limit for m in motors), (name, size, motors)
-    small = {m.motor: m for m in motor_loads(job, machine_params(job))}
-    assert small["M1"].torque == pytest.approx(25.7, abs=0.3) and small["M1"].pass_index == 1
+    # M1's load worked from the crossed axes pass by pass (_crossed_axes_load): the second pass (1.5 mm) is the
+    # heaviest, 25.1 N m of peak cutting torque at the tool; with the spindle's friction through its 1:1 drive 25.6 N m
+    params = machine_params(job)
+    small = {m.motor: m for m in motor_loads(job, params)}
+    depths = [0.0, *itertools.accumulate(job.skiving.passes)]
+    peaks = [_crossed_axes_load(job, d0, d1)["tool_torque_peak"] for d0, d1 in itertools.pairwise(depths)]
+    assert int(np.argmax(peaks)) == 1 and small["M1"].pass_index == 1
+    hand = (peaks[1] + params.tool_friction) * abs(params.tool_drive.ratio)
+    assert small["M1"].torque == pytest.approx(hand, rel=0.01)
     text = (JOBS / "spur_external.toml").read_text()
     # the small machine's class ends at 80 mm and mn 1.5 (machine_reach.py refuses more): told it takes this gear
     takes = "\n[machine.model]\nworkpiece_diameter_limit = 0.09\nmodule_limit = 0.002\n"
@@ -249,10 +357,19 @@ def test_a_job_too_heavy_for_its_machine_is_refused_before_the_run(tmp_path) -> 
         MachineRun(job)
     (problem,) = err.value.problems
     assert problem.key == "machine.size" and problem.value == "small"
-    for words in ("tool spindle motor M1", "pass 1 (3.5 mm)", "40.4 N m at M1", "against its 40 N m"):
+    # the refusal names the estimate's M1 torque, which the crossed axes give for the 3.5 mm pass (40.4 N m), the
+    # motor's 40 N m, the medium machine's 191 N m and the torque that holds it with the margin (51 N m)
+    params = machine_params(job)
+    m1 = next(m for m in motor_loads(job, params) if m.motor == "M1")
+    hand = (_crossed_axes_load(job, 0.0, 3.5)["tool_torque_peak"] + params.tool_friction) * abs(params.tool_drive.ratio)
+    assert m1.torque == pytest.approx(hand, rel=0.01) and m1.torque > params.tool_motor_torque / MARGIN
+    for words in ("tool spindle motor M1", "pass 1 (3.5 mm)", f"{m1.torque:.1f} N m at M1", "against its 40 N m"):
         assert words in problem.reason, problem.reason
-    assert 'machine.size = "medium" (tool_motor_torque 191 N m)' in problem.hint
-    assert "machine.model.tool_motor_torque >= 51" in problem.hint
+    medium = machine_params(
+        dataclasses.replace(job, machine=dataclasses.replace(job.machine, size="medium"))
+    ).tool_motor_torque
+    assert f'machine.size = "medium" (tool_motor_torque {medium:.0f} N m)' in problem.hint
+    assert f"machine.model.tool_motor_torque >= {math.ceil(m1.torque * MARGIN)}" in problem.hint
     # overrides count: the stronger motor holds it on the small machine
     stronger = heavy + "tool_motor_torque = 51.0\n"
     path.write_text(stronger)
@@ -284,7 +401,7 @@ def test_the_larger_sizes_servo_loops_reject_a_load_step(tmp_path, name, size, f
     for axis, ratio in zip(("B2", "B1"), least, strict=True):
         rms = {}
         for adaptive in (True, False):
-            j = dataclasses.replace(job, machine=dict(job.machine, adaptive_correction=adaptive))
+            j = dataclasses.replace(job, machine=dataclasses.replace(job.machine, adaptive_correction=adaptive))
             rec = simulate(j, duration=t_step + 1.0, disturbance=lambda t: 20.0 * (t >= t_step), disturbance_axis=axis)
             before = (rec.t > t_step - 0.1) & (rec.t < t_step)
             err = rec.sync_um[rec.t > t_step] - rec.sync_um[before].mean()

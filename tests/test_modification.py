@@ -1,4 +1,4 @@
-"""Flank modifications (issue 17): the designed topography, its checks, and modified teeth measured against the
+"""Flank modifications: the designed topography, its checks, and modified teeth measured against the
 design on analytic reference gears that carry the designed topography (known answers, tolerances in um)."""
 
 from __future__ import annotations

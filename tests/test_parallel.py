@@ -1,10 +1,10 @@
-"""cutting.threads: every item of a kernel's range is done exactly once, by chunks or from the shared counter."""
+"""cutting.parallel: every item of a kernel's range is done exactly once, by chunks or from the shared counter."""
 
 import numpy as np
 from numba import njit
 
-import cutting.threads as threads
-from cutting.threads import claim, run_chunks, run_shared
+import cutting.parallel as threads
+from cutting.parallel import claim, run_chunks, run_shared
 
 
 @njit(cache=True, nogil=True)

@@ -10,8 +10,9 @@ import trimesh
 from cutting.errors import InputError
 from cutting.gear import Gear
 from cutting.skiving.edge import involute_edge
-from cutting.skiving.removal import CutResult, Stock, cut
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
+from cutting.skiving.passages import CutResult
+from cutting.skiving.removal import Stock, cut
 from cutting.skiving.solids import blank
 from cutting.skiving.sweep import sample_window, tube
 from cutting.skiving.trajectory import check_poses, ideal_passes
@@ -191,7 +192,8 @@ def test_union_evaluates_each_sector_column_before_joining_them() -> None:
     import math as _m
 
     from cutting.gear import Gear
-    from cutting.skiving.removal import Stock, expected_genus, union_cells
+    from cutting.skiving.passages import expected_genus
+    from cutting.skiving.removal import Stock, union_cells
 
     g = Gear(20, 1.0, _m.radians(20), 0.0, 4.0)
     stock = Stock(g, slab=1.0)

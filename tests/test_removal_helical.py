@@ -30,7 +30,8 @@ from cutting.modification import roll
 from metrology.mesh_probe import MeshWorkpiece
 from metrology.sections import MeshData
 
-#: issue 28's helical pinion: beta = 20 deg, z = 20, mn = 2, b = 10 mm; the set-over mill of radius 25 mm
+#: the helical pinion of docs/form-milling.md: beta = 20 deg, z = 20, mn = 2, b = 10 mm; the set-over mill of
+#: radius 25 mm
 HELICAL = Gear(teeth=20, normal_module=2.0, helix_angle=math.radians(20.0), face_width=10.0)
 FEED = np.arange(-21.0, 21.0 + 1e-9, 0.05)
 TOL = 0.005
@@ -110,14 +111,42 @@ def test_a_disturbed_pass_is_removed_within_the_sweep_error(mill):
 def test_thinning_checks_the_cutting_part_and_holds_its_bound(mill):
     """The helical pass: every kept move keeps every polygon point of the cutting part within the path's share
     (0.4 tol) of its chord at every recorded pose (checked here on all points, not only the corners of their box
-    that the thinning uses), and needs 31 poses where the old bound (centre + reach x turn) keeps 48: it no longer
-    counts the far side of the disc."""
+    that the thinning uses), and needs the poses the screw motion's geometry asks (31, moves of 1.4 mm) where the
+    old bound (centre + reach x turn) keeps more (48, moves of 0.9 mm): it no longer counts the far side of the disc.
+
+    The counts from the geometry: the screw turns every point about the gear axis by kappa = 2 pi / p_z = 2 sin(beta)
+    / (mn z) per mm of feed (p_z = pi mn z / sin(beta)), so a point at radius rho from the axis runs on a helix whose
+    chord over a move of dz misses it by rho (1 - cos(kappa dz / 2)) at the middle. The thinning checks the corners
+    of the cutting part's box: the farthest at rho = 26.2 mm. The old bound adds to the centre's helix (radius r_c)
+    reach t^2 / 2 for the axis turning by t = 2 asin(sin(gamma) sin(kappa dz / 4)) either side of the middle (gamma
+    the axis's angle to the gear axis). The longest move of whole feed steps that holds the share sets the count."""
     p = helical_pass(HELICAL, mill, 0, FEED)
     frames = pose_frames(p)
     points = np.vstack(frusta_points(HELICAL, mill, TOL))
     kept = thin_moves(p, frames, points, TOL * PATH_SHARE)
-    assert len(kept) == 31 and kept[0] == 0 and kept[-1] == len(FEED) - 1
-    assert len(thin_poses(p, TOL * PATH_SHARE, math.hypot(mill.radius, mill.width / 2))) == 48
+    assert kept[0] == 0 and kept[-1] == len(FEED) - 1
+    reach = math.hypot(mill.radius, mill.width / 2)
+    old = thin_poses(p, TOL * PATH_SHARE, reach)
+
+    kappa = 2 * math.sin(HELICAL.helix_angle) / (HELICAL.mn * HELICAL.teeth)
+    step = FEED[1] - FEED[0]
+    corners = np.array(list(itertools.product(*zip(points.min(axis=0), points.max(axis=0), strict=True))))
+    rho = float(np.hypot(*(p.centre[0] + corners @ frames[0])[:, :2].T).max())
+    r_c = float(np.hypot(*p.centre[0, :2]))
+    sin_gamma = float(np.hypot(*p.axis[0, :2]) / np.linalg.norm(p.axis[0]))
+
+    def new_miss(dz: float) -> float:
+        return rho * (1 - math.cos(kappa * dz / 2))
+
+    def old_miss(dz: float) -> float:
+        t = 2 * math.asin(sin_gamma * math.sin(kappa * dz / 4))
+        return r_c * (1 - math.cos(kappa * dz / 2)) + reach * t * t / 2
+
+    for got, miss in ((kept, new_miss), (old, old_miss)):
+        samples = max(m for m in range(1, len(FEED)) if miss(m * step) <= TOL * PATH_SHARE)
+        assert np.all(np.diff(got)[:-1] == samples), (samples, np.diff(got))
+        assert len(got) == 1 + math.ceil((len(FEED) - 1) / samples)
+    assert len(kept) < len(old)
     world = p.centre[:, None, :] + np.einsum("mj,nji->nmi", points, frames)
     worst = 0.0
     for i, j in itertools.pairwise(kept):

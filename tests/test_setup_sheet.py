@@ -5,14 +5,13 @@ hydraulic structures) or 1 (mechatronic), c3 = 0.5, c4 = 0.5 mm, t_TV = 10 mm, n
 f_ref = 1 GHz, p = 10000 pulses/rev, q = 3600 steps/rev.
 """
 
-import dataclasses
 import json
 import math
 from pathlib import Path
 
 import pytest
 
-from virtual_machine.job import load_job
+from virtual_machine.job import load_job, with_machine
 from virtual_machine.setting.sheet import ratio_error_effect, setup_sheet
 
 JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
@@ -106,7 +105,7 @@ def test_thread_group_by_hand():
     assert kx.value == pytest.approx(0.175)
     # counter 7 / block 8: N/K = kx p / e = 0.175 * 10000 / 20000 = 7/80
     assert (kx.realisation["block_N"], kx.realisation["counter_K"]) == (7, 80) and kx.relative_error == 0
-    eq = setup_sheet(dataclasses.replace(job, machine={**job.machine, "synchronization": "equal-coordinates"}))
+    eq = setup_sheet(with_machine(job, synchronization="equal-coordinates"))
     n = 1000 * 90 / (math.pi * 12)
     assert eq.settings["kv"].value == pytest.approx(60 * 1e9 / (1e4 * n))
     kv = eq.settings["kv"].realisation["integer"]
@@ -129,7 +128,7 @@ def test_json_names_are_the_seeds(spur):
 def test_unreachable_guitar_ratio_names_the_setting(helical):
     from cutting.errors import InputError
 
-    job = dataclasses.replace(helical, machine={**helical.machine, "c2": 1e-4})
+    job = with_machine(helical, c2=1e-4)
     with pytest.raises(InputError, match="outside the range") as info:
         setup_sheet(job, "mechanical")
     assert info.value.keys == ["setting.iy"] and "machine.c1..c4" in str(info.value)

@@ -1,4 +1,4 @@
-"""The simulated machine (issue 5): S4 equal coordinates holds the setup ratios, the correction rejects a
+"""The simulated machine: S4 equal coordinates holds the setup ratios, the correction rejects a
 load, the recorded pose trajectory is MuJoCo's own kinematics, a diverging run names its stage."""
 
 from __future__ import annotations
@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 from checks import JOBS
 
-from cutting.skiving.setup import SkivingSetup
+from cutting.errors import SimulationDivergedError
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.skiving_machine import MachineLayout, build_spec
 from virtual_machine.job import Job, load_job
-from virtual_machine.runtime.integrator import SimulationDivergedError
 from virtual_machine.runtime.machine_run import relative_pose, simulate
 from virtual_machine.runtime.physics import MachinePhysics
 from virtual_machine.setting.machine_layout import skiving_layout
@@ -29,7 +29,7 @@ def _layout(setup: SkivingSetup, lead_screw_pitch_mm: float) -> MachineLayout:
 
 def _job(name: str, **machine) -> Job:
     job = load_job(str(JOBS / f"{name}.toml"))
-    return dataclasses.replace(job, machine=dict(job.machine, **machine))
+    return dataclasses.replace(job, machine=dataclasses.replace(job.machine, **machine))
 
 
 @pytest.mark.parametrize("name", ["spur_external", "helical_internal"])
@@ -62,7 +62,7 @@ def test_adaptive_correction_rejects_a_load_step_at_least_5x() -> None:
 
     rms = {}
     for adaptive in (True, False):
-        job = _job("spur_external", adaptive_correction=adaptive)  # on the small machine (the default of issue 5)
+        job = _job("spur_external", adaptive_correction=adaptive)  # on the small machine (the default size)
         rec = simulate(job, SkivingMachineParams(), duration=1.6, disturbance=load)
         before = (rec.t > 0.5) & (rec.t < 0.6)
         err = rec.sync_um[rec.t > 0.6] - rec.sync_um[before].mean()
@@ -123,8 +123,19 @@ def test_simulate_cli_writes_the_trajectory_and_the_record(tmp_path) -> None:
     assert doc["machine_seconds"] == pytest.approx(1.2, abs=1e-3)
     assert (tmp_path / "run.rrd").stat().st_size > 100_000 and doc["recording"].endswith("run.rrd")
     assert doc["passes"][0]["sync_error_in_cut"]["rms_um"] < 2.0  # 0.7 s of feed: the cut began after 1 mm
-    for name in ("trajectory.npz", "motion.npz", "simulation.json", "sync_error.png", "machine.xml", "scene.xml"):
-        assert (out / name).stat().st_size > 0
+    # each file holds what the run reported: simulation.json is the printed summary (less the recording's path),
+    # motion.npz the record it was computed from (its sync error while cutting gives the summary's figures),
+    # sync_error.png a PNG image, machine.xml the model MuJoCo compiles
+    assert json.loads((out / "simulation.json").read_text()) == {k: v for k, v in doc.items() if k != "recording"}
+    with np.load(out / "motion.npz") as motion:
+        assert motion["t"][-1] == pytest.approx(doc["machine_seconds"], abs=1e-9)
+        cut = motion["sync_um"][motion["cutting"]]
+        assert cut.size > 0
+        assert float(np.sqrt(np.mean(cut**2))) == pytest.approx(doc["sync_error_in_cut"]["rms_um"], rel=1e-12)
+        assert float(np.ptp(cut)) == pytest.approx(doc["sync_error_in_cut"]["peak_to_peak_um"], rel=1e-12)
+    assert (out / "sync_error.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    machine = mujoco.MjModel.from_xml_path(str(out / "machine.xml"))
+    assert "tool_spindle" in {machine.body(i).name for i in range(machine.nbody)}
     scene = mujoco.MjModel.from_xml_path(str(out / "scene.xml"))  # what the plain viewer opens
     assert "tool_spindle" in {scene.body(i).name for i in range(scene.nbody)}
     assert "cutter_frame" in {scene.site(i).name for i in range(scene.nsite)}
@@ -147,7 +158,7 @@ def test_master_slave_passes_the_masters_disturbance_to_the_slave() -> None:
 
     rms = {}
     for sync in ("master-slave", "equal-coordinates"):
-        job = _job("spur_external", synchronization=sync)  # on the small machine (the default of issue 5)
+        job = _job("spur_external", synchronization=sync)  # on the small machine (the default size)
         rec = simulate(job, SkivingMachineParams(), duration=1.2, disturbance=load, disturbance_axis="B1")
         before = (rec.t > 0.5) & (rec.t < 0.6)
         err = rec.sync_um[rec.t > 0.6] - rec.sync_um[before].mean()
@@ -229,7 +240,7 @@ def test_job_overrides_machine_parameters(tmp_path) -> None:
     """[machine.model] changes the MuJoCo machine (here the work drive's backlash, 1e-4 rad); unknown or invalid
     parameters are reported with their key and the valid names."""
     from cutting.errors import InputError
-    from virtual_machine.runtime.machine_run import machine_params
+    from virtual_machine.setting.machine_layout import machine_params
 
     text = tmp_path / "j.toml"
     base = (JOBS / "spur_external.toml").read_text()
@@ -253,7 +264,7 @@ def test_hydraulic_steps_show_as_a_sawtooth_of_one_step() -> None:
     (within 10 %), periodic with the disc's window (the synchronous average over one window explains > 90 %
     of its variance). At the shipped 3600 steps and working speed the steps come at 170 kHz and vanish."""
     job = _job("spur_external", structure="hydraulic-differential", c3=0.02, hydraulic_steps_per_rev=100)
-    job = dataclasses.replace(job, process=dict(job.process, tool_speed=10.0))
+    job = dataclasses.replace(job, process=dataclasses.replace(job.process, tool_speed=10.0))
     params = dataclasses.replace(SkivingMachineParams(), hydraulic_stiffness=3e4, hydraulic_damping=80.0)
     rec = simulate(job, params, duration=2.0)
     sel = rec.t > 1.0  # steady running

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cutting.gear import Gear
-from cutting.skiving.setup import INTERFERENCE_TOLERANCE, SkivingSetup, check_setup
+from cutting.skiving.kinematics import INTERFERENCE_TOLERANCE, SkivingSetup, check_setup
 
 DEG = math.pi / 180
 PASSES = (2.0, 1.5, 0.8, 0.2)

@@ -395,12 +395,20 @@ def test_one_and_two_workers_and_a_resumed_study_give_the_same_table(small_study
     assert [r["case"] for r in table] == ["c000", "c001", "c002"]
     assert [r["status"] for r in table] == ["ok", "ok", "failed"]
     # refused before its run: the estimated cutting torque exceeds the motor's
-    # (virtual_machine/processes/skiving/cutting_load.py)
-    assert "InputError" in table[2]["error"] and "M1" in table[2]["error"]
+    # (virtual_machine/reach/skiving_load.py)
+    assert table[2]["error"].startswith("MachineLimitError") and "M1" in table[2]["error"]
     # the table holds each case's own measurement (the figures of cases/c000/measurement.json)
     doc = json.loads((one.run.csv.parent / "cases" / "c000" / "measurement.json").read_text())
-    sync = doc["run"]["synchronisation"]["sync_error_in_cut"]["rms_um"]
-    assert float(table[0]["sync_rms_um"]) == pytest.approx(sync, rel=1e-9) and 0 < sync < 10
+    stats = doc["run"]["synchronisation"]["sync_error_in_cut"]
+    sync = stats["rms_um"]
+    assert float(table[0]["sync_rms_um"]) == pytest.approx(sync, rel=1e-9)
+    # its figures hang together (RMS^2 = mean^2 + RMS about the mean^2), and equal coordinates hold the mean within
+    # one command pulse: 2 pi r2 / p = 2 pi 9 mm / 10000 = 5.65 um of arc on the reference circle
+    sheet = json.loads(CliRunner().invoke(main, ["setup", str(path.parent / "small.toml"), "--json"]).output)
+    r2 = load_job(path.parent / "small.toml").gear.reference_radius
+    pulse_um = 2 * math.pi * r2 / sheet["constants"]["p_cmd"] * 1e3
+    assert sync**2 == pytest.approx(stats["mean_um"] ** 2 + stats["rms_about_mean_um"] ** 2, rel=1e-9)
+    assert 0 < sync and abs(stats["mean_um"]) <= pulse_um
     assert float(table[0]["F_alpha_left"]) == pytest.approx(doc["profile"]["left"]["F_alpha"], rel=1e-9)
     assert table[0]["class"] == "" and "ISO 1328-1" in one.budget.iso_error  # b = 2 mm: no classes, said so
     for name in ("report.html", "budget.json", "cases/c001/measurement.json", "cases/c002/result.json"):
@@ -452,7 +460,7 @@ def test_a_studys_change_gear_error_is_the_setting_sheets_drift(tmp_path, shared
     base = SCENARIOS / "mechanical_change_gears.toml"
     shared_runs.run(base)
     job = load_job(base)
-    with_17 = sorted([*job.machine["change_gears"], 17])
+    with_17 = sorted([*job.machine.change_gears, 17])
     path = study_file(tmp_path, f'[[vary]]\nkey = "machine.change_gears"\nvalues = [{with_17}]\n', base=base)
     outcome = pipeline.run(path, tmp_path / "out", workers=2, cache=shared_runs.cache.directory)
     res = outcome.run.results
@@ -465,7 +473,7 @@ def test_a_studys_change_gear_error_is_the_setting_sheets_drift(tmp_path, shared
     drift = []  # um of arc per mm of carriage, from each case's own setting sheet
     for case in ("c000", "c001"):
         ix = setup_sheet(load_job(tmp_path / "out" / "cases" / case / "job.toml"), "mechanical").settings["ix"]
-        drift.append(ix.effect["pitch_um_per_work_rev"] / job.process["axial_feed"])
+        drift.append(ix.effect["pitch_um_per_work_rev"] / job.process.axial_feed)
     assert abs(drift[0]) > 5.0 and abs(drift[1]) < 0.05 * abs(drift[0])  # the set with 17 makes ix (almost) exact
 
     doc = json.loads((tmp_path / "out" / "cases" / "c000" / "measurement.json").read_text())

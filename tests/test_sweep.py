@@ -8,8 +8,8 @@ import pytest
 
 from cutting.gear import Gear
 from cutting.skiving.edge import involute_edge
-from cutting.skiving.removal import in_blank_envelope
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
+from cutting.skiving.passages import in_blank_envelope
 from cutting.skiving.solids import blank
 from cutting.skiving.sweep import ZippedSweep, outline_points, place, sample_blocks, sample_window, split_sides, tube
 

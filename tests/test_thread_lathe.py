@@ -13,8 +13,8 @@ import pytest
 from checks import JOBS
 
 from machine_models.thread_lathe import ThreadLatheParams, build_thread_lathe_spec
-from virtual_machine.job import Job, load_job
-from virtual_machine.runtime.thread_run import simulate_thread
+from virtual_machine.job import Job, load_job, with_machine
+from virtual_machine.runtime.lathe_run import simulate_thread
 from virtual_machine.setting.sheet import thread_sheet
 from virtual_machine.setting.thread_layout import thread_layout
 
@@ -29,9 +29,9 @@ FINE = {"command_pulses_per_rev": 1_000_000, "encoder_lines": 2_500_000}
 def _job(form: str, fine: bool = False, thread: dict | None = None, **machine) -> Job:
     job = load_job(str(JOBS / "thread_m12.toml"))
     structure, sync = FORMS[form]
-    machine = {**job.machine, "structure": structure, "synchronization": sync, **(FINE if fine else {}), **machine}
-    payload = dataclasses.replace(job.payload, thread=dict(job.thread, **(thread or {})))
-    return dataclasses.replace(job, machine=machine, payload=payload)
+    machine = {"structure": structure, "synchronization": sync, **(FINE if fine else {}), **machine}
+    job = with_machine(job, **machine)
+    return dataclasses.replace(job, thread=dict(job.thread, **(thread or {})))
 
 
 def _sheet_eps(job: Job, form: str) -> float:

@@ -211,7 +211,7 @@ def test_grade_at_and_just_above_tolerance():
     assert grade(0.0, "f_p", **SPUR) == 1
     assert grade(51.0, "f_p", **SPUR) == 11
     assert grade(51.0 * 1.01, "f_p", **SPUR) is None
-    # F_alpha: class 6 = 12 (issue vector), class 7 = 8.516156*2 = 17.03 -> 17
+    # F_alpha: class 6 = 12 (the standard's worked vector), class 7 = 8.516156*2 = 17.03 -> 17
     assert grade(12.0, "F_alpha", **SPUR) == 6 and grade(12.12, "F_alpha", **SPUR) == 7
     # signed slope: magnitude; f_Halpha class 6 = 5.32*1.4142 = 7.52 -> 7.5, class 7 = 10.64 -> 11
     assert grade(-7.5, "f_Halpha", **SPUR) == 6 and grade(7.5, "f_Halpha", **SPUR) == 6

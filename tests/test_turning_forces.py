@@ -1,4 +1,4 @@
-"""Cutting forces of vibration turning (seed 004) on the lathe of seed 001 (issue 28, item 5): the uncut chip of the
+"""Cutting forces of vibration turning (seed 004) on the lathe of seed 001: the uncut chip of the
 round nose against the sampled envelope, Kienzle's force of plain turning against the hand-worked value, the force
 falling to zero where the vibration breaks the chip, the carriage's deflection under the feed force against F_f /
 k_axial, the crests with and without forces, the spindle motor's refusal and bad inputs.
@@ -216,7 +216,7 @@ def test_vibration_crests_with_forces_differ_by_what_the_run_reports():
 
 def test_a_spindle_motor_too_weak_for_the_cut_refuses_the_job_before_the_run(monkeypatch):
     """Plain turning needs F_c (r0 - a_p / 2) = 4.9 N m at the spindle, 5.9 N m at M1 with the bearings' 1 N m."""
-    import virtual_machine.runtime.thread_run as thread_run
+    import virtual_machine.runtime.lathe_run as thread_run
 
     def no_run(*args, **kwargs):
         raise AssertionError("the lathe ran")
