@@ -9,7 +9,7 @@
 Prints wall time, the real machine time of what was cut (tool speed and feed), their ratio, the number of
 tooth passages, swept sub-tubes and booleans, triangles of the stock, peak memory (resident, all processes);
 then the exact measurement of the same passes (what skive cut reports: the exact swept surface) with its time,
-the cut and the exact measurement together against the machine time (issue 15: bar 60 s, goal the machine's
+the cut and the exact measurement together against the machine time (bar 60 s, goal the machine's
 own time), and the mesh's measurement beside it.
 """
 
@@ -25,7 +25,7 @@ from cutting.skiving.edge import make_edge
 from cutting.skiving.engine import cut_passes
 from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.ideal_cut import default_workers, to_trimesh
-from cutting.skiving.setup import SkivingSetup
+from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
 from metrology.datum import check_mesh
 from metrology.measure import measure_gear

@@ -3,7 +3,7 @@
     python benchmarks/bench_dexel.py                     # the default job: dexel spacings against a 2 um manifold cut
     python benchmarks/bench_dexel.py --job spur_external --reference 0   # spacings only (no manifold reference)
     python benchmarks/bench_dexel.py --finishing         # spur_external's finishing pass from the blank + its exact
-                                                         # measurement, stage by stage (issue 26: bar 20 s, goal 6.3 s)
+                                                         # measurement, stage by stage (bar 20 s, goal 6.3 s)
     options: --job JOB (a job of assets/jobs or a .toml), --spacings P,F ... (profile and face spacing in mn),
              --reference UM (the manifold reference's sweep error; 0: none), --workers N (the manifold reference's)
 

@@ -4,7 +4,7 @@
     python benchmarks/bench_exact_measure.py default --edge involute
 
 Prints the build of the passage tables, then each stage of the measurement (datum, profile, helix, pitch, balls,
-span, tip and root) with its probes and seconds, and the total against the target of 10 s (issue 15) and against
+span, tip and root) with its probes and seconds, and the total against the target of 10 s and against
 the machine time of the passes.
 """
 
@@ -37,7 +37,7 @@ def main() -> None:
     a = ap.parse_args()
     job = load_job(a.job if a.job.endswith(".toml") else f"assets/jobs/{a.job}.toml")
     st = job.skiving
-    edge = make_edge(st, a.edge or job.cutter_options["edge"])
+    edge = make_edge(st, a.edge or job.cutter_options.edge)
     motions = ideal_passes(st)
     t0 = time.perf_counter()
     sv = SweptVolumes(st.gear, edge, motions)

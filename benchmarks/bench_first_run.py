@@ -1,4 +1,4 @@
-"""Benchmark (run on demand): does the install's warm-up compile every kernel a run needs? (issue 26: the first run
+"""Benchmark (run on demand): does the install's warm-up compile every kernel a run needs? (the first run
 after install should not take twice the next)
 
     python benchmarks/bench_first_run.py                 # the default job

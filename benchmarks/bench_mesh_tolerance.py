@@ -39,12 +39,12 @@ from cutting.gear_file import write_gear_stl
 from cutting.skiving.edge import make_edge
 from cutting.skiving.engine import cut_passes
 from cutting.skiving.ideal_cut import default_workers
-from cutting.skiving.removal import Chip, expected_genus
+from cutting.skiving.passages import Chip, expected_genus
 from cutting.skiving.trajectory import ideal_passes
 from virtual_machine.job import PROCESS_KEYS, load_job
 from virtual_machine.output.progress import Progress
 
-#: the requirement (issue): chip volumes within 2 % of a 1 um reference, a gear.stl a user can open
+#: the requirement: chip volumes within 2 % of a 1 um reference, a gear.stl a user can open
 VOLUME_LIMIT = 2.0  # [%] every pass's total chip volume, and the 95th percentile of its chips
 STL_LIMIT_MB = 50.0
 SIGNIFICANT = 0.01  # chips above this fraction of the pass's largest reference chip enter p95 and max
@@ -150,7 +150,7 @@ def cut_case(
     """Cut the passes at ``tols`` [mm]; their timings, the gear's figures and the chips."""
     job = load_job(job_path)
     setup = job.skiving
-    edge = make_edge(setup, job.cutter_options["edge"])
+    edge = make_edge(setup, job.cutter_options.edge)
     all_motions = ideal_passes(setup)
     motions = [all_motions[i - 1] for i in pass_numbers]
     bars: dict[int, Progress] = {}

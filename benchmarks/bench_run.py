@@ -8,7 +8,7 @@
 Prints the wall time of each stage of the run (machine and cut, measurement, report, recording), its share and
 its ratio to the machine time, the split of the co-simulation (physics, controllers, removal), the peak memory of
 this process (the dexel removal cuts here; the manifold reference's workers are not counted), the issue's bar for
-the job (issue 26: default job <= 10 s after the first run, spur_external <= 2 min and <= 4 GiB, helical_internal
+the job (the bars: default job <= 10 s after the first run, spur_external <= 2 min and <= 4 GiB, helical_internal
 <= 4 min), and then the cut alone of the same job (ideal motion, with its measurement, like `skive cut`).
 """
 
@@ -26,7 +26,7 @@ from cutting.skiving.trajectory import ideal_passes
 from virtual_machine.job import default_job_path, dexel_spacing, load_job
 from virtual_machine.processes.skiving.run import measure_written_cut, run_job
 
-#: issue 26's bars per job file name: wall seconds (after the first run), peak memory [GiB]
+#: the bars per job file name (docs/performance.md): wall seconds (after the first run), peak memory [GiB]
 BARS = {"default.toml": (10.0, None), "spur_external.toml": (120.0, 4.0), "helical_internal.toml": (240.0, None)}
 
 
@@ -60,7 +60,7 @@ def main() -> None:
     bar, memory = BARS.get(Path(a.job).name, (None, None))
     if bar is not None:
         verdict = "met" if wall <= bar else "NOT met"
-        print(f"  issue 26's bar: {bar:.0f} s ({verdict})" + (f", {memory:.0f} GiB" if memory else ""))
+        print(f"  bar: {bar:.0f} s ({verdict})" + (f", {memory:.0f} GiB" if memory else ""))
     split = run["wall_split_s"]
     print(
         f"  co-simulation: physics {split['physics']:.1f} s, controllers {split['control']:.1f} s, removal (or the "
@@ -77,15 +77,15 @@ def main() -> None:
     t0 = time.perf_counter()
     report = cut_ideal(
         job.skiving,
-        job.cutter_options["edge"],
-        job.process["sweep_error"],
-        job.process["roughing_sweep_error"],
+        job.cutter_options.edge,
+        job.process.sweep_error,
+        job.process.roughing_sweep_error,
         workers=a.workers,
         removal=a.removal,
         spacing=dexel_spacing(job),
     )
     with tempfile.TemporaryDirectory() as tmp:  # as `skive cut` does: gear.stl, the exact surface, the mesh beside
-        stl = write_gear_stl(report.result.gear, Path(tmp) / "gear.stl", job.process["stl_tolerance"])
+        stl = write_gear_stl(report.result.gear, Path(tmp) / "gear.stl", job.process.stl_tolerance)
         measure_written_cut(job, report.edge, ideal_passes(job.skiving), report.result, stl, Path(tmp) / "gear.stl")
     alone = time.perf_counter() - t0
     print(

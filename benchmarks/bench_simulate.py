@@ -53,7 +53,7 @@ def main() -> None:
         )
     base = load_job(f"assets/jobs/{a.job}.toml")
     # the finishing pass alone: one pass at the full depth has the finishing pass's geometry and feed
-    depth = sum(base.process["passes"])
+    depth = sum(base.process.passes)
     base = dataclasses.replace(base, process=dict(base.process, passes=[depth]))
     what = "the whole finishing pass" if a.seconds is None else f"the first {a.seconds:.1f} s of the finishing pass"
     print(f"{a.job}: {what} per structure (run-up, infeed, stroke, retract, return)")

@@ -53,7 +53,7 @@ def helix(doc) -> tuple[float, float]:
 def main() -> None:
     names = sys.argv[1:] or sorted(p.stem for p in SCENARIOS.glob("*.toml"))
     base_job = load_job(SCENARIOS / f"{BASELINE}.toml")
-    edge = make_edge(base_job.skiving, base_job.cutter_options["edge"])
+    edge = make_edge(base_job.skiving, base_job.cutter_options.edge)
     ideal = measure_gear(SweptVolumes(base_job.gear, edge, ideal_passes(base_job.skiving)), base_job.gear)
     il, ir = helix(ideal)
     m = ideal["iso1328"]["measured"]
