@@ -137,3 +137,19 @@ def test_measure_refuses_bad_input(tmp_path, slope_mesh):
     broken.write_text("solid x\nendsolid x\n")
     res = CliRunner().invoke(main, ["measure", str(broken), "--job", str(JOBS / "spur_external.toml")])
     assert res.exit_code == 2 and "mesh" in res.output
+
+
+def test_the_measurement_names_the_mesh_it_measured_and_its_files_appear_together(tmp_path, slope_mesh):
+    """measurement.json records the SHA-256 of the mesh file it measured; its folder gets every file or none."""
+    import hashlib
+
+    from virtual_machine.api import measure
+
+    path = tmp_path / "gear.stl"
+    slope_mesh.export(path)
+    out = tmp_path / "meas"
+    doc = measure(path, JOBS / "spur_external.toml", out)
+    assert doc["solid_sha256"] == {"gear.stl": hashlib.sha256(path.read_bytes()).hexdigest()}
+    assert json.loads((out / "measurement.json").read_text())["solid_sha256"] == doc["solid_sha256"]
+    assert {"measurement.json", "profile.png", "helix.png", "pitch.png"} <= {p.name for p in out.iterdir()}
+    assert [p.name for p in tmp_path.iterdir() if "partial" in p.name] == []

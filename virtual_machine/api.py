@@ -22,6 +22,7 @@ from typing import Any
 from virtual_machine.job import Job, default_job_path, load_job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
+from virtual_machine.output.staging import StagedOutputs, sha256_of
 from virtual_machine.processes import Product, process_for
 
 JobLike = Job | str | Path
@@ -125,12 +126,12 @@ def measure(mesh: str | Path, job: str | Path | None = None, out: str | Path | N
     gear, options = load_gear_section(default_job_path() if job is None else job)
     design = options.pop("design")
     result = measure_gear(load_mesh(Path(mesh)), gear, MeasureOptions.from_job(options, design), str(mesh))
-    doc = finite(result)
-    if out is not None:
-        folder = Path(out)
-        folder.mkdir(parents=True, exist_ok=True)
-        write_json(folder / "measurement.json", doc)
-        write_charts(folder, result)
+    doc = {**finite(result), "solid_sha256": {Path(mesh).name: sha256_of(Path(mesh))}}  # the mesh it measured
+    if out is not None:  # the files appear together, or not at all
+        with StagedOutputs(Path(out)) as staging:
+            write_json(staging.folder / "measurement.json", doc)
+            write_charts(staging.folder, result)
+            doc, _, _ = staging.publish(doc, "")
     return doc
 
 

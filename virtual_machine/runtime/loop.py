@@ -17,8 +17,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import mujoco
 import numpy as np
@@ -29,8 +28,7 @@ _apply = mujoco.mj_applyFT
 _clock = time.perf_counter
 
 
-@dataclass(frozen=True)
-class ToolLoad:
+class ToolLoad(NamedTuple):
     """A load the cut puts on the tool at ``point`` (world frame, m): ``force`` [N] and ``moment`` [N m], world frame;
     the workpiece takes the opposite at the same point (action and reaction through the chip). ``body``: the tool's
     body that carries it, where a tool has several (-1: the loop's tool body)."""
@@ -41,8 +39,16 @@ class ToolLoad:
     body: int = -1
 
 
-@dataclass(frozen=True)
-class AxisLoad:
+class WorkpieceLoad(NamedTuple):
+    """The same load stated on the workpiece (the tool takes the opposite): for a cut whose force law gives the
+    force on the workpiece."""
+
+    force: np.ndarray
+    moment: np.ndarray
+    point: np.ndarray
+
+
+class AxisLoad(NamedTuple):
     """A generalised force on one degree of freedom (``dof``: its index in qvel): a torque [N m] or force [N] from
     outside the cut, e.g. a test's disturbance on a spindle."""
 
@@ -69,7 +75,7 @@ class LoadHook(Protocol):
 
     every_substep: bool
 
-    def __call__(self, t: float, dt: float) -> Iterable[ToolLoad | AxisLoad]: ...
+    def __call__(self, t: float, dt: float) -> Iterable[ToolLoad | WorkpieceLoad | AxisLoad]: ...
 
 
 class AxisDisturbance:
@@ -106,6 +112,7 @@ class MachineLoop:
         self.model, self.data = integrator.model, integrator.data
         self.tool_body, self.work_body = tool_body, work_body
         self._single = integrator.single()  # the sub-steps one by one, for a load of every sub-step
+        self._reaction = (np.zeros(3), np.zeros(3))  # a load's opposite, without allocating per load
         self.finished = False
         self.load_work = self.actuator_work = 0.0
         self.timing = {"control": 0.0, "physics": 0.0, "record": 0.0}
@@ -149,16 +156,25 @@ class MachineLoop:
         return not self.finished
 
     def apply_loads(self, t: float, dt: float) -> None:
-        """The hook's loads at ``t`` over ``dt`` into ``qfrc_applied`` (cleared first)."""
+        """The hook's loads at ``t`` over ``dt`` into ``qfrc_applied`` (cleared first): each on its body and its
+        reaction on the other."""
         model, data = self.model, self.data
         qfrc = data.qfrc_applied
         qfrc[:] = 0.0
+        f, m = self._reaction
         for ld in self.load(t, dt):
-            if isinstance(ld, AxisLoad):
+            kind = type(ld)
+            if kind is AxisLoad:
                 qfrc[ld.dof] += ld.value
+                continue
+            np.negative(ld.force, out=f)
+            np.negative(ld.moment, out=m)
+            if kind is WorkpieceLoad:
+                _apply(model, data, ld.force, ld.moment, ld.point, self.work_body, qfrc)
+                _apply(model, data, f, m, ld.point, self.tool_body, qfrc)
             else:
                 _apply(model, data, ld.force, ld.moment, ld.point, self.tool_body if ld.body < 0 else ld.body, qfrc)
-                _apply(model, data, -ld.force, -ld.moment, ld.point, self.work_body, qfrc)
+                _apply(model, data, f, m, ld.point, self.work_body, qfrc)
 
     def _loaded_tick(self) -> None:
         """The loads of the tick's start held over its sub-steps, and their work."""

@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from machine_models.parameters import SkivingMachineParams
-from virtual_machine.runtime.loop import ToolLoad
+from virtual_machine.runtime.loop import WorkpieceLoad
 
 AXES = ("B1", "B2", "P3", "X", "TV")  # the machine's axes, in every structure
 
@@ -104,10 +104,10 @@ class MachinePhysics:
 
 class BlankFrameLoad:
     """The skiving machine's load hook: the cut's loads in the blank frame, ``cut(t, dt)``: (force [N] on the
-    workpiece, point [mm], moment [N m]) per engaged tooth, each the mean over the tick, as loads on the tool in the
-    world frame (the workpiece takes the opposite: action and reaction through the chip). The frames are those of the
-    last step (the servo tick holds the load over its sub-steps). ``rows`` keeps per tick the time [s], the loads'
-    resultant on the workpiece (blank frame) [N] and its torque about the work axis [N m]."""
+    workpiece, point [mm], moment [N m]) per engaged tooth, each the mean over the tick, as loads on the workpiece in
+    the world frame (the cutter takes the opposite: action and reaction through the chip). The frames are those of
+    the last step (the servo tick holds the load over its sub-steps). ``rows`` keeps per tick the time [s], the
+    loads' resultant on the workpiece (blank frame) [N] and its torque about the work axis [N m]."""
 
     every_substep = False
 
@@ -117,14 +117,13 @@ class BlankFrameLoad:
         self._xpos = phys.data.site_xpos[phys.site_blank]
         self.rows: list[tuple[float, float, float, float, float]] = []
 
-    def __call__(self, t: float, dt: float) -> list[ToolLoad]:
+    def __call__(self, t: float, dt: float) -> list[WorkpieceLoad]:
         rb = self._xmat.reshape(3, 3)
         out = []
         fx = fy = fz = tz = 0.0
         for force, point, moment in self.cut(t, dt):
-            f_world = rb @ force
             p_world = self._xpos + rb @ point * 1e-3
-            out.append(ToolLoad(-f_world, -(rb @ moment), p_world))
+            out.append(WorkpieceLoad(rb @ force, rb @ moment, p_world))
             fx, fy, fz = fx + force[0], fy + force[1], fz + force[2]
             tz += (point[0] * force[1] - point[1] * force[0]) * 1e-3 + moment[2]
         self.rows.append((t, fx, fy, fz, tz))
