@@ -21,10 +21,11 @@ import resource
 import time
 
 from cutting.gear import Gear
+from cutting.parallel import default_workers
 from cutting.skiving.edge import make_edge
 from cutting.skiving.engine import cut_passes
 from cutting.skiving.exact_sweep import SweptVolumes
-from cutting.skiving.ideal_cut import default_workers, to_trimesh
+from cutting.skiving.ideal_cut import to_trimesh
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.trajectory import ideal_passes
 from metrology.datum import check_mesh

@@ -26,10 +26,11 @@ from pathlib import Path
 import numpy as np
 
 from cutting.gear_file import write_gear_stl
+from cutting.parallel import default_workers
 from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import make_edge
 from cutting.skiving.exact_sweep import SweptVolumes
-from cutting.skiving.ideal_cut import cut_ideal, default_workers
+from cutting.skiving.ideal_cut import cut_ideal
 from cutting.skiving.trajectory import ideal_passes
 from metrology.cut_measurement import measure_cut
 from metrology.datum import check_mesh

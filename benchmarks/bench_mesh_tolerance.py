@@ -36,9 +36,9 @@ import numpy as np
 import trimesh
 
 from cutting.gear_file import write_gear_stl
+from cutting.parallel import default_workers
 from cutting.skiving.edge import make_edge
 from cutting.skiving.engine import cut_passes
-from cutting.skiving.ideal_cut import default_workers
 from cutting.skiving.passages import Chip, expected_genus
 from cutting.skiving.trajectory import ideal_passes
 from virtual_machine.job import PROCESS_KEYS, load_job

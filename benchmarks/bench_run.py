@@ -21,7 +21,8 @@ import time
 from pathlib import Path
 
 from cutting.gear_file import write_gear_stl
-from cutting.skiving.ideal_cut import cut_ideal, default_workers
+from cutting.parallel import default_workers
+from cutting.skiving.ideal_cut import cut_ideal
 from cutting.skiving.trajectory import ideal_passes
 from virtual_machine.job import default_job_path, dexel_spacing, load_job
 from virtual_machine.processes.skiving.run import measure_written_cut, run_job

@@ -1,24 +1,11 @@
 """Flank modifications: the designed topography of each flank as its deviation from the involute helicoid.
 
-A design gives, per flank, the deviation e(L, z) [mm] along the base tangent in the transverse plane (excess
-material positive, as every measured deviation; a modification that removes material is negative) over the roll
-length L and the face position z (0 at mid face). It is the sum of the usual shortcuts and, optionally, a bicubic
-Bezier patch (seed 003 describes the flank by Bezier patches):
-
-- ``lead_crowning`` C_beta: a parabola over the face width, e = -C_beta (2 z / b)^2 (the face ends C_beta low);
-- ``end_relief`` C_I over ``end_relief_length`` l from each end face: e = -C_I (|z| - (b/2 - l)) / l there;
-- ``profile_crowning`` C_alpha: a parabola over the active profile (root form to tip, L_F..L_a):
-  e = -C_alpha (2 (L - L_m) / (L_a - L_F))^2, L_m its middle;
-- ``tip_relief`` C_a from ``tip_relief_diameter`` d_Ca to the tip: e = -C_a (L - L_Ca) / (L_a - L_Ca) there;
-- ``helix_angle_modification`` f_Hbeta: e = f_Hbeta z / b (more material towards +z when positive);
-- ``twist`` S_beta: the helix slope changes across the profile, e = S_beta (z / b) (L - L_m) / (L_a - L_F) (the
-  helix slope at the tip minus that at the root is S_beta);
-- ``patch``: 4 x 4 control points [L, z, e] (mm) of a bicubic Bezier patch whose (L, z) must cover the flank
-  without folding; e at a flank point is found by inverting the patch's (u, v) -> (L, z) map.
-
-Amounts are in mm like every length of a job (``lead_crowning = 0.010`` is 10 um). The checks: a patch that
-folds (its (L, z) map turns back on itself) or does not cover the flank, and a design that takes more from the
-tooth than it can carry (the tip land left by both flanks below 0.2 mn), each reported with its key and the fix.
+A gear is usually made with its flanks modified (crowned, relieved, twisted), and the cut and the measurement need
+the design as a deviation e(L, z) [mm] over roll length and face position (excess material positive, as every
+measured deviation). :class:`Modification` holds both flanks' :class:`FlankDesign` (the shortcuts and an optional
+bicubic :class:`BezierPatch`, as seed 003 describes the flank; the deviation's terms in
+:meth:`FlankDesign.deviation`); :func:`design_problems` and :func:`check_design` refuse what cannot be made. The
+keys and the measured figures: docs/modifications.md.
 """
 
 from __future__ import annotations
@@ -39,7 +26,9 @@ def roll(gear: Gear, diameter: float) -> float:
 
 @dataclass(frozen=True)
 class FlankDesign:
-    """One flank's design: the shortcut amounts [mm] and an optional patch of 4 x 4 [L, z, e] control points."""
+    """One flank's design: the shortcut amounts [mm] and an optional patch of 4 x 4 [L, z, e] control points.
+
+    Amounts are in mm like every length of a job (``lead_crowning = 0.010`` is 10 um)."""
 
     lead_crowning: float = 0.0
     end_relief: float = 0.0
@@ -52,7 +41,24 @@ class FlankDesign:
     patch: tuple[tuple[tuple[float, float, float], ...], ...] | None = None
 
     def deviation(self, gear: Gear, L, z) -> np.ndarray:
-        """e [mm] at roll lengths ``L`` and face positions ``z`` (broadcast)."""
+        """e [mm] at roll lengths ``L`` and face positions ``z`` (broadcast).
+
+        e(L, z) is the deviation along the base tangent in the transverse plane (excess material positive, as every
+        measured deviation; a modification that removes material is negative) over the roll length L and the face
+        position z (0 at mid face): the sum of the shortcuts and, optionally, the patch:
+
+        - ``lead_crowning`` C_beta: a parabola over the face width, e = -C_beta (2 z / b)^2 (the face ends C_beta
+          low);
+        - ``end_relief`` C_I over ``end_relief_length`` l from each end face: e = -C_I (|z| - (b/2 - l)) / l there;
+        - ``profile_crowning`` C_alpha: a parabola over the active profile (root form to tip, L_F..L_a):
+          e = -C_alpha (2 (L - L_m) / (L_a - L_F))^2, L_m its middle;
+        - ``tip_relief`` C_a from ``tip_relief_diameter`` d_Ca to the tip: e = -C_a (L - L_Ca) / (L_a - L_Ca) there;
+        - ``helix_angle_modification`` f_Hbeta: e = f_Hbeta z / b (more material towards +z when positive);
+        - ``twist`` S_beta: the helix slope changes across the profile, e = S_beta (z / b) (L - L_m) / (L_a - L_F)
+          (the helix slope at the tip minus that at the root is S_beta);
+        - ``patch``: 4 x 4 control points [L, z, e] (mm) of a bicubic Bezier patch whose (L, z) must cover the flank
+          without folding; e at a flank point is found by inverting the patch's (u, v) -> (L, z) map.
+        """
         L, z = np.broadcast_arrays(np.asarray(L, dtype=float), np.asarray(z, dtype=float))
         b = gear.face_width
         lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)
@@ -154,7 +160,8 @@ class BezierPatch:
 
 def design_problems(mod: Modification, gear: Gear, prefix: str = "modification") -> list[Problem]:
     """Every reason the design cannot be made: a patch that folds or leaves part of the flank uncovered, a tip
-    relief that starts off the flank, negative lengths, and more taken from the tooth than it can carry."""
+    relief that starts off the flank, negative lengths, and more taken from the tooth than it can carry (the tip land
+    left by both flanks below 0.2 mn), each reported with its key and the fix."""
     out: list[Problem] = []
     b = gear.face_width
     lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)

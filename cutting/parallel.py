@@ -23,6 +23,12 @@ from numba.extending import intrinsic
 _pool: ThreadPoolExecutor | None = None
 
 
+def default_workers() -> int:
+    """Worker processes for work split over processes (the manifold removal, a study's local cluster): one per core,
+    at most 8."""
+    return max(1, min(os.cpu_count() or 1, 8))
+
+
 def threads() -> int:
     """Threads the kernels use: the cores this process may run on (NUMBA_NUM_THREADS caps it), at most 8."""
     try:

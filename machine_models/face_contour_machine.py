@@ -1,43 +1,13 @@
 """The face-contour machine of seed 004 (radial slots of a face coupling cut by continuous indexing) as an MJCF model,
 generated with MjSpec.
 
-Machine frame: z up along the work axis, the slotted face at z = 0, the point M (radius L, where the cutting speed V
-is radial) on machine +x. The tool head turns in a vertical plane above M; its plane is turned by the setting angle
-lambda from the radial line OM (cutting/face_contour/slots.py: the tool plane's horizontal direction u = (cos -lambda,
-sin -lambda), the tool axis n = (sin lambda, cos lambda)). Bodies and joints:
-
-- ``cross_slide``   (control "work_setting" only) slide ``Y`` along the tool axis n: the work's setting changed
-  during the cut (seed 004), Y = T (1 - cos q_s phi) moves the work's axis across the tool plane; it carries the work
-  spindle and its motor;
-- ``work_spindle``  hinge ``A`` about -z: table, fixture and blank; A is the seed's workpiece angle a (the workpiece
-  frame turns by -a in the machine, so the head advances by +a in it, as in eq. 5). Site ``blank_frame`` = the
-  workpiece frame of cutting/face_contour/slots.py (axis z, slotted face at z = 0, slot k's centre line at 2 pi k / m);
-- ``infeed_slide``  slide ``Z`` (vertical, on the column): Z = - the seed's feed term (S per tool revolution down to
-  the depth); Z = 0 puts the tip of an element at psi = 0 on the face (with the eccentric at its start);
-- ``swivel``        welded to the slide, turned by -lambda about z (the fixed swivel of the setting angle);
-- ``eccentric``     (control "eccentric" only) hinge ``E`` about -n through the eccentric's axis O, R - e above the
-  tip's lowest point: a sleeve that carries the head spindle's bearing at the eccentricity e (seed 004 eq. 14); at
-  E = 0 the head centre is e above O (eq. 14's start, the eccentric at 180 deg). A counterweight on the sleeve
-  balances ``eccentric_balance`` of the head's mass;
-- ``tool_head``     hinge ``H`` about -n (on the eccentric, else on the swivel): the cutter head with its cutting
-  elements. Its absolute angle phi = H + E (= H without the eccentric) is the seed's head angle; element j's tip
-  is at R (sin(phi + beta_j) u - cos(phi + beta_j) z) from the head centre. Site ``element_frame`` at element 0's
-  tip (``element_frame_<j>`` at element j's): its x axis the tool axis n (along the tip edge), its z axis from the
-  head centre to the tip.
-
-Why a hinge for the eccentric rather than two slides: the seed's eccentric is a rotating crank geared N times to the
-head (the head centre moves on a circle of radius e at constant speed), so its physics is a rotor's: a constant
-speed with no reversal (its stage stays on one flank; two slides would each reverse twice per eccentric turn and
-cross their backlash each time), an unbalance that a counterweight can cancel (two slides shake the machine with
-their masses' accelerations instead), and a phase error that moves the head centre along the circle.
-
-Drives (each a :func:`machine_models.drives.couple` tendon; motors are torque actuators of the same names, ctrl in
-N m, ctrlrange = peak torque): ``MA`` -> worm ``work_drive`` -> A; ``MH`` -> gear stage ``head_drive`` -> the head's
-absolute angle H + E (an Oldham coupling passes the absolute angle across the offset e); ``ME`` -> gear stage
-``eccentric_drive`` -> E; ``MZ`` -> ``z_drive`` -> screw ``TZ`` -> nut ``z_nut`` (ratio pitch / 2 pi) -> Z; ``MY`` ->
-``y_drive`` (ball screw and preloaded double nut, ratio pitch / 2 pi) -> Y. A hydraulic
-counterbalance (``counterbalance`` of the slide's whole weight) acts on the slide only. Lengths are metres here;
-the geometry and the records use mm.
+The work spindle A on a worm (on the cross slide Y when the work's setting changes during the cut), the infeed slide
+Z on its ball screw with the swivel at the setting angle, and the tool head H, on the eccentric E (seed 004 eq. 14)
+when the control has one: each axis driven by its motor through drive stages with their stiffness and backlash, so
+the machine's errors show between the elements' tips and the workpiece. :func:`build_face_machine_spec` (its frame,
+bodies, joints and drives there) builds it from a :class:`FaceMachineLayout` and :class:`FaceMachineParams`;
+:func:`relaxed_qpos` is a pose with every stage relaxed. Lengths are metres here; the geometry and the records use
+mm. What the machine does to the slots: docs/face-contours-and-turning.md, "The face-contour machine".
 """
 
 from __future__ import annotations
@@ -268,7 +238,40 @@ def has_joint(model: mujoco.MjModel, joint: str) -> bool:
 
 
 def build_face_machine_spec(layout: FaceMachineLayout, params: FaceMachineParams | None = None) -> mujoco.MjSpec:
-    """The MJCF model of the face-contour machine for ``layout``. Raises ValueError naming bad parameters."""
+    """The MJCF model of the face-contour machine for ``layout``. Raises ValueError naming bad parameters.
+
+    Machine frame: z up along the work axis, the slotted face at z = 0, the point M (radius L, where the cutting speed
+    V is radial) on machine +x. The tool head turns in a vertical plane above M; its plane is turned by the setting
+    angle lambda from the radial line OM (cutting/face_contour/slots.py: the tool plane's horizontal direction
+    u = (cos -lambda, sin -lambda), the tool axis n = (sin lambda, cos lambda)). Bodies and joints:
+
+    - ``cross_slide``   (control "work_setting" only) slide ``Y`` along the tool axis n: the work's setting changed
+      during the cut (seed 004), Y = T (1 - cos q_s phi) moves the work's axis across the tool plane; it carries the
+      work spindle and its motor;
+    - ``work_spindle``  hinge ``A`` about -z: table, fixture and blank; A is the seed's workpiece angle a (the
+      workpiece frame turns by -a in the machine, so the head advances by +a in it, as in eq. 5). Site
+      ``blank_frame`` = the workpiece frame of cutting/face_contour/slots.py (axis z, slotted face at z = 0, slot k's
+      centre line at 2 pi k / m);
+    - ``infeed_slide``  slide ``Z`` (vertical, on the column): Z = - the seed's feed term (S per tool revolution down
+      to the depth); Z = 0 puts the tip of an element at psi = 0 on the face (with the eccentric at its start);
+    - ``swivel``        welded to the slide, turned by -lambda about z (the fixed swivel of the setting angle);
+    - ``eccentric``     (control "eccentric" only) hinge ``E`` about -n through the eccentric's axis O, R - e above
+      the tip's lowest point: a sleeve that carries the head spindle's bearing at the eccentricity e (seed 004
+      eq. 14); at E = 0 the head centre is e above O (eq. 14's start, the eccentric at 180 deg). A counterweight on
+      the sleeve balances ``eccentric_balance`` of the head's mass (why a hinge: :func:`_add_tool_head`);
+    - ``tool_head``     hinge ``H`` about -n (on the eccentric, else on the swivel): the cutter head with its cutting
+      elements. Its absolute angle phi = H + E (= H without the eccentric) is the seed's head angle; element j's tip
+      is at R (sin(phi + beta_j) u - cos(phi + beta_j) z) from the head centre. Site ``element_frame`` at element
+      0's tip (``element_frame_<j>`` at element j's): its x axis the tool axis n (along the tip edge), its z axis
+      from the head centre to the tip.
+
+    Drives (each a :func:`machine_models.drives.couple` tendon; motors are torque actuators of the same names, ctrl
+    in N m, ctrlrange = peak torque): ``MA`` -> worm ``work_drive`` -> A; ``MH`` -> gear stage ``head_drive`` -> the
+    head's absolute angle H + E (an Oldham coupling passes the absolute angle across the offset e); ``ME`` -> gear
+    stage ``eccentric_drive`` -> E; ``MZ`` -> ``z_drive`` -> screw ``TZ`` -> nut ``z_nut`` (ratio pitch / 2 pi) -> Z;
+    ``MY`` -> ``y_drive`` (ball screw and preloaded double nut, ratio pitch / 2 pi) -> Y. A hydraulic counterbalance
+    (``counterbalance`` of the slide's whole weight) acts on the slide only.
+    """
     params = params or FaceMachineParams()
     problems = layout.problems() + params.problems()
     if problems:
@@ -341,7 +344,14 @@ def _add_infeed_slide(
 
 def _add_tool_head(swivel: mujoco.MjsBody, layout: FaceMachineLayout, params: FaceMachineParams) -> None:
     """The tool head H with its cutting elements: on the eccentric E (with its counterweight) if the machine has
-    one, else on the swivel."""
+    one, else on the swivel.
+
+    Why a hinge for the eccentric rather than two slides: the seed's eccentric is a rotating crank geared N times to the
+    head (the head centre moves on a circle of radius e at constant speed), so its physics is a rotor's: a constant
+    speed with no reversal (its stage stays on one flank; two slides would each reverse twice per eccentric turn and
+    cross their backlash each time), an unbalance that a counterweight can cancel (two slides shake the machine with
+    their masses' accelerations instead), and a phase error that moves the head centre along the circle.
+    """
     R, e = layout.R, layout.e
     # local frame of the rotating parts: z = -n (their axis), x = u, y = up
     rotor_quat = quat_x(math.pi / 2)

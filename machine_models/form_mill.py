@@ -1,33 +1,12 @@
 """The CNC form-milling machine of seed 003 (the copying method: a profiled disc mill on a spatial path) as an
 MJCF model, generated with MjSpec.
 
-Machine frame: z up along the work axis, the gear's mid face at z = 0; the mill works on the +x side. Bodies
-and joints:
-
-- ``work_table``   hinge ``A`` about z: the indexing work axis (rotary table, fixture and blank); site
-  ``blank_frame`` = the gear frame (gear axis z, mid face at z = 0, tooth space k centred at the polar angle
-  2 pi k / z; with A = 0 space 0 lies on +x);
-- ``z_slide``      slide ``Z`` (vertical, on the column; carries gravity, mostly taken by a counterbalance);
-- ``x_slide``      slide ``X`` on it (radial, along machine x);
-- ``y_slide``      slide ``Y`` on that (tangential, machine y);
-- ``mill_head``    hinge ``B`` about machine x through the mill centre on the Y slide: the swivel head that
-  turns the mill's axis out of the transverse plane (seed 003's psi_y: the mill turned with the path);
-- ``mill_spindle`` hinge ``S`` about the head's y axis (machine y at B = 0): arbor and disc mill; site
-  ``mill_frame`` at the mill centre, its local z the mill axis (machine +y at B = 0). With a finger mill
-  (``FormMillLayout.head``) the head is a right-angle head: ``S`` about machine +x (external
-  gear: the finger's tip towards the gear axis) or -x (internal gear: the head reaches into the ring's bore, the
-  tip outwards), ``mill_frame`` at the finger's tip centre, its local z the axis from the tip into the mill; B then
-  turns the finger about its own axis and is held at 0 (the finger's axis stays along the symmetry line).
-
-The slides sit at the origin, so the slide coordinates (X, Y, Z) are the mill centre in the machine frame
-and, at A = 0, in the gear frame. Each slide is driven by a ball screw: motor ``MX``/``MY``/``MZ`` -> screw
-hinge ``TX``/``TY``/``TZ`` (stage ``x_drive`` ...) -> nut (stage ``x_nut`` ..., ratio pitch / 2 pi) -> slide;
-the table by ``MA`` through the worm stage ``work_drive``; the head by ``MB`` through the worm stage
-``head_drive``; the spindle by ``MS`` through the belt ``spindle_drive``. Head B and table A together give the
-mill's axis any direction: B its tilt towards the gear axis, A (turned by a small angle during the feed) its
-component along the radius. Every stage is a :func:`machine_models.drives.couple` tendon; the motors are torque
-actuators of the same names (ctrl in N m, ctrlrange = peak torque). Lengths are metres here; the CNC and the
-records use mm.
+The indexing work table A on a worm, the slides X, Y, Z on ball screws, the swivel head B on a worm and the mill
+spindle S on a belt (a right-angle head for the finger mill): each axis driven by its motor through drive stages
+with their stiffness and backlash, so the machine's errors show between the mill and the gear.
+:func:`build_form_mill_spec` (its frame, bodies, joints and drives there) builds it from a :class:`FormMillLayout`
+and :class:`FormMillParams`. Lengths are metres here; the CNC and the records use mm. What the machine makes:
+docs/form-milling.md, "The machine".
 """
 
 from __future__ import annotations
@@ -284,7 +263,35 @@ class FormMillLayout:
 
 
 def build_form_mill_spec(layout: FormMillLayout, params: FormMillParams | None = None) -> mujoco.MjSpec:
-    """The MJCF model of the form-milling machine for ``layout``. Raises ValueError naming bad parameters."""
+    """The MJCF model of the form-milling machine for ``layout``. Raises ValueError naming bad parameters.
+
+    Machine frame: z up along the work axis, the gear's mid face at z = 0; the mill works on the +x side. Bodies
+    and joints:
+
+    - ``work_table``   hinge ``A`` about z: the indexing work axis (rotary table, fixture and blank); site
+      ``blank_frame`` = the gear frame (gear axis z, mid face at z = 0, tooth space k centred at the polar angle
+      2 pi k / z; with A = 0 space 0 lies on +x);
+    - ``z_slide``      slide ``Z`` (vertical, on the column; carries gravity, mostly taken by a counterbalance);
+    - ``x_slide``      slide ``X`` on it (radial, along machine x);
+    - ``y_slide``      slide ``Y`` on that (tangential, machine y);
+    - ``mill_head``    hinge ``B`` about machine x through the mill centre on the Y slide: the swivel head that
+      turns the mill's axis out of the transverse plane (seed 003's psi_y: the mill turned with the path);
+    - ``mill_spindle`` hinge ``S`` about the head's y axis (machine y at B = 0): arbor and disc mill; site
+      ``mill_frame`` at the mill centre, its local z the mill axis (machine +y at B = 0). With a finger mill
+      (``FormMillLayout.head``) the head is a right-angle head: ``S`` about machine +x (external
+      gear: the finger's tip towards the gear axis) or -x (internal gear: the head reaches into the ring's bore, the
+      tip outwards), ``mill_frame`` at the finger's tip centre, its local z the axis from the tip into the mill; B then
+      turns the finger about its own axis and is held at 0 (the finger's axis stays along the symmetry line).
+
+    The slides sit at the origin, so the slide coordinates (X, Y, Z) are the mill centre in the machine frame
+    and, at A = 0, in the gear frame. Each slide is driven by a ball screw: motor ``MX``/``MY``/``MZ`` -> screw
+    hinge ``TX``/``TY``/``TZ`` (stage ``x_drive`` ...) -> nut (stage ``x_nut`` ..., ratio pitch / 2 pi) -> slide;
+    the table by ``MA`` through the worm stage ``work_drive``; the head by ``MB`` through the worm stage
+    ``head_drive``; the spindle by ``MS`` through the belt ``spindle_drive``. Head B and table A together give the
+    mill's axis any direction: B its tilt towards the gear axis, A (turned by a small angle during the feed) its
+    component along the radius. Every stage is a :func:`machine_models.drives.couple` tendon; the motors are torque
+    actuators of the same names (ctrl in N m, ctrlrange = peak torque).
+    """
     params = params or FormMillParams()
     problems = layout.problems() + params.problems()
     if problems:

@@ -1,28 +1,11 @@
 """The thread-cutting lathe of seed 001 (group Fv(B1 P2)) as an MJCF model, generated with MjSpec.
 
-Machine frame: z along the spindle axis, pointing from the headstock to the tailstock (the chuck face at z = 0,
-the workpiece on +z); y up (gravity -y), so neither the spindle nor the carriage carries a weight. Bodies
-and joints (seed 001 notation):
-
-- ``spindle``     hinge ``B1`` about z: spindle, chuck and workpiece;
-- ``carriage``    slide ``P2`` along z: saddle, cross slide and threading tool (site ``tool_tip``);
-- ``lead_screw``  hinge ``TV`` about z, below the carriage;
-- ``spindle_motor`` hinge ``M1``, torque actuator ``M1`` (every form);
-- ``screw_motor`` hinge ``M2``, torque actuator ``M2`` (electronic forms only).
-
-Three forms (``virtual_machine.setting.thread_layout.thread_form``):
-
-- ``mechanical`` (fig. 1): M1 -> 8 -> R2 -> iv -> 5 -> spindle (stage ``spindle_drive``, ratio c3 iv), and the
-  internal link 5 -> ix -> R1 -> 6 -> TV (stage ``gear_chain``, ratio hand * ix * i01 screw rad per spindle
-  rad, with the realised ix of the setting sheet); no M2;
-- ``master-slave`` (fig. 2) and ``equal-coordinates`` (fig. 3): M1 -> belt -> spindle (``spindle_drive``) and
-  M2 -> TV (``feed_drive``, ratio i0 resp. i01: screw turn per motor turn).
-
-The carriage rides on the screw through the nut stage ``nut`` (ratio t_TV / (2 pi) m/rad). Every stage is a
-:func:`machine_models.drives.couple` tendon. Hand: ``hand_sign`` = dP2/dB1 sign, -1 for a right-hand thread
-(the spindle turns positively about +z, which is M03 seen from the headstock, and the carriage feeds
-towards the chuck: in the workpiece frame the tool then climbs a right-hand helix), +1 for a left-hand one.
-Lengths are metres here; the job and the records use mm.
+Seed 001's three forms of the thread-cutting group on one lathe: the spindle B1 and the carriage P2 on the lead screw
+TV, linked by the mechanical chain (fig. 1) or by the screw's own motor M2 (master-slave, fig. 2; equal coordinates,
+fig. 3), each link a drive stage with its stiffness and backlash, so the lead the form cuts shows between tool and
+workpiece. :func:`build_thread_lathe_spec` (its frame, bodies, joints, forms and drives there) builds it from a
+:class:`ThreadLayout` (the thread's hand there) and :class:`ThreadLatheParams`. Lengths are metres here; the job and
+the records use mm. The lathe's runs and its reach: docs/machines.md, "The machine in MuJoCo".
 """
 
 from __future__ import annotations
@@ -136,7 +119,11 @@ class ThreadLatheParams:
 
 @dataclass(frozen=True)
 class ThreadLayout:
-    """What the job and its setting sheet fix in the lathe: ratios, direction, speeds and the start."""
+    """What the job and its setting sheet fix in the lathe: ratios, direction, speeds and the start.
+
+    Hand: ``hand_sign`` = dP2/dB1 sign, -1 for a right-hand thread (the spindle turns positively about +z, which is
+    M03 seen from the headstock, and the carriage feeds towards the chuck: in the workpiece frame the tool then
+    climbs a right-hand helix), +1 for a left-hand one."""
 
     form: str  # one of FORMS
     hand_sign: int  # sign of dP2/dB1: -1 right hand, +1 left hand
@@ -156,7 +143,29 @@ class ThreadLayout:
 def build_thread_lathe_spec(lay: ThreadLayout, params: ThreadLatheParams | None = None) -> mujoco.MjSpec:
     """The MJCF model of the thread lathe laid out by ``lay``
     (``virtual_machine.setting.thread_layout.thread_layout``: the
-    job's form and its setting sheet's ratios)."""
+    job's form and its setting sheet's ratios).
+
+    Machine frame: z along the spindle axis, pointing from the headstock to the tailstock (the chuck face at z = 0,
+    the workpiece on +z); y up (gravity -y), so neither the spindle nor the carriage carries a weight. Bodies
+    and joints (seed 001 notation):
+
+    - ``spindle``     hinge ``B1`` about z: spindle, chuck and workpiece;
+    - ``carriage``    slide ``P2`` along z: saddle, cross slide and threading tool (site ``tool_tip``);
+    - ``lead_screw``  hinge ``TV`` about z, below the carriage;
+    - ``spindle_motor`` hinge ``M1``, torque actuator ``M1`` (every form);
+    - ``screw_motor`` hinge ``M2``, torque actuator ``M2`` (electronic forms only).
+
+    Three forms (``virtual_machine.setting.thread_layout.thread_form``):
+
+    - ``mechanical`` (fig. 1): M1 -> 8 -> R2 -> iv -> 5 -> spindle (stage ``spindle_drive``, ratio c3 iv), and the
+      internal link 5 -> ix -> R1 -> 6 -> TV (stage ``gear_chain``, ratio hand * ix * i01 screw rad per spindle
+      rad, with the realised ix of the setting sheet); no M2;
+    - ``master-slave`` (fig. 2) and ``equal-coordinates`` (fig. 3): M1 -> belt -> spindle (``spindle_drive``) and
+      M2 -> TV (``feed_drive``, ratio i0 resp. i01: screw turn per motor turn).
+
+    The carriage rides on the screw through the nut stage ``nut`` (ratio t_TV / (2 pi) m/rad). Every stage is a
+    :func:`machine_models.drives.couple` tendon.
+    """
     params = params or ThreadLatheParams()
     problems = params.problems()
     if problems:

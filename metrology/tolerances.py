@@ -1,24 +1,12 @@
 """ISO 1328-1:2013 flank tolerances of cylindrical involute gears, in micrometres.
 
 Every tolerance is the class-5 formula times the step factor ``sqrt(2)**(A - 5)`` of the flank tolerance
-class ``A`` (1..11), computed unrounded and rounded **once** per clause 5.2.3 (see :func:`round_tolerance`).
-Gear data: ``d = z*mn/cos(beta)`` reference diameter in mm, ``mn`` normal module in mm, ``b`` face width in
-mm, ``z`` number of teeth, ``k`` number of pitches of a sector (``F_pk`` only).
-
-Choices made here (the standard's text was not at hand; formulas follow ``/work/shared/metrology-notes.md``):
-
-- Composite and derived tolerances (``F_alpha``, ``F_beta``, ``F_pk``, ``F_r``) are computed from the
-  *unrounded* components and rounded once, so a rounding of a component never leaks into the total.
-- Ties are rounded half up (9.25 -> 9.5, 12.5 -> 13), not to even; a relative epsilon of 1e-9 step keeps
-  float noise (3.05 stored as 3.0499999999999998) from flipping a tie.
-- The sector pitch tolerance ``F_pk`` (informative annex) is marked "check" in the notes: its formula is
-  the one from the notes, not confirmed against a second source.
-- Default sector ``k = z/8`` rounded half up, at least 2 (a convention of this project, see
-  :func:`default_sector_pitches`).
-
-Outside ``5 <= z <= 1000``, ``5 <= d <= 15000 mm``, ``0.5 <= mn <= 70 mm``, ``4 <= b <= 1200 mm`` and
-``|beta| <= 45 deg`` ISO 1328-1:2013 defines no tolerances; the functions raise ``ValueError`` there rather
-than extrapolate.
+class ``A`` (1..11), computed unrounded and rounded **once** per clause 5.2.3 (see :func:`round_tolerance`);
+composite and derived tolerances are computed from the *unrounded* components. Gear data: ``d = z*mn/cos(beta)``
+reference diameter in mm, ``mn`` normal module in mm, ``b`` face width in mm, ``z`` number of teeth, ``k`` number
+of pitches of a sector (``F_pk`` only). Outside the standard's range (:func:`validate`) the functions raise
+``ValueError`` rather than extrapolate. The sources and the choices made without the standard's text:
+docs/measurement.md, "ISO 1328-1 tolerances".
 """
 
 import math
@@ -138,7 +126,8 @@ def validate(z: int, d: float, mn: float, b: float, beta_deg: float) -> None:
     """Check gear data against the validity range of ISO 1328-1:2013 (clause 1).
 
     ``5 <= z <= 1000``, ``5 <= d <= 15000 mm``, ``0.5 <= mn <= 70 mm``, ``4 <= b <= 1200 mm``,
-    ``|beta| <= 45 deg``; all bounds inclusive.
+    ``|beta| <= 45 deg``; all bounds inclusive. Outside them ISO 1328-1:2013 defines no tolerances; every function
+    of this module raises ``ValueError`` there rather than extrapolate.
 
     Raises
     ------

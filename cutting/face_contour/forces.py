@@ -1,36 +1,11 @@
 """The cutting force of the face-contour machine's elements (seed 004, continuous indexing): the chip each element
 takes at each head angle, Kienzle's main force along the cutting speed V and a thrust normal to the face.
 
-**The layer.** Element j's tip follows :func:`cutting.face_contour.slots.element_path` (eq. 5) with the machine's
-infeed in place of the seed's feed term: the electronic gearbox lowers the head by f(phi) = min(S phi / 2 pi, depth)
-(S per tool revolution, gated at the depth), so the tip is at z(phi) = z_final(phi) + depth - f(phi), z_final the
-spark-out pass of :func:`~cutting.face_contour.slots.element_path` (``final=True``). The xy motion repeats every
-workpiece revolution (m tool revolutions: eq. 11 and the controls all have the period 2 pi in phi), so the pass over
-the same slot one workpiece revolution earlier, at phi - 2 pi m, ran the same xy path higher by the layer
-
-    Delta(phi) = f(phi) - f(phi - 2 pi m):  m S in the plunge, the remainder depth - S (phi / 2 pi - m) in the
-    spark-out (a different one per slot, from m S down to 0 over the workpiece revolution), 0 after it.
-
-With several elements the pass before element j's is the element passing just before it in the same tool turn
-(larger phase beta first; element j's own psi = phi + beta_j at phi - (beta_i - beta_j)), for the first element the
-last one of the turn m revolutions before; the small lateral offset (beta_i - beta_j) / m between their paths is
-neglected (the layer is taken vertical, on the same xy path). The material above the tip at phi is what neither
-that pass nor the face left: d = -z(phi) below the face, the layer clipped to d: Delta_e = clip(Delta, 0, d), and
-none where the tip is off the annular face (its radius outside ``inner_radius``..``outer_radius``).
-
-**The chip.** In the section across the slot (the tool axis n and the vertical) the element is a plate with a
-straight tip edge of width w = ``edge_width`` and flanks opening by kappa = ``flank_angle``. The section it removes
-is the trapezoid between its present and its earlier position, Delta_e (w + (2 d - Delta_e) tan kappa): the tip edge
-takes a chip of width w and thickness Delta_e, each flank one of thickness Delta_e sin kappa (the layer normal to
-the flank) over the length (d - Delta_e / 2) / cos kappa (from mid-corner to the face: the corner triangle counted at
-half its height, so the areas add up exactly). V is inclined by theta to the face (the tool circle at psi), so the
-thicknesses normal to V are these times cos theta.
-
-**The forces.** Kienzle (cutting/materials.py) per edge segment: F_c = sum k_c(h) b h with k_c = k_c1.1 h^-m_c, the
-table's reference rake (+6 deg; the elements' rake is not modelled). It acts on the tool against V (the direction of
-:func:`~cutting.face_contour.slots.path_velocity`); the thrust F_p = THRUST_RATIO F_c pushes the tool out of the face
-(+z), and both act reversed on the workpiece, at the tip. The chip is the nominal one at the head angle (the
-machine's deflections do not change it: no regeneration).
+These forces are how the machine's drives feel the cut: :func:`chip` is the layer and the section an element takes
+(their derivation there), :func:`element_forces` the forces and the torques they put on the head and the work,
+:class:`FaceLoad` the tables the simulation reads every servo tick, :func:`sizing` the motors' torques the heaviest
+pass needs. The measured forces and what they do to the slots: docs/face-contours-and-turning.md, "Cutting forces on
+the face machine".
 """
 
 from __future__ import annotations
@@ -105,7 +80,35 @@ class Chip:
 
 def chip(c: FaceCoupling, phi: np.ndarray | float, element: int = 0) -> Chip:
     """The chip of element ``element`` at head angles ``phi`` (absolute: 2 pi per tool turn from the programme's
-    start, where f = 0) (see the module text)."""
+    start, where f = 0).
+
+    **The layer.** Element j's tip follows :func:`cutting.face_contour.slots.element_path` (eq. 5) with the machine's
+    infeed in place of the seed's feed term: the electronic gearbox lowers the head by f(phi) = min(S phi / 2 pi,
+    depth) (S per tool revolution, gated at the depth, :func:`infeed`), so the tip is at z(phi) = z_final(phi) +
+    depth - f(phi), z_final the spark-out pass of :func:`~cutting.face_contour.slots.element_path` (``final=True``).
+    The xy motion repeats every workpiece revolution (m tool revolutions: eq. 11 and the controls all have the period
+    2 pi in phi), so the pass over the same slot one workpiece revolution earlier, at phi - 2 pi m, ran the same xy
+    path higher by the layer
+
+        Delta(phi) = f(phi) - f(phi - 2 pi m):  m S in the plunge, the remainder depth - S (phi / 2 pi - m) in the
+        spark-out (a different one per slot, from m S down to 0 over the workpiece revolution), 0 after it.
+
+    With several elements the pass before element j's is the element passing just before it in the same tool turn
+    (larger phase beta first; element j's own psi = phi + beta_j at phi - (beta_i - beta_j)), for the first element
+    the last one of the turn m revolutions before (:func:`previous_offset`); the small lateral offset
+    (beta_i - beta_j) / m between their paths is neglected (the layer is taken vertical, on the same xy path). The
+    material above the tip at phi is what neither that pass nor the face left: d = -z(phi) below the face, the layer
+    clipped to d: Delta_e = clip(Delta, 0, d), and none where the tip is off the annular face (its radius outside
+    ``inner_radius``..``outer_radius``).
+
+    **The chip.** In the section across the slot (the tool axis n and the vertical) the element is a plate with a
+    straight tip edge of width w = ``edge_width`` and flanks opening by kappa = ``flank_angle``. The section it
+    removes is the trapezoid between its present and its earlier position, Delta_e (w + (2 d - Delta_e) tan kappa):
+    the tip edge takes a chip of width w and thickness Delta_e, each flank one of thickness Delta_e sin kappa (the
+    layer normal to the flank) over the length (d - Delta_e / 2) / cos kappa (from mid-corner to the face: the
+    corner triangle counted at half its height, so the areas add up exactly). V is inclined by theta to the face (the
+    tool circle at psi), so the thicknesses normal to V are these times cos theta.
+    """
     phi = np.asarray(phi, dtype=float)
     path = element_path(c, phi, element, final=True)
     d = -(path[..., 2] + c.depth - infeed(c, phi))
@@ -146,9 +149,16 @@ class ElementForce:
 
 
 def element_forces(c: FaceCoupling, material: Material, phi: np.ndarray | float, element: int = 0) -> ElementForce:
-    """Kienzle's F_c along -V on the tool, the thrust THRUST_RATIO F_c along +z (see the module text), with the
-    torques they put on the head (R times F's component along the tip's circle, opposing the head's turning) and on
-    the workpiece (tip x (-F), about z)."""
+    """Kienzle's F_c along -V on the tool, the thrust THRUST_RATIO F_c along +z, with the torques they put on the
+    head (R times F's component along the tip's circle, opposing the head's turning) and on the workpiece
+    (tip x (-F), about z).
+
+    Kienzle (cutting/materials.py) per edge segment of :func:`chip`: F_c = sum k_c(h) b h with k_c = k_c1.1 h^-m_c,
+    the table's reference rake (+6 deg; the elements' rake is not modelled). It acts on the tool against V (the
+    direction of :func:`~cutting.face_contour.slots.path_velocity`); the thrust F_p = THRUST_RATIO F_c pushes the
+    tool out of the face (+z), and both act reversed on the workpiece, at the tip. The chip is the nominal one at the
+    head angle (the machine's deflections do not change it: no regeneration).
+    """
     phi = np.asarray(phi, dtype=float)
     ch = chip(c, phi, element)
     fc = kienzle(material, ch.h_tip, c.edge_width) + 2 * kienzle(material, ch.h_flank, ch.b_flank)

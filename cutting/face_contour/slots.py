@@ -1,53 +1,12 @@
 """Face tooth contours by continuous indexing (seed 004): the radial slots of a face coupling, cut by a tool head
-whose cutting elements and the workpiece turn in a fixed ratio; its setting sheet, the exact slot and the manifold
-cut (measured by :mod:`metrology.face_slots`).
+whose cutting elements and the workpiece turn in a fixed ratio (eq. 11: omega_t = m omega_w).
 
-Frames and the seed's quantities. The workpiece frame turns with the workpiece (axis z, the slotted face at z = 0,
-material below). The tool head (radius R to the element tips) turns in a vertical plane about a horizontal axis; its
-angle phi is the time parameter (phi = omega_t t). The workpiece angle is a = phi / m (eq. 11: omega_t = m omega_w),
-so each tool revolution passes one slot and the slot k's centre line is the radial line at 2 pi k / m. Element j sits
-at the phase beta_j on the head (a sector of ``elements`` elements ``element_pitch`` apart, centred on phi); its own
-angle is psi = phi + beta_j. The head's centre is above the point M at radius L (seed: L, the distance of the line
-through M perpendicular to the tool axis, i.e. the vertical through M, from the workpiece axis), the tool plane is
-turned by the setting angle lambda from the radial line OM (eq. 1, lambda = arcsin(L / (R m))). The tip of element j
-is (eq. 5)
-
-    x = L cos a + R sin psi cos(a - lambda),   y = L sin a + R sin psi sin(a - lambda),
-    z = R (1 - cos psi) - S psi / (2 pi).
-
-The seed prints cos(a + lambda): with a counted as in its x = L cos a the element's velocity at M is radial (the
-condition eq. 1 is derived from) only for the tool plane at a - lambda (the tangential speed at M is
-omega_w (L - R m sin lambda) = 0), so the path uses a - lambda; lambda itself is eq. 1's positive angle.
-
-Controls (``control``):
-
-* ``"fixed"``: eq. 5 as it stands. The bottom of a slot is the tool circle, so it is concave (deeper at M), and the
-  slot's centre line bows sideways by about s^2 / (R m cos lambda) at a distance s from M (V turns along the slot).
-* ``"eccentric"``: eq. 14. The head's centre is carried by an eccentric (radius e, axis O) turning N =
-  ``eccentric_ratio`` times per tool revolution (N m cycles per workpiece revolution, a multiple of m); at phi = 0 the
-  eccentric is at 180 deg (eq. 14's start), so in the tool plane (down, along) the tip is
-  (R cos psi - e cos N phi, R sin psi - e sin N phi) from O: z gains - e (1 - cos N phi), the position along the slot
-  - e sin N phi. Eq. 14 prints m for N (eq. 15/16 write N); N is a field because the eccentric's flattening holds
-  only while N times the slot's half angle on the tool circle stays well below 1 (N = m = 24 leaves a W-shaped bottom
-  of tens of micrometres on the default coupling). At M the tip's horizontal speed is omega_t (R - N e) (eq. 15 at
-  phi = 0: V1 - V2), so the setting angle keeps V radial there with eq. 1 on R - N e.
-* ``"cyclic_ratio"``: the speed ratio varied cyclically, q = ``ratio_cycles`` cycles per tool revolution (q m per
-  workpiece revolution): a = phi / m - A (1 - cos q phi), A = ``ratio_amplitude`` [rad]; the ratio at M stays 1 / m.
-  :func:`straight_slot_amplitude` is the A that cancels the centre line's bow to second order.
-
-Both controls are geared to the head angle phi, so an element at beta_j != 0 meets them at the phase N beta_j
-(q beta_j): only the element at beta = 0 gets the flat / straight setting exactly.
-
-The cut: the head plunges with feed S per revolution (the seed's z, per element angle) until the depth is reached,
-then turns one more workpiece revolution at full depth (spark-out). The xy motion does not depend on the feed, so
-every plunge pass is the final pass lifted by depth - feed >= 0: the slot is the final passes' swept volume. Each
-element is a thin plate in the plane of the tool axis and its radius: a straight tip edge of width ``edge_width``
-along the tool axis, flanks opening by ``flank_angle``, ``element_height`` high.
-
-The exact slot: the slot bottom along the slot's radial centre line (the lowest z the tip edge reaches over each
-point, :func:`exact_bottom`) and the slot's sides at a height (:func:`exact_sides`), roots on the element's motion
-(to 1e-9 mm); :class:`ExactSlots` hands them to the measurement (:mod:`metrology.face_slots`: bottom form, side
-lines, slot spacing), which measures the manifold solid of :func:`cut_slots` the same way.
+The coupling and its setup, with the seed's kinematic controls (fixed, eccentric eq. 14, cyclic speed ratio, the
+work's setting changed during the cut), are :class:`FaceCoupling`; the element's path is :func:`element_path`
+(eq. 5, its frames there), its setting sheet :func:`setting_sheet` (setting angle eq. 1, |V| eq. 4, the flat-bottom
+eccentricity, the straight-slot amplitudes). The exact slot (:func:`exact_bottom`, :func:`exact_sides`,
+:class:`ExactSlots`) and the manifold cut (:func:`cut_slots`) are measured alike by :mod:`metrology.face_slots`.
+Measured slots: docs/face-contours-and-turning.md, "Face tooth contours".
 """
 
 from __future__ import annotations
@@ -121,6 +80,26 @@ class FaceCoupling:
     (count, phase pitch ``element_pitch``, tip edge ``edge_width``, ``flank_angle``, ``element_height``); the
     ``control`` and its settings: eccentricity ``e`` and ``eccentric_ratio`` N, ``ratio_cycles`` q and
     ``ratio_amplitude`` A, ``setting_cycles`` q_s and ``setting_offset`` T (the work's setting changed during the cut).
+
+    The controls (``control``; the work setting: :func:`work_offset`):
+
+    * ``"fixed"``: eq. 5 as it stands. The bottom of a slot is the tool circle, so it is concave (deeper at M), and
+      the slot's centre line bows sideways by about s^2 / (R m cos lambda) at a distance s from M (V turns along
+      the slot).
+    * ``"eccentric"``: eq. 14. The head's centre is carried by an eccentric (radius e, axis O) turning N =
+      ``eccentric_ratio`` times per tool revolution (N m cycles per workpiece revolution, a multiple of m); at
+      phi = 0 the eccentric is at 180 deg (eq. 14's start), so in the tool plane (down, along) the tip is
+      (R cos psi - e cos N phi, R sin psi - e sin N phi) from O: z gains - e (1 - cos N phi), the position along the
+      slot - e sin N phi. Eq. 14 prints m for N (eq. 15/16 write N); N is a field because the eccentric's
+      flattening holds only while N times the slot's half angle on the tool circle stays well below 1 (N = m
+      leaves a W-shaped bottom). At M the tip's horizontal speed is omega_t (R - N e) (eq. 15 at phi = 0:
+      V1 - V2), so the setting angle keeps V radial there with eq. 1 on R - N e.
+    * ``"cyclic_ratio"``: the speed ratio varied cyclically, q = ``ratio_cycles`` cycles per tool revolution (q m
+      per workpiece revolution): a = phi / m - A (1 - cos q phi), A = ``ratio_amplitude`` [rad]; the ratio at M
+      stays 1 / m. :func:`straight_slot_amplitude` is the A that cancels the centre line's bow to second order.
+
+    The controls are geared to the head angle phi, so an element at beta_j != 0 meets them at the phase N beta_j
+    (q beta_j): only the element at beta = 0 gets the flat / straight setting exactly.
     """
 
     m: int = 24
@@ -339,7 +318,25 @@ def tip_position(c: FaceCoupling, phi: np.ndarray, beta: float, final: bool) -> 
 def element_path(c: FaceCoupling, phi: np.ndarray | float, element: int = 0, final: bool = False) -> np.ndarray:
     """The tip of element ``element`` in the workpiece frame, (..., 3) [mm], at head angles phi [rad]
     (phi = omega_t t; the seed's a m for the fixed setting): eq. 5 with the control's terms. ``final`` replaces the
-    seed's feed term S psi / (2 pi) by the full depth (the spark-out pass)."""
+    seed's feed term S psi / (2 pi) by the full depth (the spark-out pass).
+
+    Frames and the seed's quantities. The workpiece frame turns with the workpiece (axis z, the slotted face at
+    z = 0, material below). The tool head (radius R to the element tips) turns in a vertical plane about a
+    horizontal axis; its angle phi is the time parameter. The workpiece angle is a = phi / m (eq. 11), so each tool
+    revolution passes one slot and slot k's centre line is the radial line at 2 pi k / m. Element j sits at the
+    phase beta_j on the head (a sector of ``elements`` elements ``element_pitch`` apart, centred on phi); its own
+    angle is psi = phi + beta_j. The head's centre is above the point M at radius L (seed: L, the distance of the
+    line through M perpendicular to the tool axis, i.e. the vertical through M, from the workpiece axis), the tool
+    plane is turned by the setting angle lambda from the radial line OM (eq. 1, lambda = arcsin(L / (R m))). The
+    tip of element j is (eq. 5)
+
+        x = L cos a + R sin psi cos(a - lambda),   y = L sin a + R sin psi sin(a - lambda),
+        z = R (1 - cos psi) - S psi / (2 pi).
+
+    The seed prints cos(a + lambda): with a counted as in its x = L cos a the element's velocity at M is radial (the
+    condition eq. 1 is derived from) only for the tool plane at a - lambda (the tangential speed at M is
+    omega_w (L - R m sin lambda) = 0), so the path uses a - lambda; lambda itself is eq. 1's positive angle.
+    """
     if not 0 <= element < c.elements:
         raise ValueError(f"element: must be in 0..{c.elements - 1}, got {element}")
     phi = np.asarray(phi, dtype=float)
@@ -589,7 +586,10 @@ def exact_sides(c: FaceCoupling, radii: np.ndarray, height: float, slot: int = 0
 @dataclass(frozen=True, eq=False)
 class ExactSlots:
     """The exact slots of ``coupling`` as the measurement probes them (:class:`metrology.face_slots.SlottedFace`):
-    :func:`exact_bottom` (every slot's) and :func:`exact_sides`, roots on the elements' motion."""
+    :func:`exact_bottom` (every slot's: the lowest z the tip edge reaches over each point of the slot's radial
+    centre line) and :func:`exact_sides` (the slot's sides at a height), roots on the elements' motion (to 1e-9 mm).
+    The measurement (bottom form, side lines, slot spacing) measures the manifold solid of :func:`cut_slots` the
+    same way."""
 
     coupling: FaceCoupling
 
@@ -646,7 +646,10 @@ def face_blank(c: FaceCoupling, tol: float = SWEEP_TOLERANCE, base: float = 2.0)
 
 
 def plate_corners(c: FaceCoupling, phi: np.ndarray, beta: float) -> np.ndarray:
-    """The element plate's four corners (..., 4, 3) on the final pass: the tip edge's ends and the top's."""
+    """The element plate's four corners (..., 4, 3) on the final pass: the tip edge's ends and the top's.
+
+    Each element is a thin plate in the plane of the tool axis and its radius: a straight tip edge of width
+    ``edge_width`` along the tool axis, flanks opening by ``flank_angle``, ``element_height`` high."""
     u, n, centre, zc, _ = tool_frame(c, phi)
     psi = phi + beta
     u3 = np.concatenate([u, np.zeros((*u.shape[:-1], 1))], axis=-1)
@@ -725,7 +728,12 @@ def slot_hulls(c: FaceCoupling, slot: int, tol: float = SWEEP_TOLERANCE) -> tupl
 
 
 def cut_slots(c: FaceCoupling, slots: tuple[int, ...] = (0, 1), tol: float = SWEEP_TOLERANCE) -> FaceCut:
-    """The face blank with the slots' swept volumes removed (one batched boolean); ``tol`` [mm] the chord error."""
+    """The face blank with the slots' swept volumes removed (one batched boolean); ``tol`` [mm] the chord error.
+
+    The cut: the head plunges with feed S per revolution (the seed's z, per element angle) until the depth is
+    reached, then turns one more workpiece revolution at full depth (spark-out). The xy motion does not depend on the
+    feed, so every plunge pass is the final pass lifted by depth - feed >= 0: the slot is the final passes' swept
+    volume. :mod:`metrology.face_slots` measures the solid as it measures :class:`ExactSlots`."""
     t0 = time.perf_counter()
     pieces, worst = [], 0.0
     for k in slots:

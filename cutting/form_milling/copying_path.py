@@ -1,35 +1,12 @@
 """The path of the profiled disc mill for spatially modified teeth (seed 003, fig. 1, its 15 steps).
 
-The copying method cuts a tooth space with a mill whose edge is the space's section: what it cannot copy from
-its edge (a profile that changes from section to section) it makes by its path. Each space is cut flank by
-flank: the mill is narrower than the space by a clearance c, so the *left pass* (path point shifted -c/2) makes
-the left flank with the mill's left edge and the *right pass* (+c/2) the right flank. Per pass the path carries
-the seed's two corrections at the path points z_i = i b / (2n): the tangential k_t (x, along the thickness) and
-the radial k_r (y, along the height), i.e. a level and a slope of that flank's profile per section.
-
-The steps (seed fig. 1), as :func:`plan_copying` runs them:
-
-1. initial data: the designed flank sections (:func:`cutting.form_milling.mill.designed_section`);
-2. initial path points (eq. 1): moved by how far the design moves the flank's point on the pitch cylinder at z_i,
-   along the thickness and the height (the seed takes them between the symmetry plane and the end face; a
-   design need not be symmetric, so both halves);
-3. the profiling plane through each path point, normal to the path (the seed puts it through each segment's
-   middle; through the points with the adjacent segments' mean direction the corrections land on the points);
-4. its intersection with the designed flank (eq. 2, Newton on z per profile point);
-5. the transfer angles psi_x = atan2(-T_y, T_z), psi_y = asin(T_x) of the path tangent T (eqs. 4, 5);
-6. the section in tool coordinates, rotated by psi_x about x and psi_y about y (eq. 6);
-7./8. mean section over the path points (eq. 7) and the sections' RMS deviation from it (eq. 8); the mill edge
-   fitted to the mean section as a Bezier chain (eq. 9); the radial correction k_r (eq. 10: the edge, moved by
-   k_r along the height, meets the section's bottom and top points with one thickness offset) and the
-   tangential correction k_t (eqs. 11-15: that offset, the thickness deviation of the bottom and top points);
-9. the refined path points x = x_pr + k_t, y = y_pr + k_r, z = z_pr (eq. 16);
-10. the path fitted with cubic Bezier segments (eq. 17; a C2 spline through the points, exact on a parabola,
-    continued along its end tangents beyond the face so the mill runs in and out without a kink), or with the
-    seed's single cubic Bezier over the face (``path_form="bezier"``);
-11.-14. the profiling planes of the Bezier path, their sections and corrections again, until the path stands;
-15. the accuracy check: the flank the mill really cuts on the path (its exact swept surface, no deflections)
-    against the design at every path point; where it misses, the residual's level and slope over the profile
-    (least squares) correct the path and the check is repeated.
+The copying method cuts a tooth space with a mill whose edge is the space's section: what it cannot copy from its
+edge (a profile that changes from section to section) it makes by its path. Each space is cut flank by flank: the
+mill is narrower than the space by a clearance c, so the *left pass* (path point shifted -c/2) makes the left flank
+with the mill's left edge and the *right pass* (+c/2) the right flank. Per pass the path carries the seed's two
+corrections at the path points z_i = i b / (2n): the tangential k_t (x, along the thickness) and the radial k_r (y,
+along the height), i.e. a level and a slope of that flank's profile per section. :func:`plan_copying` runs the steps
+(listed there) into a :class:`CopyingPlan`. What the plans achieve: docs/form-milling.md, "The mill and its path".
 """
 
 from __future__ import annotations
@@ -473,7 +450,32 @@ def plan_copying(
 ) -> CopyingPlan:
     """The seed's 15 steps for ``gear`` carrying ``design``: the mill, both passes' paths and the accuracy check
     (``checks`` rounds at most; 0: none). ``path_form``: "spline" (a C2 spline through the path points) or
-    "bezier" (the seed's single cubic Bezier, eq. 17)."""
+    "bezier" (the seed's single cubic Bezier, eq. 17).
+
+    The steps (seed fig. 1):
+
+    1. initial data: the designed flank sections (:func:`cutting.form_milling.mill.designed_section`);
+    2. initial path points (eq. 1): moved by how far the design moves the flank's point on the pitch cylinder at z_i,
+       along the thickness and the height (the seed takes them between the symmetry plane and the end face; a
+       design need not be symmetric, so both halves);
+    3. the profiling plane through each path point, normal to the path (the seed puts it through each segment's
+       middle; through the points with the adjacent segments' mean direction the corrections land on the points);
+    4. its intersection with the designed flank (eq. 2, Newton on z per profile point);
+    5. the transfer angles psi_x = atan2(-T_y, T_z), psi_y = asin(T_x) of the path tangent T (eqs. 4, 5);
+    6. the section in tool coordinates, rotated by psi_x about x and psi_y about y (eq. 6);
+    7./8. mean section over the path points (eq. 7) and the sections' RMS deviation from it (eq. 8); the mill edge
+       fitted to the mean section as a Bezier chain (eq. 9); the radial correction k_r (eq. 10: the edge, moved by
+       k_r along the height, meets the section's bottom and top points with one thickness offset) and the
+       tangential correction k_t (eqs. 11-15: that offset, the thickness deviation of the bottom and top points);
+    9. the refined path points x = x_pr + k_t, y = y_pr + k_r, z = z_pr (eq. 16);
+    10. the path fitted with cubic Bezier segments (eq. 17; a C2 spline through the points, exact on a parabola,
+        continued along its end tangents beyond the face so the mill runs in and out without a kink), or with the
+        seed's single cubic Bezier over the face (``path_form="bezier"``);
+    11.-14. the profiling planes of the Bezier path, their sections and corrections again, until the path stands;
+    15. the accuracy check: the flank the mill really cuts on the path (its exact swept surface, no deflections)
+        against the design at every path point; where it misses, the residual's level and slope over the profile
+        (least squares) correct the path and the check is repeated.
+    """
     radius = mill_diameter / 2
     L = section_rolls(gear)
     lf, la = form_roll_length(gear), roll(gear, gear.tip_diameter_value)

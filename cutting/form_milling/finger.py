@@ -2,28 +2,11 @@
 
 A finger mill is an end mill whose axis is normal to the gear axis, along the tooth space's radial symmetry line
 y_s, its tip towards the root: an external gear's space is milled from outside (axis +y_s into the mill), an internal
-gear's from inside the ring (axis -y_s), which no disc mill reaches. It is a solid of revolution: at the distance v
-from its tip along its axis its radius is rho(v), a chain of cubic Bezier segments (seed eq. 9,
-:meth:`cutting.form_milling.mill.BezierChain.fit`) fitted to the space's section, from the root (the tip, v = 0)
-to TIP_MARGIN mn beyond the tip circle; below the lowest section point (an external gear's form circle) the chain
-runs on along its end tangent down to the tip, whose end is flat.
-
-Fed along the face (z) the mill's transverse silhouette is x = +-rho(v) about its axis, so a mill narrower than the
-space by a clearance c (rho(v) the flank section's distance from an axis c/2 off the symmetry line) cuts one flank
-exactly with each pass, like the disc mill: the pass of the ``side`` flank runs with the axis shifted c/2 towards
-that flank (:func:`finger_pass`). Its path point (x_tr, y_tr) is the tip centre in the space frame, nominally
-(+-c/2, r_f). The mill answers :class:`cutting.form_milling.mill.Mill` (its pose's centre is the tip centre, its
-axial table v -> rho(v) = R - h(v), R its largest radius), so the exact swept surface
-(:class:`cutting.form_milling.sweep.MilledGear`) and the manifold removal
-(:func:`cutting.form_milling.removal.cut_gear`) take it as they take the disc mill.
-
-An internal gear's tooth space narrows towards its root (it is an external gear's tooth turned inside out): its
-finger mill is thinnest at its tip.
-
-On a helical gear the finger follows the space's screw motion and its radius is the envelope of the helicoid (the
-flank's normal meets its axis, as the set-over disc's in :mod:`cutting.form_milling.helical`). With a design
-(flank modifications) on a spur gear, :func:`plan_finger` runs the seed's steps for the finger's path (its axis
-kept along the symmetry line) and checks them on the exact swept surface (step 15).
+gear's from inside the ring (axis -y_s), which no disc mill reaches. :class:`FingerMill` is the mill (fitted to the
+space by :func:`fit_finger_mill`), :func:`finger_pass` a pass, :func:`plan_finger` the seed's steps for its path on a
+design; the exact swept surface (:class:`cutting.form_milling.sweep.MilledGear`) and the manifold removal
+(:func:`cutting.form_milling.removal.cut_gear`) take it as they take the disc mill. What it cuts:
+docs/form-milling.md, "The finger mill".
 """
 
 from __future__ import annotations
@@ -144,7 +127,17 @@ def finger_profile(
 class FingerMill:
     """The profiled finger mill: ``flank`` the chain (v, rho) [mm] of its radius along its axis from the lowest fitted
     point up (v from the tip), ``teeth`` its flutes; below the chain's first point the radius runs on along its
-    end tangent down to the tip (v = 0)."""
+    end tangent down to the tip (v = 0).
+
+    A solid of revolution: at the distance v from its tip along its axis its radius is rho(v), a chain of cubic
+    Bezier segments (seed eq. 9, :meth:`cutting.form_milling.mill.BezierChain.fit`) fitted to the space's section,
+    from the root (the tip, v = 0) to TIP_MARGIN mn beyond the tip circle; below the lowest section point (an
+    external gear's form circle) the chain runs on to the tip, whose end is flat. It answers
+    :class:`cutting.form_milling.mill.Mill` (its pose's centre is the tip centre, its axial table
+    v -> rho(v) = R - h(v), R its largest radius). An internal gear's tooth space narrows towards its root (it is an
+    external gear's tooth turned inside out): its finger mill is thinnest at its tip. On a helical gear its radius is
+    the envelope of the helicoid (the flank's normal meets its axis, as the set-over disc's in
+    :mod:`cutting.form_milling.helical`; :func:`finger_profile`)."""
 
     flank: BezierChain
     teeth: int = 4
@@ -290,7 +283,12 @@ def finger_pass(
     """The poses (gear frame) of the ``side`` pass of tooth space ``space`` at face positions ``z`` [mm]: the tip
     centre on the path point (default the nominal one, :func:`path_point`; else ``xy`` (n, 2) in the space frame),
     the axis along the space's symmetry line into the mill; on a helical gear in the space frame of each face
-    position (the space's screw motion: turned about the gear axis by 2 pi / p_z per mm of feed)."""
+    position (the space's screw motion: turned about the gear axis by 2 pi / p_z per mm of feed).
+
+    Fed along the face (z) the mill's transverse silhouette is x = +-rho(v) about its axis, so a mill narrower than
+    the space by a clearance c (rho(v) the flank section's distance from an axis c/2 off the symmetry line) cuts one
+    flank exactly with each pass, like the disc mill: the pass of the ``side`` flank runs with the axis shifted c/2
+    towards that flank. Its path point (x_tr, y_tr) is the tip centre in the space frame, nominally (+-c/2, r_f)."""
     z = np.asarray(z, dtype=float)
     if xy is None:
         xy = np.broadcast_to(path_point(gear, side, clearance), (len(z), 2))

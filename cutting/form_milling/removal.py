@@ -1,40 +1,12 @@
 """Form milling's removal with manifold3d: the mill's swept volume taken out of the blank, one tooth space after
 another (the chips, the forces' volumes, gear.stl; the micrometre truth is :mod:`cutting.form_milling.sweep`).
 
-The mill (a solid of revolution) is cut into frusta along its axis where its profile bends by more than its share of
-the tolerance; a frustum is convex, so what it sweeps between two poses that differ by a straight move is (close to)
-the convex hull of its two placements. Each circle of a frustum is a polygon whose chords stay within its share of
-it, and only where that circle can reach the blank: a disc's circles only over the arc towards the gear axis that
-comes within the tooth depth (+ 2 tol, + 0.05 rad) of the tip circle, per circle from its own radius (a circle
-higher up the edge reaches less; a frustum that stays above the tip circle is dropped); a finger mill's all round.
-The part of a disc beyond that arc's chord never comes inside the tip cylinder, so leaving it out changes nothing
-inside the blank. Per move, a disc's arc keeps every polygon point only within two steps of its contact (where its
-surface turns from the move's back to its front; the sweep's boundary is made there) and one every COARSE_STEP
-elsewhere: a point there is swept through by the polygon's inside as the move carries it on, so the removed
-volume is the same (the helical pass's chip to all digits) with half the hulls' facets (:func:`contact_band`).
-
-Why it holds the tolerance ``tol`` against :class:`cutting.form_milling.sweep.MilledGear` (the exact surface):
-
-- the profile (PROFILE_SHARE = 0.3 tol): each frustum's generator is a chord of the profile within it (outside the
-  mill where its side is concave, as on both flanks of a space, inside where it is convex);
-- the circles (CIRCLE_SHARE = 0.5 tol): polygon chords within it, inside;
-- the path (PATH_SHARE = 0.4 tol): the poses are thinned (:func:`thin_moves`) to the fewest whose straight moves
-  keep every point of the cutting part, at every recorded pose between, within it of where the straight move puts
-  it. The mill is rigid, so a point's miss of its chord is affine in the point and its length convex: the largest
-  is at a corner of the box (mill frame) of the rings' polygon points, and those 8 are checked. No screw and no
-  straight feed is assumed: recorded (simulated machine) passes are thinned alike (their wobble keeps more poses);
-- the rest (0.3 tol on the outside) is the margin for the hull of a turning frustum, which exceeds its sweep by a
-  term of first order in the move's turn times the length of its facets between polygon points (a translation's
-  hull is its sweep exactly); docs/form-milling.md gives the figures measured on a helical pass that set the split.
-
-Hulls and their union are what cost: manifold's booleans cost with the operands' facets whose boxes overlap, and
-thin stacked slabs with large tilted facets overlap each other's boxes everywhere (docs/form-milling.md, "The
-removal's figures"). So each move's hulls are built and unioned in the move's own frame (the mill's axis along z:
-the slabs stack along z and their facets' boxes stay thin), only those that can meet the blank (beyond an end face
-or the tip cylinder's tangent plane they cannot), and moved back by the pose's rigid transform; then the moves are
-subtracted one after another (their union first costs more) from a local stock: the solid's part in the box of the
-space's moves, put back after (a boolean's cost grows with the solid it cuts). The union of a move is the same set
-in either frame, so the tolerance argument is unchanged by it.
+The mill, a solid of revolution, is cut into frusta (:func:`frusta_points`); each straight move between thinned poses
+(:func:`thin_moves`) sweeps the convex hulls of their two placements (:func:`swept_moves`), and :func:`cut_gear`
+subtracts the moves space by space. The tolerance ``tol`` is shared between the profile, the circles and the path
+(PROFILE_SHARE, CIRCLE_SHARE, PATH_SHARE), argued against :class:`cutting.form_milling.sweep.MilledGear` in
+:func:`swept_moves`; why the moves are subtracted one by one: :func:`cut_gear`. The figures that set the design:
+docs/form-milling.md, "The removal's figures".
 """
 
 from __future__ import annotations
@@ -166,7 +138,16 @@ def pose_frames(p: MillPassPoses) -> np.ndarray:
 def frusta_points(gear: Gear, mill: Mill, tol: float) -> list[np.ndarray]:
     """Per frustum that can reach the blank, the points of its two circles' polygons in the mill's frame (e1, e2,
     a): chords within ``tol/2``; a disc's over the arc of each circle that comes within the tooth depth + 2 ``tol``
-    of its lowest point's circle (and 0.05 rad more), a finger mill's all round."""
+    of its lowest point's circle (and 0.05 rad more), a finger mill's all round.
+
+    The mill is cut into frusta along its axis where its profile bends by more than its share of the tolerance
+    (:func:`profile_slices`); a frustum is convex, so what it sweeps between two poses that differ by a straight move
+    is (close to) the convex hull of its two placements. Each circle of a frustum is a polygon whose chords stay
+    within its share, and only where that circle can reach the blank: a disc's circles only over the arc towards the
+    gear axis that comes within the tooth depth (+ 2 tol, + 0.05 rad) of the tip circle, per circle from its own
+    radius (a circle higher up the edge reaches less; a frustum that stays above the tip circle is dropped). The part
+    of a disc beyond that arc's chord never comes inside the tip cylinder, so leaving it out changes nothing inside
+    the blank."""
     us, hs = profile_slices(mill, tol * PROFILE_SHARE)
     depth = gear.tip_radius - gear.root_radius + 2 * tol
     mill_reach = mill.reach_angle(depth)
@@ -232,7 +213,9 @@ def contact_band(q: np.ndarray, turn: np.ndarray, shift: np.ndarray, coarse: flo
     to pose ``q @ turn.T + shift``: all of them within two polygon steps of where the frustum's surface turns from
     the move's back to its front (n . m changes sign: the contact, whose sweep is the sweep's boundary), one every
     ``coarse`` [rad] elsewhere and the arc's ends (a point there is swept through by the polygon's inside, which
-    the move carries over it: leaving it out of the hull leaves nothing behind). All if the sign never changes."""
+    the move carries over it: leaving it out of the hull leaves nothing behind). All if the sign never changes.
+    The removed volume is the same with about half the hulls' facets (docs/form-milling.md, "The removal's
+    figures")."""
     n = len(q) // 2
     rings = (q[:n], q[n:])
     r = [float(np.hypot(*ring[0, :2])) for ring in rings]
@@ -255,7 +238,29 @@ def contact_band(q: np.ndarray, turn: np.ndarray, shift: np.ndarray, coarse: flo
 def swept_moves(gear: Gear, mill: Mill, p: MillPassPoses, tol: float) -> tuple[list[mf.Manifold], int]:
     """The pass's swept volume within ``tol`` [mm] as one solid per straight move (the union of its frusta's hulls,
     built in the move's frame and moved back), moves that cannot meet the blank left out; and the number of hulls.
-    The tolerance's shares: the profile's chords, the circles' chords, the path (:func:`thin_moves`)."""
+
+    Why it holds the tolerance ``tol`` against :class:`cutting.form_milling.sweep.MilledGear` (the exact surface):
+
+    - the profile (PROFILE_SHARE = 0.3 tol): each frustum's generator is a chord of the profile within it (outside
+      the mill where its side is concave, as on both flanks of a space, inside where it is convex);
+    - the circles (CIRCLE_SHARE = 0.5 tol): polygon chords within it, inside;
+    - the path (PATH_SHARE = 0.4 tol): the poses are thinned (:func:`thin_moves`) to the fewest whose straight moves
+      keep every point of the cutting part, at every recorded pose between, within it of where the straight move
+      puts it. The mill is rigid, so a point's miss of its chord is affine in the point and its length convex: the
+      largest is at a corner of the box (mill frame) of the rings' polygon points, and those 8 are checked. No screw
+      and no straight feed is assumed: recorded (simulated machine) passes are thinned alike (their wobble keeps more
+      poses);
+    - the rest (0.3 tol on the outside) is the margin for the hull of a turning frustum, which exceeds its sweep by
+      a term of first order in the move's turn times the length of its facets between polygon points (a
+      translation's hull is its sweep exactly); docs/form-milling.md gives the figures measured on a helical pass
+      that set the split.
+
+    Hulls and their union are what cost: manifold's booleans cost with the operands' facets whose boxes overlap, and
+    thin stacked slabs with large tilted facets overlap each other's boxes everywhere. So each move's hulls are built
+    and unioned in the move's own frame (the mill's axis along z: the slabs stack along z and their facets' boxes
+    stay thin), only those that can meet the blank (beyond an end face or the tip cylinder's tangent plane they
+    cannot), and moved back by the pose's rigid transform. The union of a move is the same set in either frame, so
+    the tolerance argument is unchanged by it."""
     pieces = frusta_points(gear, mill, tol)
     arcs = mill.reach_angle(gear.tip_radius - gear.root_radius + 2 * tol) < math.pi  # a disc's
     frames = pose_frames(p)
@@ -295,8 +300,9 @@ def cut_gear(
     progress: Callable[[float], None] | None = None,
 ) -> FormCutResult:
     """The blank with every pass's swept volume removed, space after space, move after move; ``tol`` [mm] the
-    sweep's error (module docstring). Each space is cut from a local stock: the solid's part inside the box of its
-    moves, put back after (a boolean's cost grows with the solid it cuts)."""
+    sweep's error (:func:`swept_moves`). The moves are subtracted one after another (their union first costs more),
+    each space from a local stock: the solid's part inside the box of its moves, put back after (a boolean's cost
+    grows with the solid it cuts)."""
     solid = blank(gear)
     chips = []
     hulls = 0

@@ -1,27 +1,11 @@
 """Compiled kernels of the dexel workpiece (numba): tooth passages cut the dexel lines, exactly, in time order.
 
-The lines are grouped in cells (one fan: a tooth space in one slice); a cell's lines share their candidate
-passages, and cells are cut in parallel. Per line, the passages that can reach it are taken in the order the machine
-made them. A passage removes from the line the points whose rake-plane image lies inside the edge outline at the
-instant the rake plane passes them (:mod:`cutting.skiving.exact_sweep`); only the line's remaining material matters,
-so each
-material interval is marched through:
-
-- far from the edge, the pose table and a signed distance raster of the outline give the in-plane distance e(d)
-  of the line's point to the outline within ``delta`` (as :func:`cutting.skiving.exact_kernels.in_plane` gives it to the
-  measurement's estimate); e is 1-Lipschitz in the plane, so a step whose in-plane track is shorter than
-  |e| - delta cannot cross the outline: far from the passage the steps are long, near it they shrink to ``fine``;
-- on a fine step the margin of the outline polygon itself is taken at the table's in-plane point (within
-  ``POSE_ERROR`` of the truth: the pose is quadratic between table samples), its sign change found by the Illinois
-  method, and the crossing polished with the margin solved exactly on the motion
-  (:func:`cutting.skiving.exact_solve.margin_at`, the measurement's own solve) until it moves less than ``tol``;
-  where the
-  table's margin is within ``POSE_ERROR`` of zero the exact margin decides.
-
-What a passage removes of a line is subtracted from its material intervals, and the chip's share is summed per
-(cell, passage): volume (the polar quadrature of :mod:`cutting.skiving.dexel_lines`), first moment (centroid), removed
-length, chip thickness normal to the nominal boundary (largest, and summed over the footprint), the footprint on the
-boundary and the profile length it covers.
+Compiled so that the dexel removal cuts real gears at machine speed: :func:`cut_cells` cuts the lines cell by cell
+in parallel (a nogil kernel on a thread pool) and sums each passage's chip (the scheme there); :func:`_march` marches
+a line's material through one passage (estimate, crossing, exact polish there). A passage removes from a line the
+points whose rake-plane image lies inside the edge outline at the instant the rake plane passes them
+(:mod:`cutting.skiving.exact_sweep`). The dexel workpiece and its measured figures: docs/cutting.md, "The dexel
+workpiece: real gears at machine speed".
 """
 
 from __future__ import annotations
@@ -217,7 +201,18 @@ def _march(tab, motion, tables, outline, g, lo, hi, p, u, i, a, b, fine, tol, ou
     crosses the outline once (its ends surely on opposite sides, and the in-plane track no longer than the two
     distances add up to: no room for a second crossing deeper than the estimate's error), then found exactly.
     Near the outline the step aims past it; steps that settle nothing shrink to ``fine``, where the margin itself
-    decides at the ends."""
+    decides at the ends.
+
+    - far from the edge, the pose table and a signed distance raster of the outline give the in-plane distance e(d)
+      of the line's point to the outline within ``delta`` (as :func:`cutting.skiving.exact_kernels.in_plane` gives
+      it to the measurement's estimate); e is 1-Lipschitz in the plane, so a step whose in-plane track is shorter
+      than |e| - delta cannot cross the outline: far from the passage the steps are long, near it they shrink to
+      ``fine``;
+    - on a fine step the margin of the outline polygon itself is taken at the table's in-plane point (within
+      ``POSE_ERROR`` of the truth: the pose is quadratic between table samples), its sign change found by the
+      Illinois method, and the crossing polished with the margin solved exactly on the motion
+      (:func:`cutting.skiving.exact_solve.margin_at`, the measurement's own solve) until it moves less than ``tol``;
+      where the table's margin is within ``POSE_ERROR`` of zero the exact margin decides."""
     ok0, e0, dl0, x0, y0 = _estimate(tab, g, lo, hi, p, u, i, a)
     work[0] += 1
     if not ok0:  # a break (cut_cells): the rake plane meets a by the window's end sample, rounding put it outside
@@ -457,6 +452,14 @@ def cut_cells(
     """Cut the lines of fan ``cells[k]`` (lines cells[k] * rays ... + rays - 1) by the passages
     ``cell_g[cell_ptr[k]:cell_ptr[k + 1]]`` (in time order), for every k < ``n_cells`` that this thread takes from
     ``counter`` (cutting.parallel.run_shared: the threads share the cells one by one).
+
+    The lines are grouped in cells (one fan: a tooth space in one slice); a cell's lines share their candidate
+    passages, and cells are cut in parallel. Per line, the passages that can reach it are taken in the order the
+    machine made them; only the line's remaining material matters, so each material interval is marched through
+    (:func:`_march`). What a passage removes of a line is subtracted from its material intervals, and the chip's
+    share is summed per (cell, passage): volume (the polar quadrature of :mod:`cutting.skiving.dexel_lines`), first
+    moment (centroid), removed length, chip thickness normal to the nominal boundary (largest, and summed over the
+    footprint), the footprint on the boundary and the profile length it covers.
 
     ``p``, ``u``, ``weight``: every line's origin, direction and weights (n, 2): an interval [d1, d2] holds
     w0 (d2 - d1) + w1 (d2^2 - d1^2) / 2 of volume (parallel lines: w0, a fan's rays: w1); ``ray_cos``,

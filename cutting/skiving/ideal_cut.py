@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -11,6 +10,7 @@ import manifold3d as mf
 import numpy as np
 import trimesh
 
+from cutting.parallel import default_workers
 from cutting.skiving.dexel_cut import cut_dexel
 from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import CuttingEdge, make_edge
@@ -35,11 +35,6 @@ class CutReport:
 
 #: the removals: the dexel workpiece (default), or manifold3d booleans passage by passage (the reference)
 REMOVALS = ("dexel", "manifold")
-
-
-def default_workers() -> int:
-    """One worker process per core, at most 8."""
-    return max(1, min(os.cpu_count() or 1, 8))
 
 
 def cut_ideal(

@@ -1,28 +1,10 @@
 """Cutting forces of vibration turning (seed 004) with a round-nosed tool: the uncut chip at each spindle angle,
 Kienzle's main force on it, the feed and passive forces by fixed ratios.
 
-The chip (workpiece frame of :mod:`cutting.turning.vibration`: z axial along the feed, r radial). At the spindle
-angle theta the nose (radius r_eps, centre on r_c = r0 - a_p + r_eps) stands at z = z(theta) on the tool path; the
-surface the earlier turns left at that angle is the lower envelope of their nose circles, centres z_k = z(theta -
-2 pi k), no higher than r0. Equal circles with centres on one radius: the envelope at z is the circle of the
-nearest centre, so the new nose cuts only in its own cell between the midpoints to its nearest earlier passes
-behind (L) and ahead (R), and only where it lies below r0 (|z - z(theta)| < u0 = sqrt(r_eps^2 - (r_eps - a_p)^2)).
-The uncut chip section there,
-
-    A = int_lo^hi [min(r0, C(z - z_nb)) - C(z - z(theta))] dz,   C(u) = r_c - sqrt(r_eps^2 - u^2),
-
-(z_nb the nearest earlier centre), is closed form with F(u) = int sqrt(r_eps^2 - u^2) du (:func:`chip_section`).
-The engaged edge is the nose arc over (lo, hi), of length b; the equivalent chip thickness h = A / b (R. Woxen's
-equivalent chip thickness, 1932, used for round-nosed tools in place of f sin(kappa_r)). Plain turning (L = z - S0, no
-R): A = S0 a_p - int_{-S0/2}^{S0/2} (r_eps - sqrt(r_eps^2 - u^2)) du (S0 a_p less the crest's scallop). Where
-the vibration breaks the chip (:func:`cutting.turning.vibration.chip_breaks`: the path meets the foremost earlier
-pass, z(theta) = z_L) the cell is empty and A = 0; while the tool runs behind the foremost pass it only shaves
-the crest between the two earlier passes it lies between (A at most h(Delta) Delta, Delta their distance).
-
-Forces (on the tool; reversed on the workpiece): Kienzle's main (tangential) force F_c = kc(h) A, kc = kc1.1
-h^-mc of the job's material (:mod:`cutting.materials`, h no less than its H_MIN); the feed (axial, against the
-feed) force F_f = FEED_RATIO F_c and the passive (radial, pushing the tool off the work) force F_p = PASSIVE_RATIO
-F_c; the spindle torque M_c = F_c (r0 - a_p / 2) (the chip's mean radius).
+The lathe's carriage and spindle feel the cut through these forces, and a vibration that breaks the chip drops them
+to zero at every break. :func:`chip_section` (and its scalar :func:`chip_area`) is the uncut chip in closed form
+(its derivation there), :class:`TurningForces` the forces on it and the spindle torque. The measured forces and what
+they do to the crests: docs/face-contours-and-turning.md, "Cutting forces on the lathe".
 """
 
 from __future__ import annotations
@@ -101,8 +83,27 @@ def _sqrt_integral(u: np.ndarray, re: float) -> np.ndarray:
 
 
 def chip_section(nose: NoseGeometry, z: np.ndarray, previous: np.ndarray) -> ChipSection:
-    """The uncut chip (module text) of the nose at axial positions ``z`` [mm] (n,), the earlier passes through the
-    same angles at ``previous`` [mm] (n, K; NaN where there is none). Vectorised over n."""
+    """The uncut chip of the nose at axial positions ``z`` [mm] (n,), the earlier passes through the same angles at
+    ``previous`` [mm] (n, K; NaN where there is none). Vectorised over n.
+
+    The workpiece frame is that of :mod:`cutting.turning.vibration` (z axial along the feed, r radial). At the
+    spindle angle theta the nose (radius r_eps, centre on r_c = r0 - a_p + r_eps) stands at z = z(theta) on the tool
+    path; the surface the earlier turns left at that angle is the lower envelope of their nose circles, centres
+    z_k = z(theta - 2 pi k), no higher than r0. Equal circles with centres on one radius: the envelope at z is the
+    circle of the nearest centre, so the new nose cuts only in its own cell between the midpoints to its nearest
+    earlier passes behind (L) and ahead (R), and only where it lies below r0
+    (|z - z(theta)| < u0 = sqrt(r_eps^2 - (r_eps - a_p)^2)). The uncut chip section there,
+
+        A = int_lo^hi [min(r0, C(z - z_nb)) - C(z - z(theta))] dz,   C(u) = r_c - sqrt(r_eps^2 - u^2),
+
+    (z_nb the nearest earlier centre), is closed form with F(u) = int sqrt(r_eps^2 - u^2) du. The engaged edge is
+    the nose arc over (lo, hi), of length b; the equivalent chip thickness h = A / b (R. Woxen's equivalent chip
+    thickness, 1932, used for round-nosed tools in place of f sin(kappa_r)). Plain turning (L = z - S0, no R):
+    A = S0 a_p - int_{-S0/2}^{S0/2} (r_eps - sqrt(r_eps^2 - u^2)) du (S0 a_p less the crest's scallop). Where the
+    vibration breaks the chip (:func:`cutting.turning.vibration.chip_breaks`: the path meets the foremost earlier
+    pass, z(theta) = z_L) the cell is empty and A = 0; while the tool runs behind the foremost pass it only shaves
+    the crest between the two earlier passes it lies between (A at most h(Delta) Delta, Delta their distance).
+    """
     z = np.atleast_1d(np.asarray(z, dtype=float))
     prev = np.asarray(previous, dtype=float).reshape(len(z), -1)
     re, ap, r0 = nose.nose_radius, nose.depth, nose.radius
@@ -161,7 +162,12 @@ def chip_area(nose: NoseGeometry, z: float, behind: float, ahead: float) -> tupl
 
 @dataclass(frozen=True)
 class TurningForces:
-    """Kienzle's law on the chip section and the force ratios (module text)."""
+    """Kienzle's law on the chip section and the force ratios.
+
+    Forces on the tool (reversed on the workpiece): Kienzle's main (tangential) force F_c = kc(h) A, kc = kc1.1
+    h^-mc of the job's material (:mod:`cutting.materials`, h no less than its H_MIN); the feed (axial, against the
+    feed) force F_f = FEED_RATIO F_c and the passive (radial, pushing the tool off the work) force
+    F_p = PASSIVE_RATIO F_c; the spindle torque M_c = F_c (r0 - a_p / 2) (the chip's mean radius)."""
 
     nose: NoseGeometry
     material: Material

@@ -1,47 +1,13 @@
 """Vibration turning (seed 004, "Вибрационное точение"): the feed vibration, the crests it leaves and the chips
 it breaks.
 
-Workpiece frame: the tool stands at the spindle angle theta [rad, cumulative]; z is axial (the feed goes to
-+z), r radial. The round nose (radius r_eps) lies in the axial half plane at theta with its tip on the radius
-r0 - a_p, so its centre is on r_c = r0 - a_p + r_eps. The tool path is z(theta) = S0 theta / 2 pi + a(theta),
-S0 the feed per revolution, a(theta) the axial feed vibration (:class:`FeedVibration`).
-
-The surface at the angle phi is left by every pass of the tool through it, theta = phi + 2 pi k: the lower
-envelope of their nose circles, r(z) = min_k (r_c - sqrt(r_eps^2 - (z - z_k)^2)), no higher than r0
-(:func:`surface_profile`, sampled every 0.1 um). Between two paths Delta apart the crest is
-h(Delta) = r_eps - sqrt(r_eps^2 - Delta^2 / 4) ~ Delta^2 / 8 r_eps (:func:`crest_height`); between two neighbouring
-paths (sorted along z) no other circle reaches lower, so the crests follow from the path positions alone
-(:func:`predicted_crests`), which the envelope must reproduce.
-
-The seed: in plain turning the axial distance between the paths of neighbouring turns is Delta = S0, the crest
-h(S0). With symmetric vibration Delta = z(phi + 2 pi) - z(phi) varies from 0 to Delta_max > 2 S0 and the crests
-rise; asymmetric vibration, xi = T_in / T_out != 1 (time moving with the feed over time moving back within one
-cycle), lowers them. Vibration breaks the chip: where the path meets the surface the earlier turns left, the
-uncut chip thickness is zero (:func:`chip_breaks`).
-
-What the geometry gives (S0 = 0.2 mm, r_eps = 0.8 mm, a_p = 0.3 mm, A = 0.2 mm; Rt over 72 angles, the tests):
-
-- plain turning: every crest h(S0) = 6.275 um, no chip breaks;
-- the crests follow the sorted neighbours, not the successive turns: at f = n + 1/q cycles/rev the paths q turns
-  apart are always q S0 apart, so no crest gap exceeds min(Delta_max, q S0);
-- f = 2.25 (a quarter cycle's shift a turn): symmetric (soft) Delta = S0 +- 2A sin(pi/4), Delta_max = 2.41 S0,
-  Rt_max 37.1 um, mean crest 12.1 um; asymmetric xi = 3 (in-feed three times as long as the retraction): soft
-  Rt_max 25.3 / mean 9.2 um, hard 17.6 / 8.2 um (Delta_max 1.67 S0): the seed's statement holds, and all three
-  break the chip 2.25 times a revolution. The slow in-feed keeps successive paths nearly parallel (hard:
-  Delta = S0 + 2A s / p, s = 1/4 the shift, p = 3/4), the quick retraction crosses the previous path and
-  breaks the chip;
-- it does not hold for every choice. That the asymmetry leads the shift (xi > 1 with frac(f) < 1/2, xi < 1 with
-  frac(f) > 1/2) is necessary: at f = 2.25 xi = 1/3 raises Rt_max to 57.5 um. It is not sufficient: at f = 2.45
-  the hard xi = 3 form leaves Rt_max 19.0 um against 16.2 um of the symmetric hard (triangle) form. At
-  f = n + 1/2 the paths two turns apart are 2 S0 apart, so once the chip breaks the largest crest is
-  h(2 S0) = 25.4 um whatever xi, and at f = 1.5 the hard xi = 3 form raises the mean crest (9.4 against 8.0 um).
-
-The seed's figure labels the asymmetric forms "soft" (a > b) and "hard" (a < b); here ``form`` is the waveform
-(smooth or straight strokes) and xi, either side of 1, is independent of it.
-
-:func:`cut_workpiece` cuts the same surface with manifold3d (the nose swept along the helix, subtracted from a
-cylinder). Both are measured (crests, Rt over the spindle angles, against the prediction) by
-:mod:`metrology.turned_surface`: the envelope and the solid's axial section.
+The seed: in plain turning the paths of neighbouring turns are Delta = S0 apart; a symmetric feed vibration varies
+Delta from 0 to Delta_max > 2 S0 and the crests rise, an asymmetric one (xi = T_in / T_out != 1) lowers them, and
+the vibration breaks the chip. :class:`TurningSetup` with its :class:`FeedVibration` is the tool path (its frame
+there), :func:`surface_profile` the surface it leaves, :func:`predicted_crests` the crests from the path positions
+alone, :func:`chip_breaks` where the chip breaks; :func:`cut_workpiece` cuts the same surface with manifold3d. Both
+are measured by :mod:`metrology.turned_surface` (the envelope and the solid's axial section). What the geometry
+gives, and where the seed's statement holds: docs/face-contours-and-turning.md, "Vibration turning: the geometry".
 """
 
 from __future__ import annotations
@@ -93,7 +59,9 @@ class FeedVibration:
     form : str
         "soft": half cosines, -A cos(pi u / p) rising and A cos(pi (u - p) / (1 - p)) falling (u the cycle's
         phase); smooth, a pure cosine at xi = 1. "hard": straight rise and fall (a sawtooth; a triangle at
-        xi = 1). Both have zero mean over a cycle.
+        xi = 1). Both have zero mean over a cycle. The seed's figure labels the asymmetric forms "soft" (a > b)
+        and "hard" (a < b); here ``form`` is the waveform (smooth or straight strokes) and xi, either side of 1,
+        is independent of it.
     """
 
     amplitude: float
@@ -207,6 +175,11 @@ def crest_height(delta: np.ndarray | float, nose_radius: float, depth: float) ->
 @dataclass(frozen=True)
 class TurningSetup:
     """Turning with a round-nosed tool, plain or with a feed vibration.
+
+    Workpiece frame: the tool stands at the spindle angle theta [rad, cumulative]; z is axial (the feed goes to
+    +z), r radial. The round nose (radius r_eps) lies in the axial half plane at theta with its tip on the radius
+    r0 - a_p, so its centre is on r_c = r0 - a_p + r_eps. The tool path is z(theta) = S0 theta / 2 pi + a(theta),
+    S0 the feed per revolution, a(theta) the axial feed vibration (:class:`FeedVibration`).
 
     Parameters
     ----------
@@ -352,7 +325,8 @@ def predicted_crests(
 ) -> Crests:
     """The crests from the path positions alone: the passes z_k through phi sorted along z, each neighbouring
     pair Delta apart leaves h(Delta) (:func:`crest_height`) at its midpoint (equal circles meet there); no other
-    circle reaches between two neighbours, so none is shadowed."""
+    circle reaches between two neighbours, so none is shadowed. The envelope of :func:`surface_profile` must
+    reproduce them."""
     n = checked_revs(setup, n_revs)
     lo, hi = setup.window(n)
     zk = np.sort(setup.passes(phi, n))

@@ -1,40 +1,13 @@
 """The face-contour machine's electronic gearbox (seed 004: continuous indexing; the equal-coordinates scheme of
 seed 000 fig. 4 as its means): one pulse train couples the work, the eccentric and the infeed to the tool head.
 
-Seed 004 cuts the m radial slots of a face coupling by continuous indexing: the tool head (radius R, at the setting
-angle lambda = arcsin(L / (R m)), eq. 1) and the workpiece turn in the fixed ratio omega_t = m omega_w (eq. 11), the
-element's path is eq. 5 with S the feed per tool revolution, and the slots are corrected by one of the seed's two
-kinematic controls: an **eccentric** carrying the head (fig. 3, radius e, eq. 14; geared N times to the head, the N of
-eq. 15) or a **cyclic change of the speed ratio**. Every axis counts the pulses of **reference generator 14** (p
-pulses per head revolution):
-
-- tool head H: the generator's pulses themselves (divider 6 with kv = 1: the generator's frequency sets the head's
-  speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p; with ``hold_speed`` the generator's frequency
-  follows eq. 16 (:func:`cutting.face_contour.slots.held_speed_factor`): the head slows where the eccentric's speed
-  adds to the tip's, so the tip keeps its speed at M all round (every axis counts the same pulses: the paths in
-  phi stay the same, only their timing changes);
-- work spindle A: **frequency divider** 7 with k = m (the indexing ratio 1/m, eq. 11) -> **summator** 9, whose
-  second input carries the cyclic-ratio modulation - A (1 - cos q phi) of :func:`cutting.face_contour.slots.
-  workpiece_angle` (control "cyclic_ratio"; the CNC's function generator of the head's command angle) -> A;
-- eccentric E (control "eccentric"): a rate multiplier N (N pulses per generator pulse): the eccentric e geared N
-  times to the head, E = N phi;
-- cross slide Y (control "work_setting", the work's setting changed during the cut): the CNC's function generator of
-  the head's command angle, Y = T (1 - cos q_s phi) (:func:`cutting.face_contour.slots.work_offset`; q_s m cycles per
-  workpiece revolution);
-- infeed Z: rate multiplier ks (S / resolution pulses per p generator pulses: the seed's feed S per tool
-  revolution), gated by the CNC at the programmed depth (then the spark-out: one more workpiece revolution),
-  Z = - min(S phi / 2 pi, depth).
-
-**Master** (``master``): ``"generator"`` (the equal-coordinates scheme of seed 000 fig. 4, default): every axis
-counts generator 14's pulses, so the work, the eccentric and the cross slide follow the head's *command*; where the
-head lags it (its drive's torsion under the cutting torque, its speed dipping as an element crosses a slot) the slots
-move with the lag. ``"head"`` (the master-slave scheme of seed 001 fig. 2 on this machine): the head still follows the
-generator, but the slaves count the pulses of the direct encoder on the cutter spindle (its absolute angle behind
-the head drive; speed and acceleration from the same encoder), so they copy what the head really does.
-
-The pulse-to-analog converters turn each axis's fine count (its divider's content included, no +-1 pulse jitter)
-into the position command and the generator's frequency into the speed feed-forward; the axes' servos
-(:mod:`virtual_machine.controllers.cascade`) follow these commands.
+Seed 004 cuts the m radial slots of a face coupling with the tool head (radius R, at the setting angle lambda =
+arcsin(L / (R m)), eq. 1) and the workpiece turning in the fixed ratio omega_t = m omega_w (eq. 11), the element's
+path eq. 5 with S the feed per tool revolution, the slots corrected by one of the seed's kinematic controls: an
+**eccentric** carrying the head (fig. 3, radius e, eq. 14; geared N times to the head, the N of eq. 15) or a
+**cyclic change of the speed ratio**. :class:`ElectronicGearbox` makes every axis count the pulses of **reference
+generator 14** (its axes, its masters and its converters there); the axes' servos
+(:mod:`virtual_machine.controllers.cascade`) follow its commands.
 """
 
 from __future__ import annotations
@@ -57,6 +30,37 @@ class ElectronicGearbox:
     """Reference generator 14 -> head H; -> frequency divider 7 (1/m, eq. 11) -> summator 9 (+ cyclic-ratio
     modulation) -> work A; -> rate multiplier N -> eccentric E (fig. 3); -> rate multiplier ks (S per turn, eq. 5),
     gated at the depth -> infeed Z; function generator T (1 - cos q_s phi) -> cross slide Y.
+
+    Every axis counts the pulses of generator 14 (p pulses per head revolution):
+
+    - tool head H: the generator's pulses themselves (divider 6 with kv = 1: the generator's frequency sets the
+      head's speed, with a half-cosine run-up), phi = phi0 + 2 pi n / p; with ``hold_speed`` the generator's
+      frequency follows eq. 16 (:func:`cutting.face_contour.slots.held_speed_factor`): the head slows where the
+      eccentric's speed adds to the tip's, so the tip keeps its speed at M all round (every axis counts the same
+      pulses: the paths in phi stay the same, only their timing changes);
+    - work spindle A: **frequency divider** 7 with k = m (the indexing ratio 1/m, eq. 11) -> **summator** 9, whose
+      second input carries the cyclic-ratio modulation - A (1 - cos q phi) of
+      :func:`cutting.face_contour.slots.workpiece_angle` (control "cyclic_ratio"; the CNC's function generator of the
+      head's command angle) -> A;
+    - eccentric E (control "eccentric"): a rate multiplier N (N pulses per generator pulse): the eccentric e geared
+      N times to the head, E = N phi;
+    - cross slide Y (control "work_setting", the work's setting changed during the cut): the CNC's function
+      generator of the head's command angle, Y = T (1 - cos q_s phi) (:func:`cutting.face_contour.slots.work_offset`;
+      q_s m cycles per workpiece revolution);
+    - infeed Z: rate multiplier ks (S / resolution pulses per p generator pulses: the seed's feed S per tool
+      revolution), gated by the CNC at the programmed depth (then the spark-out: one more workpiece revolution),
+      Z = - min(S phi / 2 pi, depth).
+
+    **Master** (``master``): ``"generator"`` (the equal-coordinates scheme of seed 000 fig. 4, default): every axis
+    counts generator 14's pulses, so the work, the eccentric and the cross slide follow the head's *command*; where
+    the head lags it (its drive's torsion under the cutting torque, its speed dipping as an element crosses a slot)
+    the slots move with the lag. ``"head"`` (the master-slave scheme of seed 001 fig. 2 on this machine): the head
+    still follows the generator, but the slaves count the pulses of the direct encoder on the cutter spindle (its
+    absolute angle behind the head drive; speed and acceleration from the same encoder), so they copy what the head
+    really does.
+
+    The pulse-to-analog converters turn each axis's fine count (its divider's content included, no +-1 pulse jitter)
+    into the position command and the generator's frequency into the speed feed-forward.
 
     Parameters: the coupling ``c``, the head turn ``start_turn`` the run starts at (the axes where the programme has
     them then), the head's full speed ``tool_speed`` [rad/s], ``pulses_per_rev`` (command pulses per revolution of

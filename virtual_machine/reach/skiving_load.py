@@ -1,38 +1,12 @@
 """The cutting load a skiving job puts on its machine, estimated from the setting sheet before a run, and the check
 that the job's machine holds it (its motors' peak torques against the estimate x a margin).
 
-Per pass k, with the force law the co-simulation applies (cutting/forces.py: Kienzle, along each edge element's
-velocity, the chip thickness from the chip's volume over the swept area):
-
-1. Removed cross-section. A tooth space cut with the cutter standing delta short of its finishing position is the
-   space of the gear with profile shift x2 + delta/mn; its transverse area inside the blank is
-   S(delta) = integral of r (2 pi/z2 - 2 psi(r)) dr from its root (r_f + delta; ring gear: r_f - delta) to the tip
-   circle (psi: half the tooth's angular thickness, involute, held at its base-circle value below r_b). Pass k
-   removes A_k = S(full - d_k) - S(full - d_(k-1)) per space (d_k: cumulative depth, full: the full depth).
-2. Chip of one engagement. Each space is passed once per work revolution while the carriage moves the axial feed s,
-   so in the steady state (the engagement zone inside the face) an engagement takes V_k = A_k s.
-3. The engagement. One cutter tooth turns through the engagement window (the cutter angles at which its edge is
-   within the tip cylinder) at the pass's centre distance, the carriage at mid face, by the ideal kinematics. The
-   edge (the involute outline in elements of <= 0.2 mm, as the co-simulation's) inside the blank's envelope is the
-   chip width b(t); each element dl moves at v relative to the work. Mean chip thickness h = V_k / integral(sum dl
-   |v| dt) and kc = kc1.1 h^-mc x the rake factor (0 deg rake: 1.09), exactly as cutting/forces.py does.
-4. Loads. Each element pushes the workpiece with kc h dl along v (the cutter takes the opposite): a torque about
-   the work axis T2(phi) and one about the cutter axis T1(phi). Successive cutter teeth engage a cutter pitch
-   apart and overlap (2-6 teeth in the cut on the shipped jobs): the torques of all teeth are summed over one
-   pitch and the peak is taken. The mean power is the chips' energy rate, kc V_k z0 n0 (tested).
-
-How the estimate compares with the co-simulated peaks, and the margin that covers it: docs/machines.md ("The cut
-against the motors").
-
-Which motor holds which spindle, per structure (power through each chain; the motor's torque = the spindle's
-torque x the spindle's turn per motor turn):
-
-- mechatronic (S4): M1 tool spindle through tool_drive; M2 work spindle through work_drive; M3 the carriage's
-  axial cutting force and its unbalanced weight through the screw;
-- mechanical (S1): the main motor M1 drives the tool through the speed chain and the work through the chains behind
-  it: (P_tool + P_work) / omega_M1 against its breakdown torque (2.5 x main_motor_torque);
-- hydraulic-differential (S2): M1 the tool (speed chain); GShD1 and GShD2 the work through the differential;
-- hydraulic-shaft (S3): M1 the work (speed chain); GShD the tool through the generating chain.
+A job whose motors cannot hold its cut is refused as an input error before the run, naming the motor and what would
+hold it. The estimate uses the force law the co-simulation applies (cutting/forces.py: Kienzle, along each edge
+element's velocity, the chip thickness from the chip's volume over the swept area): :func:`pass_loads` per pass (its
+steps there), :func:`motor_loads` at the motors of the job's structure, :func:`check_machine_holds` the check. How the
+estimate compares with the co-simulated peaks, and the margin that covers it: docs/machines.md ("The cut against the
+motors").
 """
 
 from __future__ import annotations
@@ -121,7 +95,29 @@ def space_area(gear: Gear, delta: float, samples: int = 400) -> float:
 
 
 def pass_loads(setup: SkivingSetup, material_key: str, samples: int = 121) -> list[PassLoad]:
-    """The estimated load of every pass of ``setup`` cutting ``material_key`` (a row of assets/materials.toml)."""
+    """The estimated load of every pass of ``setup`` cutting ``material_key`` (a row of assets/materials.toml).
+
+    Per pass k:
+
+    1. Removed cross-section. A tooth space cut with the cutter standing delta short of its finishing position is the
+       space of the gear with profile shift x2 + delta/mn; its transverse area inside the blank is
+       S(delta) = integral of r (2 pi/z2 - 2 psi(r)) dr from its root (r_f + delta; ring gear: r_f - delta) to the tip
+       circle (psi: half the tooth's angular thickness, involute, held at its base-circle value below r_b;
+       :func:`space_area`). Pass k removes A_k = S(full - d_k) - S(full - d_(k-1)) per space (d_k: cumulative depth,
+       full: the full depth).
+    2. Chip of one engagement. Each space is passed once per work revolution while the carriage moves the axial feed
+       s, so in the steady state (the engagement zone inside the face) an engagement takes V_k = A_k s.
+    3. The engagement. One cutter tooth turns through the engagement window (the cutter angles at which its edge is
+       within the tip cylinder) at the pass's centre distance, the carriage at mid face, by the ideal kinematics. The
+       edge (the involute outline in elements of <= 0.2 mm, as the co-simulation's) inside the blank's envelope is
+       the chip width b(t); each element dl moves at v relative to the work. Mean chip thickness
+       h = V_k / integral(sum dl |v| dt) and kc = kc1.1 h^-mc x the rake factor (0 deg rake: 1.09), exactly as
+       cutting/forces.py does.
+    4. Loads. Each element pushes the workpiece with kc h dl along v (the cutter takes the opposite): a torque about
+       the work axis T2(phi) and one about the cutter axis T1(phi). Successive cutter teeth engage a cutter pitch
+       apart and overlap (2-6 teeth in the cut on the shipped jobs): the torques of all teeth are summed over one
+       pitch and the peak is taken. The mean power is the chips' energy rate, kc V_k z0 n0 (tested).
+    """
     mat = material(material_key)
     g = setup.gear
     edge = make_edge(setup, "involute")  # within micrometres of the conjugate edge: the same engaged length
@@ -200,7 +196,18 @@ def _overlapped(phi: np.ndarray, pitch: float, half: float):
 
 
 def motor_loads(job: Job, params: SkivingMachineParams, loads: list[PassLoad] | None = None) -> list[MotorLoad]:
-    """Every motor of the job's structure with the largest torque the estimate asks of it over the passes."""
+    """Every motor of the job's structure with the largest torque the estimate asks of it over the passes.
+
+    Which motor holds which spindle, per structure (power through each chain; the motor's torque = the spindle's
+    torque x the spindle's turn per motor turn):
+
+    - mechatronic (S4): M1 tool spindle through tool_drive; M2 work spindle through work_drive; M3 the carriage's
+      axial cutting force and its unbalanced weight through the screw;
+    - mechanical (S1): the main motor M1 drives the tool through the speed chain and the work through the chains
+      behind it: (P_tool + P_work) / omega_M1 against its breakdown torque (2.5 x main_motor_torque);
+    - hydraulic-differential (S2): M1 the tool (speed chain); GShD1 and GShD2 the work through the differential;
+    - hydraulic-shaft (S3): M1 the work (speed chain); GShD the tool through the generating chain.
+    """
     setup = job.skiving
     loads = pass_loads(setup, job.process.material) if loads is None else loads
     structure = job.machine.structure

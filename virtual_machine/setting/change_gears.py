@@ -1,61 +1,12 @@
 """Change-gear ("guitar") selection: the best a/b or (a/b)*(c/d) from a finite set of change gears.
 
-Mechanical gear-cutting machines (hobbing, shaping, skiving machines with mechanical kinematic chains)
-set their index, feed and differential ratios with change gears mounted on a swinging bracket, the
-"guitar".  A one-stage train is a single pair a/b (a driving, b driven); a two-stage train is
-(a/b)*(c/d) with b and c keyed to a common intermediate shaft.  The gears come from a finite, documented
-set, so a target ratio can in general only be approximated, and gear cutting needs the ratio to about
-1e-6 relative or better wherever the set allows it.  :func:`choose_change_gears` therefore returns the
-*best* admissible train, not merely a good one.
-
-The default set :data:`STANDARD_SET` has 45 gears, 20 to 100 teeth (39 distinct counts; 30, 40, 50,
-60, 70 and 80 twice), modelled on hobbing-machine change-gear sets and chosen so that every prime that
-occurs in tooth counts up to 100 is present as a factor.  Jobs may supply their own :class:`ChangeGearSet`.
-
-Admissible trains
------------------
-* every physical gear is used at most once: the set is a multiset, a tooth count listed twice is two
-  physical gears and may appear twice in one train;
-* every stage ratio (a/b, and c/d) lies in ``[min_stage_ratio, max_stage_ratio]`` (inclusive, with a
-  1e-12 relative tolerance so that decimal bounds such as 0.2 admit 20/100);
-* two stages obey the guitar engagement rule, the classic design rule that keeps a gear from fouling
-  the shaft of the gear it does not mesh with::
-
-      a + b >= c + min_clearance_teeth    and    c + d >= b + min_clearance_teeth
-
-Best train
-----------
-The key is, in order:
-
-1. smallest |ratio - target|, compared exactly: the achieved ratio is an exact fraction of tooth
-   products and the target is taken as the exact binary value of the float (so the comparison is the
-   same as comparing |relative error|, without rounding ties);
-2. smallest total number of teeth (a + b, or a + b + c + d): smaller, lighter gears;
-3. lexicographically smallest ``(a, b)`` or ``(a, b, c, d)``.
-
-The result is therefore unique and deterministic.
-
-Algorithm
----------
-One stage: all admissible ordered pairs of tooth counts are evaluated (vectorised; ~1500 pairs).
-Two stages: meet in the middle.  The admissible pairs are sorted by ratio; for every first-stage pair
-(a, b) the second stage ideally equals ``target / (a/b)``, located by bisection (``np.searchsorted``).
-On each side of that point the error grows monotonically with the distance in the sorted list, so the
-neighbours are examined outward in growing windows, checking the engagement and multiplicity rules on
-each 4-tuple, and a side is abandoned as soon as its next unexamined neighbour is already worse than the
-best admissible train found so far (branch and bound).  This is exact, not heuristic: the tests compare
-it against an exhaustive search over all admissible 4-tuples.  Near-ties in floating point (within
-1e-12) are resolved with exact rational arithmetic.  A call takes a few milliseconds for a 45-gear set.
-
-Reachable range
----------------
-:func:`reachable_range` gives the smallest and largest ratio an admissible train can realise with a set
-and a number of stages.  A target outside it (by more than 1e-9 relative, which tolerates float
-rounding of a target that *is* the extreme ratio) is rejected with ``ValueError``: no change-gear
-setting can approximate it in the sense required for gear cutting.
-
-Invalid inputs raise ``ValueError`` (``TypeError`` for a wrong type) whose message names the input, the
-value, why it is wrong and what would be valid.
+Mechanical gear-cutting machines set their index, feed and differential ratios with change gears on a swinging
+bracket, the "guitar". The gears come from a finite set, so a ratio can only be approximated, and gear cutting needs
+it to about 1e-6 relative or better wherever the set allows: :func:`choose_change_gears` returns the *best*
+admissible :class:`GearTrain` (an exact search), :func:`reachable_range` the ratios a set can realise at all. The
+default set is :data:`STANDARD_SET`; a job may supply its own :class:`ChangeGearSet`. Invalid inputs raise
+``ValueError`` (``TypeError`` for a wrong type) whose message names the input, the value, why it is wrong and what
+would be valid. The search's cost per ratio: docs/performance.md, "Benchmarks".
 """
 
 from __future__ import annotations
@@ -104,6 +55,12 @@ def _is_real(x: object) -> bool:
 class ChangeGearSet:
     """A finite set of change gears and the mounting rules of the guitar that carries them.
 
+    A train from the set is admissible when every physical gear is used at most once (the set is a multiset), every
+    stage ratio (a/b, and c/d) lies within the stage-ratio bounds, and two stages obey the guitar engagement rule,
+    the classic design rule that keeps a gear from fouling the shaft of the gear it does not mesh with::
+
+        a + b >= c + min_clearance_teeth    and    c + d >= b + min_clearance_teeth
+
     Parameters
     ----------
     name : str
@@ -117,8 +74,9 @@ class ChangeGearSet:
         ``c + d >= b + min_clearance_teeth`` (centre distances large enough that gear c clears the
         shaft of gear a and gear b clears the shaft of gear d).  ``>= 0``.
     min_stage_ratio, max_stage_ratio : float, default 0.2 and 5.0
-        Each stage ratio a/b, c/d must lie in ``[min_stage_ratio, max_stage_ratio]`` (inclusive, 1e-12
-        relative tolerance).  Finite, ``0 < min_stage_ratio <= max_stage_ratio``.
+        Each stage ratio a/b, c/d must lie in ``[min_stage_ratio, max_stage_ratio]`` (inclusive, with a 1e-12
+        relative tolerance so that decimal bounds such as 0.2 admit 20/100).  Finite,
+        ``0 < min_stage_ratio <= max_stage_ratio``.
 
     Raises
     ------
@@ -216,6 +174,9 @@ Rules: ``min_clearance_teeth = 15``, stage ratios in ``[0.2, 5.0]``.  A job may 
 @dataclass(frozen=True)
 class GearTrain:
     """A change-gear train (a/b) or (a/b)*(c/d) chosen for a target ratio.
+
+    A one-stage train is a single pair a/b (a driving, b driven); a two-stage train is (a/b)*(c/d) with b and c
+    keyed to a common intermediate shaft.
 
     Parameters
     ----------
@@ -483,6 +444,10 @@ def reachable_range(gear_set: ChangeGearSet = STANDARD_SET, stages: int = 2) -> 
     stages : {1, 2}, default 2
         One-stage (a/b) or two-stage ((a/b)*(c/d)) trains.
 
+    A target outside this range (by more than 1e-9 relative, which tolerates float rounding of a target that *is*
+    the extreme ratio) is rejected by :func:`choose_change_gears`: no change-gear setting can approximate it in the
+    sense required for gear cutting.
+
     Returns
     -------
     (float, float)
@@ -526,8 +491,8 @@ def choose_change_gears(target: float, gear_set: ChangeGearSet = STANDARD_SET, s
     Returns
     -------
     GearTrain
-        The admissible train with the smallest |relative error|; ties broken by the smallest total number
-        of teeth, then the lexicographically smallest (a, b, c, d) (see the module docstring).  Its
+        The admissible train (:class:`ChangeGearSet`) with the smallest |relative error|; ties broken by the
+        smallest total number of teeth, then the lexicographically smallest (a, b, c, d) (see Notes).  Its
         ``relative_error`` is the error actually achieved; the set may not allow 1e-6.
 
     Raises
@@ -538,6 +503,27 @@ def choose_change_gears(target: float, gear_set: ChangeGearSet = STANDARD_SET, s
         message states the range).
     TypeError
         If ``gear_set`` is not a :class:`ChangeGearSet`.
+
+    Notes
+    -----
+    The best train's key is, in order:
+
+    1. smallest |ratio - target|, compared exactly: the achieved ratio is an exact fraction of tooth products and
+       the target is taken as the exact binary value of the float (so the comparison is the same as comparing
+       |relative error|, without rounding ties);
+    2. smallest total number of teeth (a + b, or a + b + c + d): smaller, lighter gears;
+    3. lexicographically smallest ``(a, b)`` or ``(a, b, c, d)``.
+
+    The result is therefore unique and deterministic.
+
+    One stage: all admissible ordered pairs of tooth counts are evaluated (vectorised; ~1500 pairs). Two stages:
+    meet in the middle. The admissible pairs are sorted by ratio; for every first-stage pair (a, b) the second stage
+    ideally equals ``target / (a/b)``, located by bisection (``np.searchsorted``). On each side of that point the
+    error grows monotonically with the distance in the sorted list, so the neighbours are examined outward in
+    growing windows, checking the engagement and multiplicity rules on each 4-tuple, and a side is abandoned as soon
+    as its next unexamined neighbour is already worse than the best admissible train found so far (branch and
+    bound). This is exact, not heuristic: the tests compare it against an exhaustive search over all admissible
+    4-tuples. Near-ties in floating point (within 1e-12) are resolved with exact rational arithmetic.
 
     Examples
     --------

@@ -1,27 +1,12 @@
 """Machine setting sheets: the seeds' setting formulas for every structure, realised on real setting organs.
 
-Seed 000 (skiving), one sheet per structure:
-
-- S1 mechanical (fig. 1): ix = z0 / (c1 iS z2), iy = t_TV / (T c2 iS), iv = n0 / (c3 n_M), is = s / c4;
-- S2 hydraulic with differential (fig. 2): kx, ky as ix, iy (pulse generators GGI1, GGI2), iv a
-  two-gear guitar, is on GGI3;
-- S3 hydraulic shaft without differential (fig. 3): kx = (z2/z0)(1 + s/T) / c1 (plus iv, is);
-- S4 mechatronic (fig. 4): kv on divider 6, kx = c1 kv z2/z0 on divider 7, ks on divider 21,
-  ky on divider 22.
-
-Seed 001 (thread-cutting group Fv(B1 P2)): mechanical ix = P / (i01 t_TV); master-slave
-kx = P / (i0 P_TV); equal coordinates kv and kx = c kv / P with c = i01 P_TV.
-
-T is the lead of the gear helix, pi mn z2 / sin(beta2). The sign conventions of skive: the additional
-rotation B4 and the "1 + s/T" of S3 carry the signs of the helix hand, the feed direction and the work's
-direction of rotation (s/T -> dir2 s_z / p_z with s_z = -s for a downward feed and dir2 = -1 for an external
-gear, which turns against the cutter), see :func:`feed_over_lead` and :mod:`cutting.skiving.kinematics`.
-
-A divider (frequency divider = pulse counter + coefficient block) emits one pulse per k input pulses:
-f_out = f_ref / k. Seed 000's ky for S4 is printed as ks t_TV / (c2 T); deriving it from the same
-calculation displacements with this divider law (as kx is) gives ky = c2 ks T / t_TV, which skive uses;
-with the printed form the lead would be wrong by a factor (T/t_TV)^2. c2 of S4 is the ratio
-(work per M2 revolution / screw per M3 revolution) of the two drives.
+A machine of seed 000 (skiving: S1 mechanical, S2 hydraulic with differential, S3 hydraulic shaft, S4 mechatronic)
+or of seed 001 (the thread-cutting group Fv(B1 P2)) is set by ratios that its organs (change-gear guitars, coding
+discs, integer frequency dividers) can only approximate: each sheet computes the seed's formulas, realises each on its
+organ and states what the realised value's error does to the gear. :func:`setup_sheet` gives a job's
+:class:`SetupSheet` of :class:`Setting` rows, one function per structure (:func:`sheet_mechanical` ...
+:func:`sheet_mechatronic`, :func:`thread_sheet`); the signs: :func:`feed_over_lead`. The formulas per structure and
+where skive departs from the printed seed: docs/machines.md, "Setting sheets".
 """
 
 from __future__ import annotations
@@ -205,6 +190,11 @@ def feed_over_lead(job: Job) -> float:
     turn the cutter turns (1 + dir2 s_z / p_z) / |r|: B4 slows the work (per cutter turn) when this is positive. An
     external gear turns against the cutter (dir2 = -1), an internal one with it: the sign is the gear's as much as
     the feed's.
+
+    The sign conventions of skive: the additional rotation B4 and the "1 + s/T" of S3 carry the signs of the helix
+    hand, the feed direction and the work's direction of rotation (s/T -> dir2 s_z / p_z with s_z = -s for a
+    downward feed and dir2 = -1 for an external gear, which turns against the cutter); T is the lead of the gear
+    helix, pi mn z2 / sin(beta2); see :mod:`cutting.skiving.kinematics`.
     """
     g = job.gear
     if g.helix_angle == 0:
@@ -297,6 +287,12 @@ def sheet_mechatronic(job: Job) -> tuple[dict[str, Setting], tuple[str, ...]]:
     kv is taken as the multiple nearest 60 f_ref / (p n0) that makes kx = c1 kv z2 / z0 an exact integer,
     so the generating ratio carries no rounding error; ks, ky are rounded (ky is large, so the lead error
     is far below a micrometre).
+
+    A divider (frequency divider = pulse counter + coefficient block) emits one pulse per k input pulses:
+    f_out = f_ref / k. Seed 000's ky for S4 is printed as ks t_TV / (c2 T); deriving it from the same calculation
+    displacements with this divider law (as kx is) gives ky = c2 ks T / t_TV, which skive uses; with the printed
+    form the lead would be wrong by a factor (T/t_TV)^2. c2 of S4 is the ratio (work per M2 revolution / screw per
+    M3 revolution) of the two drives.
     """
     g, c, m, p = job.gear, job.cutter, job.machine, job.process
     f, pp = m.reference_frequency, m.command_pulses_per_rev
@@ -417,7 +413,10 @@ def skiving_geometry(job: Job) -> tuple[dict[str, Any], list[dict[str, float]], 
 
 # ---- thread-cutting group of seed 001 --------------------------------------------------------------
 def thread_sheet(job: Job, structure: str) -> SetupSheet:
-    """Seed 001: mechanical ix (+ iv), master-slave kx, equal coordinates kv, kx."""
+    """Seed 001: mechanical ix (+ iv), master-slave kx, equal coordinates kv, kx.
+
+    Mechanical ix = P / (i01 t_TV); master-slave kx = P / (i0 P_TV); equal coordinates kv and kx = c kv / P with
+    c = i01 P_TV."""
     t, m, p = job.thread, job.machine, job.process
     P = t["lead"]
     n_sp = 1000 * p.cutting_speed / (math.pi * t["diameter"])

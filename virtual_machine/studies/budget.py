@@ -1,25 +1,11 @@
 """The error budget of a study: for each ISO 1328-1 parameter, each varied part's effect, computed from the
 cases alone (nothing typed in).
 
-Each case's parameter is what the class is graded on: the worse flank, and the magnitude of the slope
-deviations (ISO 1328-1 grades |f_Halpha|, |f_Hbeta|). Per part:
-
-- **sensitivity** [um per unit of the key]: one-at-a-time, the least-squares slope over the part's own cases
-  and the base case; grid and Monte Carlo, the coefficient of a linear least-squares fit over every case and
-  every numeric part at once (a switch counts 0/1);
-- **contribution**: one-at-a-time and grid, |sensitivity| x the part's stated tolerance (worst case, the parts
-  stacked arithmetically on the base case's value); Monte Carlo, |sensitivity| x the part's standard deviation,
-  and its **variance share** b_i cov(x_i, P) / var(P) (Pratt's measure: the shares add up to R^2 of the fit even
-  where a finite sample's draws correlate; b_i^2 var(x_i) / var(P) for independent draws; the rest, 1 - R^2, is the
-  residual: nonlinearity, interactions);
-- the **tornado**: the parameter at the part's lowest and highest studied value (Monte Carlo: at -1 and +1
-  standard deviation), every other part at its base.
-
-For a target class N: the parameter's ISO tolerance T(N). One-at-a-time and grid: the stack
-P0 + sum |s_i| t_i against T; the part with the largest contribution limits; it must be tightened to
-t_i* = (T - P0 - sum_{j != i} |s_j| t_j) / |s_i| (none if that is not positive: the part alone cannot do it).
-Monte Carlo: the 95th percentile of the cases against T; the part with the largest variance share limits; its
-spread must shrink by k, with mean + 1.645 sqrt(var(P) - (1 - k^2) b_i^2 var(x_i)) = T.
+The budget answers which part's tolerance decides the gear's class and what it must be for a target class.
+:func:`error_budget` grades each case (:func:`graded`), takes each part's sensitivity and contribution (one at a
+time: :func:`_one_at_a_time`; grid and Monte Carlo: the fit of :func:`_regression`), stacks them (:func:`_stack`) and
+answers a target class (:func:`_answer_stack`, :func:`_answer_mc`); the method of each is in its docstring, the
+tornado in :class:`PartEffect`. The method and the studies' figures: docs/studies.md, "The budget".
 """
 
 from __future__ import annotations
@@ -39,6 +25,10 @@ Z95 = 1.6448536269514722  # one-sided 95 % of a normal distribution
 
 @dataclass
 class PartEffect:
+    """One varied part's effect on one parameter. ``low`` and ``high`` are the **tornado**: the parameter at the
+    part's lowest and highest studied value (Monte Carlo: at -1 and +1 standard deviation), every other part at its
+    base."""
+
     key: str
     label: str
     sensitivity: float  # um per unit of the key (nan: not a number)
@@ -90,7 +80,8 @@ class Budget:
 
 
 def graded(measured: dict[str, Any]) -> dict[str, float]:
-    """The values a case is graded on (um): the worse flank, slope deviations by magnitude."""
+    """The values a case is graded on (um): the worse flank, slope deviations by magnitude (each case's parameter is
+    what the class is graded on: ISO 1328-1 grades |f_Halpha|, |f_Hbeta|)."""
     out = {}
     for name in PARAMETERS:
         if name == "F_r":
@@ -151,6 +142,8 @@ def error_budget(
 
 
 def _one_at_a_time(name, varies: tuple[Vary, ...], ids, x, y) -> ParameterBudget | None:
+    """One part at a time: each part's **sensitivity** [um per unit of the key] is the least-squares slope over the
+    part's own cases and the base case; its **contribution** |sensitivity| x the part's stated tolerance."""
     base_rows = [i for i in range(len(ids)) if all(_same(x[v.key][i], v.base) for v in varies)]
     if not base_rows:
         return None  # the base case failed: no reference
@@ -171,7 +164,14 @@ def _one_at_a_time(name, varies: tuple[Vary, ...], ids, x, y) -> ParameterBudget
 
 
 def _regression(name, study: Study, x, y) -> ParameterBudget | None:
-    """Linear least squares over every case: P = P0 + sum b_i (x_i - base_i)."""
+    """Linear least squares over every case: P = P0 + sum b_i (x_i - base_i).
+
+    Grid and Monte Carlo: each part's **sensitivity** is its coefficient b_i in one linear least-squares fit over
+    every case and every numeric part at once (a switch counts 0/1). Grid: the **contribution** is |b_i| x the part's
+    stated tolerance (stacked by :func:`_stack`). Monte Carlo: |b_i| x the part's standard deviation, and its
+    **variance share** b_i cov(x_i, P) / var(P) (Pratt's measure: the shares add up to R^2 of the fit even where a
+    finite sample's draws correlate; b_i^2 var(x_i) / var(P) for independent draws; the rest, 1 - R^2, is the
+    residual: nonlinearity, interactions)."""
     keys = [v for v in study.varies if v.numeric]
     if len(y) < len(keys) + 1:
         return None
@@ -210,7 +210,8 @@ def _regression(name, study: Study, x, y) -> ParameterBudget | None:
 
 
 def _stack(name: str, p0: float, parts: list[PartEffect]) -> ParameterBudget:
-    """Worst case: the base value plus every stated tolerance's contribution."""
+    """Worst case: the base value plus every stated tolerance's contribution (one-at-a-time and grid: the parts
+    stacked arithmetically on the base case's value)."""
     stated = sum(e.contribution for e in parts if e.contribution is not None)
     for e in parts:
         if e.contribution is not None:
@@ -225,6 +226,9 @@ def _missed(target: int, tol: float, note: str, limiting: str | None = None, req
 
 
 def _answer_stack(p: ParameterBudget, tol: float, target: int, _y) -> TargetAnswer:
+    """One-at-a-time and grid against a target class N, T(N) the parameter's ISO tolerance: the stack
+    P0 + sum |s_i| t_i against T; the part with the largest contribution limits; it must be tightened to
+    t_i* = (T - P0 - sum_{j != i} |s_j| t_j) / |s_i| (none if that is not positive: the part alone cannot do it)."""
     if p.stacked <= tol:
         return TargetAnswer(target, tol, True)
     base = abs(p.base)
@@ -252,6 +256,9 @@ def _answer_stack(p: ParameterBudget, tol: float, target: int, _y) -> TargetAnsw
 
 
 def _answer_mc(p: ParameterBudget, tol: float, target: int, y) -> TargetAnswer:
+    """Monte Carlo against a target class N, T(N) the parameter's ISO tolerance: the 95th percentile of the cases
+    against T; the part with the largest variance share limits; its spread must shrink by k, with
+    mean + 1.645 sqrt(var(P) - (1 - k^2) b_i^2 var(x_i)) = T."""
     if p.stacked <= tol:
         return TargetAnswer(target, tol, True)
     mean, var_y = float(np.mean(y)), float(np.var(y, ddof=1))

@@ -198,7 +198,7 @@ def run_study(
 
 
 def default_study_workers() -> int:
-    from cutting.skiving.ideal_cut import default_workers
+    from cutting.parallel import default_workers
 
     return default_workers()
 

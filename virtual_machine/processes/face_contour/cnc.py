@@ -2,32 +2,12 @@
 and the cut and the measurement of the motion the machine really makes, with the geometry of
 :mod:`cutting.face_contour.slots`.
 
-**Electronic gearbox** (:class:`virtual_machine.controllers.face_gearbox.ElectronicGearbox`: reference generator 14
--> head; divider 7 (1/m) -> summator 9 with the cyclic-ratio modulation -> work; x N -> eccentric; the infeed's S per
-turn, gated at the depth): every axis counts the generator's pulses; its converters give the position commands and
-the speed feed-forward. Per axis the servo is the cascade of :mod:`virtual_machine.controllers.cascade` on the
-**motor encoder** (semi-closed loop): position loop (Kv) with speed feed-forward -> PI speed loop -> torque, plus
-inertia feed-forward, limited to the motor's peak torque with anti-windup. The stages' compliance, backlash and
-friction therefore show between tip and workpiece, not at the encoders.
-
-**Run.** The machine starts at rest at head turn ``start_turn`` (default: ``run_in`` turns before the first
-recorded pass) with every axis where the programme has it then and every stage relaxed: the plunge passes before
-it lie above the final ones (the xy motion does not depend on the feed), so they cut nothing the final passes
-leave. It runs up, and records, at the servo rate, the element tips' poses in the workpiece frame (sites
-``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest: the
-task :class:`FaceCnc` on the machine loop (:mod:`virtual_machine.runtime.loop`), whose physics has the divergence and
-runaway checks of :class:`virtual_machine.runtime.integrator.Integrator`.
-
-**Cutting forces** (``load``, :mod:`cutting.face_contour.forces`): checked before the run against the motors
-(:func:`virtual_machine.reach.face.check_cutting_load`: a feed the head motor cannot cut is refused, naming the feed
-that would do), then fed back at every tick (:class:`ForceFeedback`, the machine's load hook: at the element tips on
-the head and, reversed, on the workpiece); the passes record the forces and the work and head drives' twists.
-
-**Cut and measure** the recorded motion: :func:`cut_recorded` sweeps the elements' plates (the plate corners of
-:func:`cutting.face_contour.slots.plate_corners`, here from the recorded frames) as hulls through the face blank;
-:func:`measure_recorded` measures the slot bottom and sides exactly on the recorded path (cubic splines of the
-poses in time, roots bisected), as :func:`metrology.face_slots.measure_slots` does on the ideal path
-(:class:`cutting.face_contour.slots.ExactSlots`).
+The slots a real machine cuts carry its drives' errors and the cut's loads; this module runs the machine
+(:func:`simulate_face_contour`: the electronic gearbox
+:class:`virtual_machine.controllers.face_gearbox.ElectronicGearbox`, the servos :class:`FaceServo`, the task
+:class:`FaceCnc`, the load hook :class:`ForceFeedback`), records the element tips' final passes
+(:class:`FaceContourRecord`), and cuts (:func:`cut_recorded`) and measures (:func:`measure_recorded`) what they
+made. The machine's measured slots: docs/face-contours-and-turning.md, "The face-contour machine".
 """
 
 from __future__ import annotations
@@ -241,7 +221,13 @@ def final_turn(c: FaceCoupling, slot: int, window: tuple[float, float]) -> int:
 class FaceServo(CascadeServo):
     """The drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops and PI
     speed loops on the motor encoders (A, H, [E,] Z, [Y]); commands and ``torque``, ``error`` as (A, H, E, Z, Y), E
-    zero without the eccentric, Y without the work setting. ``axis0``: the axes' start positions."""
+    zero without the eccentric, Y without the work setting. ``axis0``: the axes' start positions.
+
+    Per axis the servo is the cascade of :mod:`virtual_machine.controllers.cascade` on the **motor encoder**
+    (semi-closed loop): position loop (Kv) with speed feed-forward -> PI speed loop -> torque, plus inertia
+    feed-forward, limited to the motor's peak torque with anti-windup. The commands and the speed feed-forward come
+    from the electronic gearbox's converters (every axis counts the generator's pulses). The stages' compliance,
+    backlash and friction therefore show between tip and workpiece, not at the encoders."""
 
     def __init__(
         self,
@@ -392,7 +378,26 @@ def simulate_face_contour(
     (:class:`cutting.face_contour.forces.FaceLoad`), fed back at every tick (:class:`ForceFeedback`) after a check
     that the motors can take the cycle's heaviest pass (:func:`check_cutting_load`, InputError if not); none: the
     elements cut air. ``master``: what the work, the eccentric and the cross slide follow (the gearbox's
-    ``master``): "generator" (the head's command) or "head" (its spindle encoder, what the head really does)."""
+    ``master``): "generator" (the head's command) or "head" (its spindle encoder, what the head really does).
+
+    **Electronic gearbox** (:class:`virtual_machine.controllers.face_gearbox.ElectronicGearbox`: reference generator
+    14 -> head; divider 7 (1/m) -> summator 9 with the cyclic-ratio modulation -> work; x N -> eccentric; the
+    infeed's S per turn, gated at the depth); the drives: :class:`FaceServo`.
+
+    **Run.** The machine starts at rest at head turn ``start_turn`` (default: ``run_in`` turns before the first
+    recorded pass) with every axis where the programme has it then and every stage relaxed: the plunge passes before
+    it lie above the final ones (the xy motion does not depend on the feed), so they cut nothing the final passes
+    leave. It runs up, and records, at the servo rate, the element tips' poses in the workpiece frame (sites
+    ``element_frame*`` relative to ``blank_frame``) during the final (full-depth) pass over each slot of interest:
+    the task :class:`FaceCnc` on the machine loop (:mod:`virtual_machine.runtime.loop`), whose physics has the
+    divergence and runaway checks of :class:`virtual_machine.runtime.integrator.Integrator`.
+
+    **Cutting forces** (``load``, :mod:`cutting.face_contour.forces`): checked before the run against the motors
+    (:func:`virtual_machine.reach.face.check_cutting_load`: a feed the head motor cannot cut is refused, naming the
+    feed that would do), then fed back at every tick (:class:`ForceFeedback`, the machine's load hook: at the element
+    tips on the head and, reversed, on the workpiece); the passes record the forces and the work and head drives'
+    twists (:class:`FacePassRecord`).
+    """
     params = params or FaceMachineParams()
     tuning = tuning or FaceTuning()
     if not (math.isfinite(tool_rpm) and tool_rpm > 0):
@@ -698,7 +703,9 @@ def recorded_hulls(c: FaceCoupling, p: FacePassRecord, tol: float = SWEEP_TOLERA
 
 def cut_recorded(record: FaceContourRecord, tol: float = SWEEP_TOLERANCE) -> FaceCut:
     """The face blank with the recorded passes' swept volumes removed (one batched boolean), as
-    :func:`cutting.face_contour.slots.cut_slots` does with the ideal motion; ``tol`` [mm] the chord error."""
+    :func:`cutting.face_contour.slots.cut_slots` does with the ideal motion; ``tol`` [mm] the chord error. The
+    elements' plates (the plate corners of :func:`cutting.face_contour.slots.plate_corners`, here from the recorded
+    frames) are swept as hulls through the face blank."""
     t0 = time.perf_counter()
     c = record.coupling
     pieces, worst = [], 0.0
@@ -780,7 +787,9 @@ def measure_recorded(
 ) -> list[SlotMeasure]:
     """The recorded slots measured exactly on the recorded motion (bottom, sides at ``height``, default half the
     depth, and the centre at radius L), as :func:`metrology.face_slots.measure_slots` measures the ideal
-    slots; the spacing follows with :func:`metrology.face_slots.slot_spacing`."""
+    slots (:class:`cutting.face_contour.slots.ExactSlots`); the spacing follows with
+    :func:`metrology.face_slots.slot_spacing`. Exactly: the slot bottom and sides are roots bisected on cubic splines
+    of the recorded poses in time (:func:`recorded_bottom`, :func:`recorded_sides`)."""
     c = record.coupling
     radii = measuring_radii(c) if radii is None else np.asarray(radii, dtype=float)
     height = -0.5 * c.depth if height is None else height

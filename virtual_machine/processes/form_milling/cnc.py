@@ -1,28 +1,12 @@
 """The CNC of the form-milling machine (seed 003, the copying method): its program, its task and load hook on the
 machine loop.
 
-A pass mills one tooth space k with the profiled disc mill (or the finger mill, whose axis the right-angle head
-keeps along the space's symmetry line: its passes give no axis, B stays at 0, X Y Z carry its tip centre): retract X
-to the safe radius, rapid Z to the pass start, index the **indexing work axis** A to ``-2 pi k / z`` (space k then
-faces +x, where the mill is) and swivel the head B to the pass's start, approach X/Y to the path, settle, feed along
-z at the feed rate with X and Y following the path (the mill centre in the **profiling plane** z = const), retract
-X. A pass whose mill is turned with the path (seed 003's transfer angles, eq. 6) gives the mill's axis per face
-position: B tilts it towards the gear axis and A turns the work by the small angle that puts the axis's radial
-component into the head's plane, X Y Z following the centre turned with the work (five axes at once). The spindle
-runs at the commanded speed all the time (velocity loop, half-cosine run-up).
-
-Per axis (A, X, Y, Z, B) the servo is the usual cascade on the **motor encoder** (semi-closed loop, as a machine
-with rotary encoders): position loop (gain Kv) with velocity feed-forward -> PI velocity loop -> torque,
-plus inertia (acceleration) feed-forward, limited to the motor's peak torque with anti-windup::
-
-    e = q_cmd - q_enc        w_ref = (v_cmd + Kv e) / g        tau = J a_cmd / g + Kp (w_ref - w) + Ki int(w_ref - w)
-
-(g: axis motion per motor radian, J: inertia at the motor). Screw and nut compliance, backlash, friction and
-the Z weight therefore show in the relative motion of mill and gear but not at the encoders. Moves are
-minimum-jerk (quintic) point-to-point profiles; the feed ramps up and down with a cycloidal (jerk-limited)
-velocity ramp. The machine runs on the machine loop (:mod:`virtual_machine.runtime.loop`: the CNC's task
-:class:`FormMillCnc`, the cut's load hook :class:`MillLoad`, the physics sub-steps with the divergence and runaway
-checks).
+The flanks a real machine mills carry what its drives do to the planned path (screw and nut compliance, backlash,
+friction, the Z weight, the cut's forces): :func:`simulate_form_milling` runs the passes (:class:`MillPass`) on the
+simulated machine with the program (:func:`_plan`, its moves there), the servos (:class:`FormMillServo`, their law
+there), the CNC's task :class:`FormMillCnc` and the cut's load hook :class:`MillLoad` on the machine loop
+(:mod:`virtual_machine.runtime.loop`: the physics sub-steps with the divergence and runaway checks), and records the
+feeds (:class:`FormMillRecord`). What the machine makes: docs/form-milling.md, "The machine".
 """
 
 from __future__ import annotations
@@ -266,7 +250,19 @@ def _plan(
     layout: FormMillLayout, passes: Sequence[MillPass], feed_mm_min: float, dt: float, tuning: CncTuning
 ) -> list[_Segment]:
     """The CNC program as servo-rate segments: per pass retract X, rapid Z with the index of A, approach X/Y,
-    settle, feed, retract X (zero-length moves left out)."""
+    settle, feed, retract X (zero-length moves left out).
+
+    A pass mills one tooth space k with the profiled disc mill (or the finger mill, whose axis the right-angle head
+    keeps along the space's symmetry line: its passes give no axis, B stays at 0, X Y Z carry its tip centre):
+    retract X to the safe radius, rapid Z to the pass start, index the **indexing work axis** A to ``-2 pi k / z``
+    (space k then faces +x, where the mill is) and swivel the head B to the pass's start, approach X/Y to the path,
+    settle, feed along z at the feed rate with X and Y following the path (the mill centre in the **profiling
+    plane** z = const), retract X. A pass whose mill is turned with the path (seed 003's transfer angles, eq. 6)
+    gives the mill's axis per face position: B tilts it towards the gear axis and A turns the work by the small angle
+    that puts the axis's radial component into the head's plane, X Y Z following the centre turned with the work
+    (five axes at once). Moves are minimum-jerk (quintic) point-to-point profiles (:func:`_move`); the feed ramps up
+    and down with a cycloidal (jerk-limited) velocity ramp (:func:`_feed`). The spindle runs at the commanded speed
+    all the time (velocity loop, half-cosine run-up)."""
     q = np.array([layout.home_a, layout.home_x, layout.home_y, layout.home_z, 0.0])
     out: list[_Segment] = []
 
@@ -291,7 +287,16 @@ def _plan(
 
 class FormMillServo(CascadeServo):
     """The six drives of the machine (:class:`virtual_machine.controllers.cascade.CascadeServo`): position loops
-    (A X Y Z B) and PI velocity loops (A X Y Z B S) on the motor encoders; the spindle S has a velocity loop only."""
+    (A X Y Z B) and PI velocity loops (A X Y Z B S) on the motor encoders; the spindle S has a velocity loop only.
+
+    Per axis (A, X, Y, Z, B) the servo is the usual cascade on the **motor encoder** (semi-closed loop, as a machine
+    with rotary encoders): position loop (gain Kv) with velocity feed-forward -> PI velocity loop -> torque, plus
+    inertia (acceleration) feed-forward, limited to the motor's peak torque with anti-windup::
+
+        e = q_cmd - q_enc      w_ref = (v_cmd + Kv e) / g      tau = J a_cmd / g + Kp (w_ref - w) + Ki int(w_ref - w)
+
+    (g: axis motion per motor radian, J: inertia at the motor). Screw and nut compliance, backlash, friction and the
+    Z weight therefore show in the relative motion of mill and gear but not at the encoders."""
 
     def __init__(
         self,

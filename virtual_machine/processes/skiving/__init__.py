@@ -195,7 +195,7 @@ def _cut_motions(job: Job, plan: SkivingPlan, trajectory: Path | None, rep: Repo
 
 def _cut_summary(report, stl, edge: str, motion: str, workers: int | None, st) -> dict:
     """measurement.json's ``cut``: the edge and motion cut along, the removal's figures, gear.stl, the chips."""
-    from cutting.skiving.ideal_cut import default_workers
+    from cutting.parallel import default_workers
     from virtual_machine.output.formatting import chip_record
 
     r = report.result

@@ -18,9 +18,9 @@ import numpy as np
 
 from cutting.errors import InputError, Problem, UnmeasurableError, UnmeasurableGearError
 from cutting.gear_file import GearFile, write_gear_stl
+from cutting.parallel import default_workers
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_sweep import SweptVolumes
-from cutting.skiving.ideal_cut import default_workers
 from cutting.skiving.passages import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
 from cutting.skiving.trajectory import PassMotion
