@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 from checks import JOBS, ROOT
 
+from virtual_machine.output.json_file import json_text
 from virtual_machine.output.staging import MANIFEST, StagedOutputs, sha256_of
 
 
@@ -35,7 +36,9 @@ def test_staged_outputs_replace_the_previous_stage_and_name_their_final_place(tm
         data, text, files = first.publish({"mesh": str(first.folder / "gear.stl")}, f"wrote {first.folder}")
     assert data["mesh"] == str(out / "gear.stl") and text == f"wrote {out}"
     assert data["solid_sha256"]["gear.stl"] == sha256_of(out / "gear.stl")
-    assert json.loads((out / "measurement.json").read_text())["mesh"] == str(out / "gear.stl")
+    published = (out / "measurement.json").read_text()
+    assert json.loads(published)["mesh"] == str(out / "gear.stl")
+    assert published == json_text(json.loads(published))  # the format every JSON file has (indented, no NaN)
     assert sorted(f.name for f in files) == ["gear.stl", "measurement.json", "old.png"]
     (out / "notes.txt").write_text("the user's own file")
     with StagedOutputs(out) as second:

@@ -17,6 +17,8 @@ import uuid
 from pathlib import Path
 from typing import Any
 
+from virtual_machine.output.json_file import write_json
+
 MANIFEST = ".skive-outputs.json"
 #: text files whose contents may name the staging folder
 TEXT_SUFFIXES = (".json", ".html", ".txt", ".csv", ".md")
@@ -71,7 +73,7 @@ class StagedOutputs:
         solids = {p.name: sha256_of(p) for p in files if p.suffix == ".stl" and p.parent == self.folder}
         if measurement.is_file() and isinstance(data, dict) and solids:
             data = {**data, "solid_sha256": solids}  # the solids this measurement belongs to
-            measurement.write_text(json.dumps({**json.loads(measurement.read_text()), "solid_sha256": solids}))
+            write_json(measurement, {**json.loads(measurement.read_text()), "solid_sha256": solids})
         for p in files:
             if p.suffix in TEXT_SUFFIXES:
                 content = p.read_text(errors="surrogateescape")

@@ -18,7 +18,6 @@ outputs (:mod:`virtual_machine.output.staging`).
 
 from __future__ import annotations
 
-from abc import ABC
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, ClassVar
@@ -70,7 +69,7 @@ def written(out: Path, *names: str) -> list[Path]:
     return [f for f in files if f.exists()]
 
 
-class Process(ABC):
+class Process:
     """One process: the job kind it takes, its stages and their options.
 
     A subclass sets ``kind``, ``title`` and ``stages`` and implements the stages it lists, each

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from cutting.errors import InputError, Problem
+from cutting.skiving.edge import EDGE_KINDS
 from virtual_machine.job import Job, with_machine
 
 
@@ -79,7 +80,6 @@ class SkivingRunOptions(RecordedOptions):
 
 
 REMOVALS = ("dexel", "manifold")
-EDGES = ("conjugate", "involute")
 
 
 def option_flag(name: str) -> str:
@@ -113,7 +113,7 @@ def _value_problems(taken: dict[str, Any]) -> list[Problem]:
     out = []
     if taken.get("removal") not in (None, *REMOVALS):
         out.append(Problem("--removal", taken["removal"], "unknown removal", "use 'dexel' or 'manifold'"))
-    if taken.get("edge") not in (None, *EDGES):
+    if taken.get("edge") not in (None, *EDGE_KINDS):
         out.append(Problem("--edge", taken["edge"], "unknown edge", "use 'conjugate' or 'involute'"))
     tol = taken.get("mesh_tolerance")
     if tol is not None and not tol > 0:

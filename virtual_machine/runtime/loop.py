@@ -116,7 +116,6 @@ class MachineLoop:
         self.finished = False
         self.load_work = self.actuator_work = 0.0
         self.timing = {"control": 0.0, "physics": 0.0, "record": 0.0}
-        self.ticks = 0
 
     @property
     def dt(self) -> float:
@@ -128,7 +127,6 @@ class MachineLoop:
         data, task, load, step = self.data, self.task, self.load, self.integrator.step
         before, after = task.before_tick, task.after_tick
         t_ctrl = t_phys = t_rec = 0.0
-        ticks = 0
         try:
             while data.time < until:
                 c0 = _clock()
@@ -147,12 +145,10 @@ class MachineLoop:
                 t_ctrl += c1 - c0
                 t_phys += c2 - c1
                 t_rec += _clock() - c2
-                ticks += 1
         finally:
             self.timing["control"] += t_ctrl
             self.timing["physics"] += t_phys
             self.timing["record"] += t_rec
-            self.ticks += ticks
         return not self.finished
 
     def apply_loads(self, t: float, dt: float) -> None:
@@ -195,16 +191,3 @@ class MachineLoop:
             self.load_work += float(data.qfrc_applied @ data.qvel) * h
             self.actuator_work += float(data.actuator_force @ data.actuator_velocity) * h
         data.qfrc_applied[:] = 0.0
-
-
-def every(n: int, call: Callable[[], None]) -> Callable[[], None]:
-    """``call`` on every ``n``-th invocation (a progress report every few hundred ticks)."""
-    count = 0
-
-    def tick() -> None:
-        nonlocal count
-        count += 1
-        if count % n == 0:
-            call()
-
-    return tick

@@ -174,7 +174,7 @@ class CuttingRun:
         self.machine = MachineRun(job, params, servo_substeps, correction=correction, plan=plan, cut=cut)
         check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
         self.removal = _removal(job, setup, edge, plans, removal, workers)
-        self.removal_kind, self.workers, self.snapshots_per_pass = removal, workers, snapshots_per_pass
+        self.workers, self.snapshots_per_pass = workers, snapshots_per_pass
         # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
         # finest facets of the sweep
         self.edge_points = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))

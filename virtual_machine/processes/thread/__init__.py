@@ -17,6 +17,7 @@ from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, written
 from virtual_machine.processes.options import MachineSimulateOptions, RecordedOptions, SheetOptions, StageOptions
+from virtual_machine.processes.sheets import sheet_product
 
 
 class ThreadCutting(Process):
@@ -30,8 +31,6 @@ class ThreadCutting(Process):
     hints: ClassVar[dict[str, str]] = {"cut": "use `skive run`: the thread is cut by the lathe's simulated stroke"}
 
     def setup(self, job: Job, options: SheetOptions | None = None) -> Product:
-        from virtual_machine.processes.sheets import sheet_product
-
         # the thread group's sheet comes from the same setting sheets as skiving's
         return sheet_product(job, self._options("setup", options).structure)
 
