@@ -121,7 +121,7 @@ def test_vectorized_refinement_matches_a_scalar_bounded_search(probe_edges):
     idx = np.array([0, 12, 24, 42, 54])  # below the generating zone (no bound), at its lower end, over it
     for side, sgn in (("left", 1.0), ("right", -1.0)):
         mate = _mate(st, side)
-        vec = _envelope_bound(st, ie.radii[idx], ie.theta[side][idx], mate, sgn, phi, band)
+        vec, _ = _envelope_bound(st, ie.radii[idx], ie.theta[side][idx], mate, sgn, phi, band)
         refined_by = []
         for j, i in enumerate(idx):
             grid, scalar = scalar_envelope_bound(st, ie.radii[i], ie.theta[side][i], mate, sgn, phi, band)

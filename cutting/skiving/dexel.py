@@ -141,8 +141,8 @@ class DexelWorkpiece:
         packed = np.ascontiguousarray(
             np.concatenate([pack_table(tb.normal, tb.offset, tb.rot, tb.origin) for tb in tables])
         )
-        motion, (_, times, cos_a, sin_a), outline = solver.motion, solver.tables, solver.outline
-        ex_tables = (packed, times, cos_a, sin_a)
+        motion, (_, times, frames), outline = solver.motion, solver.tables, solver.outline
+        ex_tables = (packed, times, frames)
         stack = [
             np.ascontiguousarray(np.concatenate([getattr(tb, name) for tb in tables]))
             for name in ("ball_centre", "ball_radius", "box_centre", "box_axes", "box_half")

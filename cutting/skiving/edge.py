@@ -1,7 +1,9 @@
-"""The cutting edge: the outline of one cutter tooth in its rake plane (the cutter's end plane, z0 = 0).
+"""The cutting edge: the outline of one cutter tooth in its rake plane.
 
-Cutter frame: z along the cutter axis, the rake face in z = 0, tooth 0 centred on +x (the ideal motion of
-:class:`cutting.skiving.kinematics.SkivingSetup` brings tooth 0 to the mesh point at phi0 = 0). The outline is the
+Rake frame (:mod:`cutting.skiving.tooling`): the rake face in z = 0, tooth 0 centred on +x; it is the cutter's end
+plane (the ideal motion of :class:`cutting.skiving.kinematics.SkivingSetup` brings tooth 0 to the mesh point at
+phi0 = 0) moved along the axis by the rake face's offset, or for a stepped face turned about the tooth's radial line
+to be normal to the tooth direction. The outline is the
 closed, counter-clockwise polygon of the tooth section from the depth that can meet the workpiece up to
 the tip; the removed volume is what this planar region sweeps.
 
@@ -29,8 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from cutting.flank import SIDES, Side, base_tangent_deviation, flank_points
+from cutting.flank import SIDES, Side, base_tangent_deviation, flank_points, flank_polar_angle
 from cutting.skiving.kinematics import SkivingSetup
+from cutting.skiving.tooling import RakeFace
 
 EDGE_KINDS = ("involute", "conjugate")
 
@@ -74,11 +77,36 @@ def involute_edge(setup: SkivingSetup, points: int = 120) -> CuttingEdge:
     radii, r_low = edge_radii(setup, points)
     r_eff = np.maximum(radii, c.base_radius)
     xi = np.sqrt(r_eff**2 - c.base_radius**2) / c.base_radius
+    q = setup.rake_frame
+    end_plane = bool(np.array_equal(q[:, :3], np.eye(3)))
     theta = {}
     for side in SIDES:
-        p = flank_points(c, side, xi, 0.0, 0)
+        p = flank_points(c, side, xi, float(q[2, 3]), 0)  # the end plane at the rake face's offset
         theta[side] = np.arctan2(p[:, 1], p[:, 0])
+        if not end_plane:
+            theta[side] = _section(setup, radii, theta[side], side)
     return _assemble("involute", radii, theta, r_low)
+
+
+def _section(setup: SkivingSetup, radii: np.ndarray, start: np.ndarray, side: Side) -> np.ndarray:
+    """The polar angles at ``radii`` of the rake plane's section of the cutter's own flank ``side`` (a stepped rake
+    face: a plane through the tooth's radial line), by Newton's method from ``start``."""
+    c, q = setup.cutter, setup.rake_frame
+
+    def residual(th: np.ndarray) -> np.ndarray:
+        p = np.stack([radii * np.cos(th), radii * np.sin(th), np.zeros_like(th)], -1) @ q[:, :3].T + q[:, 3]
+        r = np.maximum(np.hypot(p[:, 0], p[:, 1]), c.base_radius)  # radial below the base circle
+        d = np.arctan2(p[:, 1], p[:, 0]) - flank_polar_angle(c, r, p[:, 2], side, 0)
+        return (d + np.pi) % (2 * np.pi) - np.pi
+
+    th = np.array(start, dtype=float)
+    for _ in range(NEWTON_ITERATIONS):
+        f = residual(th)
+        step = f / ((residual(th + NEWTON_H) - f) / NEWTON_H)
+        th -= np.clip(step, -NEWTON_MAX_STEP, NEWTON_MAX_STEP)
+        if np.max(np.abs(step)) < NEWTON_TOL:
+            break
+    return th
 
 
 def _assemble(kind: str, radii: np.ndarray, theta: dict[str, np.ndarray], r_low: float) -> CuttingEdge:
@@ -143,7 +171,7 @@ def _on_flank(
     g = setup.gear
     phi = np.asarray(phi0, dtype=float)
     shape = np.broadcast_shapes(np.shape(rho), np.shape(th_start), phi.shape)
-    rot, t = setup.cutter_pose(phi.ravel())  # the pose once per distinct angle
+    rot, t = setup.rake_pose(phi.ravel())  # the pose of the rake plane once per distinct angle
     # the rake-plane point (rho cos th, rho sin th, 0) is rho cos th * ex + rho sin th * ey + t in the work frame;
     # coordinate-major (3, angles) arrays keep each coordinate contiguous
     ex, ey, t = rot[:, :, 0].T.copy(), rot[:, :, 1].T.copy(), t.T.copy()
@@ -216,19 +244,20 @@ def _work_point(
 
 def _golden_section_min(
     f: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, hi: np.ndarray, xatol: float
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
     """The least value of ``f`` found on each interval [lo, hi] by golden-section search, all intervals at once.
 
     ``f`` maps an array of abscissae (one per interval) to the values there, so each step is one vectorized call:
     this replaces a scalar bounded search per interval, whose cost was Python overhead. The search stops when every
     bracket is narrower than ``xatol``; it returns the best value evaluated (the interior points only, like a bounded
-    scalar search). For a unimodal f it finds the minimum; where f jumps up (a contact leaving the flank) it closes
-    on the jump from the low side.
+    scalar search) and where it was found. For a unimodal f it finds the minimum; where f jumps up (a contact leaving
+    the flank) it closes on the jump from the low side.
     """
     a, b = np.array(lo, dtype=float), np.array(hi, dtype=float)
     c, d = b - _INV_GOLDEN * (b - a), a + _INV_GOLDEN * (b - a)
     fc, fd = f(c), f(d)
     best = np.minimum(fc, fd)
+    at = np.where(fc <= fd, c, d)
     width = float(np.max(b - a, initial=0.0))
     steps = math.ceil(math.log(xatol / width) / math.log(_INV_GOLDEN)) if width > xatol else 0
     for _ in range(steps):
@@ -239,8 +268,9 @@ def _golden_section_min(
         new_f = f(new_x)
         c, fc = np.where(left, new_x, kept_x), np.where(left, new_f, kept_f)
         d, fd = np.where(left, kept_x, new_x), np.where(left, kept_f, new_f)
+        at = np.where(new_f < best, new_x, at)
         best = np.minimum(best, new_f)
-    return best
+    return best, at
 
 
 def _envelope_bound(
@@ -252,8 +282,9 @@ def _envelope_bound(
     phi_grid: np.ndarray,
     band: tuple[float, float],
     xatol: float = REFINE_XATOL,
-) -> np.ndarray:
-    """sgn * theta*(rho) for each radius: the most restrictive theta_t over the tooth passage (+inf where none bounds).
+) -> tuple[np.ndarray, np.ndarray]:
+    """sgn * theta*(rho) for each radius: the most restrictive theta_t over the tooth passage (+inf where none bounds),
+    and the cutter angle at which it binds (nan where none).
 
     ``th0``: the involute edge at ``radii`` (the Newton start); ``sgn``: the direction in which the cutter tooth grows
     thicker. The extreme is taken on ``phi_grid`` for all radii at once and refined between the grid's neighbours of
@@ -266,10 +297,10 @@ def _envelope_bound(
     cand = np.where(active, sgn * th_t, np.inf)
     k = np.argmin(cand, axis=1)  # the most restrictive instant on the grid, refined in between
     grid_best = cand[np.arange(len(radii)), k]
-    out = np.full(len(radii), np.inf)
+    out, at = np.full(len(radii), np.inf), np.full(len(radii), np.nan)
     has = np.isfinite(grid_best)
     if not has.any():
-        return out
+        return out, at
     rho, start = radii[has], th0[has]
 
     def bound(phi: np.ndarray) -> np.ndarray:
@@ -278,7 +309,25 @@ def _envelope_bound(
 
     lo = phi_grid[np.maximum(k[has] - 1, 0)]
     hi = phi_grid[np.minimum(k[has] + 1, len(phi_grid) - 1)]
-    out[has] = np.minimum(grid_best[has], _golden_section_min(bound, lo, hi, xatol))  # 1e9 where none was found
+    refined, at_refined = _golden_section_min(bound, lo, hi, xatol)
+    out[has] = np.minimum(grid_best[has], refined)  # 1e9 where none was found
+    at[has] = np.where(refined <= grid_best[has], at_refined, phi_grid[k[has]])
+    return out, at
+
+
+#: A bound whose contact lies this close to the workpiece's tip circle [mm] comes from its tip corner, not its flank.
+CORNER = 1e-4
+
+
+def _contact_radius(setup: SkivingSetup, radii: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """The work-frame radius of the rake-face points (radii, theta) at cutter angles phi (nan where phi is)."""
+    out = np.full(len(radii), np.nan)
+    ok = np.isfinite(phi) & np.isfinite(theta)
+    if ok.any():
+        rot, t = setup.rake_pose(phi[ok])
+        p = np.stack([radii[ok] * np.cos(theta[ok]), radii[ok] * np.sin(theta[ok]), np.zeros(ok.sum())], -1)
+        w = np.einsum("nij,nj->ni", rot, p) + t
+        out[ok] = np.hypot(w[:, 0], w[:, 1])
     return out
 
 
@@ -294,11 +343,19 @@ def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) ->
     for side in SIDES:
         sgn = 1.0 if side == "left" else -1.0  # the direction in which the cutter tooth grows thicker
         th0 = inv_edge.theta[side]
-        bound = _envelope_bound(setup, radii, th0, _mate(setup, side), sgn, phi_grid, band)
+        bound, at = _envelope_bound(setup, radii, th0, _mate(setup, side), sgn, phi_grid, band)
         out = np.where(np.isfinite(bound), sgn * bound, th0)  # no instant bounds the edge: keep the involute
-        # Below the generating zone the "envelope" comes from the workpiece's tip corner and departs from the
-        # involute by far more than the crossing error: keep the involute there (it never meets the flank).
-        out = np.where(np.abs(out - th0) * radii > CONJUGATE_MAX_DEPARTURE, th0, out)
+        # Below the generating zone the "envelope" comes from the workpiece's tip corner: keep the section there (it
+        # never meets the flank). A plane rake face through the axes' crossing departs from the section by a few
+        # micrometres where it generates; an offset or stepped face by tens all along: there the corner is found
+        # by where the bound touches the workpiece.
+        departure = np.abs(out - th0) * radii
+        if setup.rake == RakeFace():
+            corner = departure > CONJUGATE_MAX_DEPARTURE
+        else:
+            r = _contact_radius(setup, radii, out, at)
+            corner = np.abs(r - g.tip_radius) < CORNER
+        out = np.where(corner, th0, out)
         # then make sure no point enters the whole nominal tooth (involute and tip circle)
         theta[side] = _clear_tip_corners(setup, radii, out, th0, phi_grid)
     return _assemble("conjugate", radii, theta, inv_edge.r_low)
@@ -310,7 +367,7 @@ def tooth_intrusion(setup: SkivingSetup, pts: np.ndarray, phi_grid: np.ndarray) 
     Material: inside a tooth's involute outline between the form circle and the tip circle.
     """
     g = setup.gear
-    rot, t = setup.cutter_pose(phi_grid)
+    rot, t = setup.rake_pose(phi_grid)
     q = np.column_stack([pts, np.zeros(len(pts))])
     w = np.matmul(rot, q.T).transpose(0, 2, 1) + t[:, None, :]  # (angles, points, 3); a batched matmul: einsum is slow
     r = np.hypot(w[..., 0], w[..., 1])

@@ -133,7 +133,8 @@ class ItemSolver:
 
     @classmethod
     def build(cls, tables: Sequence, packed: np.ndarray, outline) -> ItemSolver | None:
-        """From the pass tables (``motion``, ``t`` (m, P), ``angle`` (m,)), their packed pose table and the
+        """From the pass tables (``motion``, ``t`` (m, P), ``tooth`` (m, 3, 4), ``blank`` (3, 4)), their packed pose
+        table and the
         :class:`cutting.skiving.exact_sweep.Outline`; None unless every table's motion has a compiled pose."""
         poses = [compiled_pose(tb.motion) for tb in tables]
         if not poses or any(q is None for q in poses):
@@ -143,10 +144,10 @@ class ItemSolver:
         params = np.concatenate([q[1] for q in poses])
         owner = np.concatenate([np.full(len(tb.m), k, np.int64) for k, tb in enumerate(tables)])
         times = np.ascontiguousarray(np.concatenate([tb.t for tb in tables]), dtype=float)
-        angle = np.concatenate([np.asarray(tb.angle, dtype=float) for tb in tables])
+        frames = np.concatenate([passage_frames(tb.tooth, tb.blank) for tb in tables])
         return cls(
             (owner, kind, ptr, params),
-            (np.ascontiguousarray(packed), times, np.cos(angle), np.sin(angle)),
+            (np.ascontiguousarray(packed), times, frames),
             outline.compiled,
         )
 
@@ -277,19 +278,54 @@ def _sampled(w, o, t):
     return _mm(ri, ex), org
 
 
+#: floats per passage of :func:`passage_frames`: the tooth frame (9 + 3), the blank frame (9 + 3), and 1.0 where the
+#: tooth frame keeps the spindle's z axis (a turn about it and a shift along it: the plane needs only the third column)
+FRAME_FLOATS = 25
+
+
+def passage_frames(tooth: np.ndarray, blank: np.ndarray) -> np.ndarray:
+    """Each passage's frames as the kernels read them, (n, FRAME_FLOATS): tooth frames (n, 3, 4) [R | q] and the
+    blank frame (3, 4) [L | l], row-major."""
+    tooth = np.asarray(tooth, dtype=float)
+    n = len(tooth)
+    out = np.empty((n, FRAME_FLOATS))
+    out[:, 0:9] = tooth[:, :, :3].reshape(n, 9)
+    out[:, 9:12] = tooth[:, :, 3]
+    out[:, 12:21] = np.asarray(blank, dtype=float)[:, :3].ravel()
+    out[:, 21:24] = np.asarray(blank, dtype=float)[:, 3]
+    axial = (tooth[:, 0, 2] == 0) & (tooth[:, 1, 2] == 0) & (tooth[:, 2, 2] == 1) & (tooth[:, 0, 3] == 0)
+    out[:, 24] = axial & (tooth[:, 1, 3] == 0)
+    return np.ascontiguousarray(out)
+
+
 @njit(cache=True, error_model="numpy")
 def _tooth_pose(motion, tables, g, t, full=True):
-    """PassTable.exact_pose: the motion's frame at t turned by passage g's tooth angle (rotation 9-tuple, origin);
-    unless ``full``, only the rotation's third column (turns about the tooth's z axis leave it)."""
+    """PassTable.exact_pose: the motion's frame at t carrying passage g's tooth frame, in the blank's frame (rotation
+    9-tuple, origin); unless ``full``, only the rotation's third column and the origin are right (enough for the rake
+    plane: a tooth frame that keeps the spindle's z axis needs only that column of the spindle's rotation)."""
     owner, kind, ptr, params = motion
+    f = tables[2][g]
     k = owner[g]
+    whole = full or f[24] == 0.0
     if kind[k] == IDEAL:
-        rot, org = _ideal(params, ptr[k], t, full)
+        rot, org = _ideal(params, ptr[k], t, whole)
     else:
         rot, org = _sampled(params, ptr[k], t)
-    if full:
-        rot = _mm(rot, _rz(tables[2][g], tables[3][g]))
-    return rot, org
+    q = (f[0], f[1], f[2], f[3], f[4], f[5], f[6], f[7], f[8])
+    if whole:
+        o0 = rot[0] * f[9] + rot[1] * f[10] + rot[2] * f[11] + org[0]
+        o1 = rot[3] * f[9] + rot[4] * f[10] + rot[5] * f[11] + org[1]
+        o2 = rot[6] * f[9] + rot[7] * f[10] + rot[8] * f[11] + org[2]
+        rot = _mm(rot, q)
+    else:  # q turns about z and shifts along it: the third column stays, the origin moves along it
+        o0, o1, o2 = rot[2] * f[11] + org[0], rot[5] * f[11] + org[1], rot[8] * f[11] + org[2]
+    ll = (f[12], f[13], f[14], f[15], f[16], f[17], f[18], f[19], f[20])
+    org = (
+        ll[0] * o0 + ll[1] * o1 + ll[2] * o2 + f[21],
+        ll[3] * o0 + ll[4] * o1 + ll[5] * o2 + f[22],
+        ll[6] * o0 + ll[7] * o1 + ll[8] * o2 + f[23],
+    )
+    return _mm(ll, rot), org
 
 
 # ---- the margin ----------------------------------------------------------------------------------------------

@@ -33,6 +33,7 @@ from cutting.skiving.exact_kernels import PACKED, pack_table, segment_distances,
 from cutting.skiving.exact_solve import ItemSolver, compiled_outline, pose_table
 from cutting.skiving.passages import passage_range
 from cutting.skiving.sweep import outline_points, simplify_outline
+from cutting.skiving.tooling import IDENTITY
 from cutting.skiving.trajectory import PassMotion
 
 #: a line's crossing is solved to this [mm] (and the rake-plane instant to 1e-10 mm of the plane's distance)
@@ -154,24 +155,32 @@ class Outline:
         return out
 
 
-def _rot_z(angle: np.ndarray) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    r = np.zeros((*np.shape(angle), 3, 3))
-    r[..., 0, 0], r[..., 0, 1], r[..., 1, 0], r[..., 1, 1], r[..., 2, 2] = c, -s, s, c, 1.0
-    return r
+def tooth_frames_of(angle_or_frames: np.ndarray) -> np.ndarray:
+    """Tooth frames (n, 3, 4) from themselves or from tooth angles about the cutter axis (n,) [rad]."""
+    a = np.asarray(angle_or_frames, dtype=float)
+    if a.ndim == 3:
+        return a
+    a = np.atleast_1d(a)
+    out = np.zeros((len(a), 3, 4))
+    c, s = np.cos(a), np.sin(a)
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1], out[:, 2, 2] = c, -s, s, c, 1.0
+    return out
 
 
 @dataclass
 class PassTable:
-    """Every tooth passage of one pass with its pose table: times (m, P), the tooth frame in the work frame
-    (rotation (m, P, 3, 3) with the tooth's angle in it, origin (m, P, 3)) and one bounding ball per subwindow."""
+    """Every tooth passage of one pass with its pose table: times (m, P), the tooth's rake frame in the blank's frame
+    (rotation (m, P, 3, 3), origin (m, P, 3)) and one bounding ball per subwindow. ``tooth`` (m, 3, 4): each
+    passage's rake frame in the motion's (cutter spindle) frame; ``blank`` (3, 4): the motion's (work spindle)
+    frame in the blank's (:mod:`cutting.skiving.tooling`)."""
 
     motion: PassMotion
     m: np.ndarray
     t: np.ndarray
     rot: np.ndarray
     origin: np.ndarray
-    angle: np.ndarray
+    tooth: np.ndarray
+    blank: np.ndarray
     ball_centre: np.ndarray  # (m, S, 3)
     ball_radius: np.ndarray  # (m, S)
     box_centre: np.ndarray  # (m, S, 3): a box per subwindow, in the tooth frame of its middle sample
@@ -185,13 +194,14 @@ class PassTable:
     @classmethod
     def build(cls, motion: PassMotion, edge: CuttingEdge) -> PassTable:
         """The passages of a skiving pass, windowed as :func:`cutting.skiving.removal.cut` windows them."""
-        z0 = motion.setup.cutter.teeth
+        st = motion.setup
+        z0 = st.cutter.teeth
         half, m_first, m_last = passage_range(motion, edge)
         m = np.arange(m_first, m_last + 1)
         pitch = 2 * math.pi / z0
         t0 = np.asarray(motion.time_at_angle(m * pitch - half), dtype=float)
         t1 = np.asarray(motion.time_at_angle(m * pitch + half), dtype=float)
-        return cls.from_windows(motion, t0, t1, 2 * np.pi * ((-m) % z0) / z0, edge.outline, m)
+        return cls.from_windows(motion, t0, t1, st.passage_frames(m), edge.outline, m, st.blank_frame)
 
     @classmethod
     def from_windows(
@@ -199,23 +209,26 @@ class PassTable:
         motion,
         t0: np.ndarray,
         t1: np.ndarray,
-        angle: np.ndarray,
+        tooth: np.ndarray,
         outline: np.ndarray,
         m: np.ndarray | None = None,
+        blank: np.ndarray | None = None,
     ) -> PassTable:
-        """Passages of any motion with ``pose(t)``: windows [t0, t1] [s] and the tooth's angle about the cutter
-        axis [rad] (the tooth frame is the motion's frame turned by it)."""
-        t0, t1, angle = np.atleast_1d(t0).astype(float), np.atleast_1d(t1).astype(float), np.atleast_1d(angle)
+        """Passages of any motion with ``pose(t)``: windows [t0, t1] [s], each passage's tooth frame in the motion's
+        frame ((n, 3, 4), or the tooth's angle about the cutter axis (n,) [rad]) and the motion's frame in the
+        blank's ((3, 4), default the same frame)."""
+        t0, t1 = np.atleast_1d(t0).astype(float), np.atleast_1d(t1).astype(float)
+        tooth = tooth_frames_of(tooth)
+        blank = IDENTITY if blank is None else np.asarray(blank, dtype=float)
         n = len(t0)
         t = t0[:, None] + np.linspace(0.0, 1.0, SAMPLES)[None, :] * (t1 - t0)[:, None]
         rot, origin = pose_table(motion, t.ravel()) or motion.pose(t.ravel())
-        rot = (rot.reshape(n, SAMPLES, 3, 3) @ _rot_z(angle)[:, None]).copy()
-        origin = origin.reshape(n, SAMPLES, 3)
+        rot, origin = _in_blank(rot.reshape(n, SAMPLES, 3, 3), origin.reshape(n, SAMPLES, 3), tooth[:, None], blank)
         # balls and boxes from the outline simplified to 20 um; the margin covers that and the bulge between samples
         coarse = _coarse_outline(np.ascontiguousarray(outline, dtype=float).tobytes(), len(outline))
         bounds = sweep_bounds(rot, origin, np.ascontiguousarray(coarse, dtype=float), SUBWINDOWS, 0.1)
         m = np.arange(n) if m is None else m
-        return cls(motion, m, t, rot, origin, angle, *bounds)
+        return cls(motion, m, t, rot, origin, tooth, blank, *bounds)
 
     def rows(self, a: int, b: int) -> PassTable:
         """The passages a .. b - 1 of this table (same motion)."""
@@ -226,7 +239,8 @@ class PassTable:
             self.t[sl],
             self.rot[sl],
             self.origin[sl],
-            self.angle[sl],
+            self.tooth[sl],
+            self.blank,
             self.ball_centre[sl],
             self.ball_radius[sl],
             self.box_centre[sl],
@@ -234,10 +248,27 @@ class PassTable:
             self.box_half[sl],
         )
 
+    def take(self, index: np.ndarray) -> PassTable:
+        """The passages ``index`` (an index array or mask) of this table (same motion)."""
+        i = np.asarray(index)
+        parts = (self.t, self.rot, self.origin, self.tooth)
+        bounds = (self.ball_centre, self.ball_radius, self.box_centre, self.box_axes, self.box_half)
+        return PassTable(self.motion, self.m[i], *(a[i] for a in parts), self.blank, *(a[i] for a in bounds))
+
     def exact_pose(self, passage: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The tooth frame of the passages at times t, from the motion itself."""
         rot, origin = self.motion.pose(t)
-        return rot @ _rot_z(self.angle[passage]), origin
+        return _in_blank(rot, origin, self.tooth[passage], self.blank)
+
+
+def _in_blank(rot: np.ndarray, origin: np.ndarray, tooth: np.ndarray, blank: np.ndarray):
+    """The rake frame ``tooth`` of a spindle at poses (rot, origin) in the work spindle's frame, in the blank's
+    frame: blank o pose o tooth (contiguous arrays: the kernels read them)."""
+    r = rot @ tooth[..., :3]
+    o = (rot @ tooth[..., 3:])[..., 0] + origin
+    r = np.ascontiguousarray(blank[:, :3] @ r)
+    o = np.ascontiguousarray(o @ blank[:, :3].T + blank[:, 3])
+    return r, o
 
 
 @functools.lru_cache(maxsize=16)

@@ -27,6 +27,7 @@ import numpy as np
 from cutting.errors import Problem
 from cutting.flank import SIDES, flank_points
 from cutting.gear import MIN_TIP_THICKNESS, Gear
+from cutting.skiving.tooling import Clamping, CutterErrors, RakeFace, blank_frame, chain, rake_frame, tooth_frames
 
 #: Below this shaft angle the sliding speed is under ~3.5 % of the cutter's peripheral speed:
 #: the edge rubs instead of cutting. Modern practice is 10-30 deg (domain.md section 1).
@@ -70,6 +71,8 @@ class SkivingSetup:
     clearance: axial distance [mm] added before and after the engagement zone on every pass
     holder_diameter: the holder behind the cutter body [mm]; None means half the cutter's reference diameter
         (a typical arbor nut); the cutter body width behind the rake face is ``cutter.face_width``
+    rake, cutter_errors, clamping: the rake face, the cutter's deviations and the blank's clamping
+        (:mod:`cutting.skiving.tooling`); the edge is designed for the rake face of a cutter without deviations
     """
 
     gear: Gear
@@ -80,6 +83,9 @@ class SkivingSetup:
     feed_direction: str = "down"
     clearance: float = 1.0
     holder_diameter: float | None = None
+    rake: RakeFace = field(default_factory=RakeFace)
+    cutter_errors: CutterErrors = field(default_factory=CutterErrors)
+    clamping: Clamping = field(default_factory=Clamping)
     _cutter_tip: float | None = field(default=None, repr=False)
 
     @property
@@ -197,16 +203,33 @@ class SkivingSetup:
         Tip circle point t: (a -/+ r_a0 cos t, r_a0 sin t cos(Sigma), r_a0 sin t sin(Sigma)) in the frame
         above; inside the blank where its distance to the work axis passes the blank's tip radius.
         """
+        lo, hi = self.engagement_range(centre_distance)
+        return (hi - lo) / 2
+
+    def engagement_range(self, centre_distance: float) -> tuple[float, float]:
+        """Axial extent [z_lo, z_hi] [mm], from the carriage position s, of the part of the rake face's tip circle
+        inside the blank at ``centre_distance`` (symmetric about s unless the rake face is offset along the axis)."""
         ra0 = self.cutter_tip_diameter / 2
-        t = np.linspace(0.0, math.pi, 20001)
+        h = float(self.rake_frame[2, 3])
         sgn = 1.0 if self.gear.internal else -1.0
-        x = centre_distance + sgn * ra0 * np.cos(t)
-        y = ra0 * np.sin(t) * math.cos(self.shaft_angle)
+        if h == 0.0:  # the tip circle through the axes' common perpendicular: symmetric, half a turn is enough
+            t = np.linspace(0.0, math.pi, 20001)
+            x = centre_distance + sgn * ra0 * np.cos(t)
+            y = ra0 * np.sin(t) * math.cos(self.shaft_angle)
+            r = np.hypot(x, y)
+            inside = r >= self.gear.tip_radius if self.gear.internal else r <= self.gear.tip_radius
+            if not inside.any():
+                return 0.0, 0.0
+            half = float(ra0 * np.sin(t[inside]).max() * abs(math.sin(self.shaft_angle)))
+            return -half, half
+        t = np.linspace(-math.pi, math.pi, 40001)
+        p = np.stack([-sgn * ra0 * np.cos(t), ra0 * np.sin(t), np.full_like(t, h)], -1) @ rot_x(self.tilt).T
+        x, y, z = centre_distance + p[:, 0], p[:, 1], p[:, 2]
         r = np.hypot(x, y)
         inside = r >= self.gear.tip_radius if self.gear.internal else r <= self.gear.tip_radius
         if not inside.any():
-            return 0.0
-        return float(ra0 * np.sin(t[inside]).max() * abs(math.sin(self.shaft_angle)))
+            return 0.0, 0.0
+        return float(z[inside].min()), float(z[inside].max())
 
     @cached_property
     def pass_travel(self) -> tuple[float, ...]:
@@ -215,6 +238,12 @@ class SkivingSetup:
             self.gear.face_width + 2 * self.engagement_half_length(a) + 2 * self.clearance
             for a in self.pass_centre_distances
         )
+
+    @cached_property
+    def pass_middles(self) -> tuple[float, ...]:
+        """The carriage position at the middle of every pass [mm]: 0 unless an offset rake face moves the
+        engagement along the axis, then the position that centres the engagement on the face."""
+        return tuple(-sum(self.engagement_range(a)) / 2 for a in self.pass_centre_distances)
 
     @cached_property
     def pass_times(self) -> tuple[float, ...]:
@@ -264,6 +293,42 @@ class SkivingSetup:
         rot = back @ rot_x(self.tilt) @ rot_z(phi0 + self.cutter_phase)
         centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1)
         return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
+
+    @cached_property
+    def rake_frame(self) -> np.ndarray:
+        """Tooth 0's rake frame in the cutter's frame as designed (no deviations), (3, 4): what the edge is made in."""
+        return rake_frame(self.rake, self.cutter.helix_angle)
+
+    def rake_pose(self, phi0: np.ndarray, s: np.ndarray | float = 0.0, centre_distance: float | None = None):
+        """:meth:`cutter_pose` of tooth 0's designed rake frame (its edge's plane): ``(R, t)`` as there."""
+        rot, t = self.cutter_pose(phi0, s, centre_distance)
+        q = self.rake_frame
+        return rot @ q[:, :3], t + rot @ q[:, 3]
+
+    @cached_property
+    def tooth_frames(self) -> np.ndarray:
+        """Every cutter tooth's rake frame in the tool spindle's frame, (z0, 3, 4): its angle, pitch deviation, the
+        rake face and the cutter's runout (:func:`cutting.skiving.tooling.tooth_frames`)."""
+        c = self.cutter
+        return tooth_frames(
+            self.rake, self.cutter_errors, c.teeth, c.helix_angle, c.reference_radius, self.cutter_tip_diameter / 2
+        )
+
+    @cached_property
+    def blank_frame(self) -> np.ndarray:
+        """The work spindle's frame in the blank's, (3, 4): the clamping's eccentricity and tilt undone."""
+        return blank_frame(self.clamping, self.gear.reference_radius)
+
+    def passage_frames(self, m: np.ndarray) -> np.ndarray:
+        """The rake frames of the teeth at the mesh at cutter pitches ``m`` (tooth (-m) mod z0), (n, 3, 4)."""
+        return self.tooth_frames[(-np.asarray(m, dtype=np.int64)) % self.cutter.teeth]
+
+    def in_blank(self, rot: np.ndarray, trans: np.ndarray, tooth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Poses (rot (..., 3, 3), trans (..., 3)) of the cutter spindle in the work spindle's frame turned into
+        poses of the rake frame ``tooth`` ((3, 4), or one per pose) in the blank's frame."""
+        spindle = np.concatenate([rot, np.asarray(trans)[..., None]], -1)
+        out = chain(self.blank_frame, spindle, tooth)
+        return out[..., :3], out[..., 3]
 
     def edge_in_work_frame(self, edge: np.ndarray, phi0: np.ndarray) -> np.ndarray:
         """Edge points of every cutter tooth for each cutter angle, in the work frame (s = 0), shape (n, m, 3)."""

@@ -15,7 +15,6 @@ import numpy as np
 from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_solve import pose_table
-from cutting.skiving.kinematics import rot_z
 from cutting.skiving.sweep import outline_points, place, place_few
 from cutting.skiving.trajectory import PassMotion
 
@@ -92,7 +91,7 @@ def engagement_half_angle(motion: PassMotion, edge: CuttingEdge) -> float:
     """Cutter rotation from the mesh [rad] beyond which no point of a tooth reaches the blank's radius range."""
     g = motion.setup.gear
     phi = np.linspace(-math.pi, math.pi, 3601)
-    rot, trans = motion.setup.cutter_pose(phi, 0.0, motion.centre_distance)
+    rot, trans = motion.setup.rake_pose(phi, 0.0, motion.centre_distance)  # tooth 0's edge in its rake face
     w = place(outline_points(edge.outline), rot, trans)
     r = np.hypot(w[..., 0], w[..., 1])
     inside = (r > g.tip_radius).any(axis=1) if g.internal else (r < g.tip_radius).any(axis=1)
@@ -120,13 +119,15 @@ def passage_count(motion: PassMotion, edge: CuttingEdge) -> int:
 
 
 def tooth_pose(motion: PassMotion, m: int):
-    """pose(t) of the cutter tooth that is at the mesh at the m-th cutter tooth pitch, tooth (-m) mod z0."""
-    z0 = motion.setup.cutter.teeth
-    local = rot_z(2 * math.pi * ((-m) % z0) / z0)
+    """pose(t) of the rake frame of the cutter tooth that is at the mesh at the m-th cutter tooth pitch, tooth
+    (-m) mod z0, in the blank's frame (its pitch deviation, the rake face, the cutter's runout and the blank's
+    clamping: :mod:`cutting.skiving.tooling`)."""
+    st = motion.setup
+    tooth = st.passage_frames(np.array([m]))[0]
 
     def pose(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         rot, trans = pose_table(motion, t) or motion.pose(t)  # compiled where the motion has it: the same values
-        return rot @ local, trans
+        return st.in_blank(rot, trans, tooth)
 
     return pose
 

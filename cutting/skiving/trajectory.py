@@ -60,9 +60,10 @@ def ideal_passes(setup: SkivingSetup, reverse_feed: bool | None = None) -> list[
     omega0 = setup.tool_speed * 2 * math.pi / 60
     v = setup.axial_feed * setup.work_speed / 60
     out = []
-    for i, (a, travel) in enumerate(zip(setup.pass_centre_distances, setup.pass_travel, strict=True)):
+    spans = zip(setup.pass_centre_distances, setup.pass_travel, setup.pass_middles, strict=True)
+    for i, (a, travel, mid) in enumerate(spans):
         half = travel / 2
-        out.append(PassMotion(setup, i, a, omega0, half if down else -half, -v if down else v, travel / v))
+        out.append(PassMotion(setup, i, a, omega0, mid + (half if down else -half), -v if down else v, travel / v))
     return out
 
 

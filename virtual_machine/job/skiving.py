@@ -2,7 +2,8 @@
 optionally [measurement] and [modification] (virtual_machine.job.gear_sections).
 
 [cutter] is the skiving cutter (tooth count z0, helix angle beta0 in degrees, right hand positive; its profile
-shift, tip diameter, body width and holder diameter in mm; the edge made by the envelope method or an involute).
+shift, tip diameter, body width and holder diameter in mm; the edge made by the envelope method or an involute; its
+rake face), [cutter.errors] its deviations and [workpiece] the blank's clamping (virtual_machine.job.cutter_sections).
 [process] the cutter spindle speed n0 (rpm), the axial feed s (mm per workpiece revolution), the radial infeed
 passes (mm), the feed direction, the material, the approach and overrun (mm), and the tolerances of the swept solid,
 the dexel workpiece and gear.stl (mm). Its [machine] is the skiving machine of seeds 000 and 001 (head.MACHINE_KEYS).
@@ -11,7 +12,7 @@ the dexel workpiece and gear.stl (mm). Its [machine] is the skiving machine of s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any, ClassVar
 
@@ -19,6 +20,14 @@ from cutting.errors import InputError, Problem
 from cutting.gear import Gear, check_gear
 from cutting.modification import Modification, design_problems
 from cutting.skiving.kinematics import SkivingSetup, check_setup
+from cutting.skiving.tooling import Clamping, CutterErrors, RakeFace
+from virtual_machine.job.cutter_sections import (
+    RAKE_KEYS,
+    WORKPIECE_KEYS,
+    parse_clamping,
+    parse_cutter_errors,
+    rake_face,
+)
 from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, helix, parse_optional_sections
 from virtual_machine.job.head import MACHINE_KEYS, Job, MachineSection, model_problems
 from virtual_machine.job.keys import (
@@ -51,6 +60,7 @@ CUTTER_KEYS: dict[str, Key] = {
         "cutting edge: 'conjugate' (envelope method) or 'involute'",
         one_of("conjugate", "involute"),
     ),
+    **RAKE_KEYS,
 }
 
 PROCESS_KEYS: dict[str, Key] = {
@@ -76,6 +86,8 @@ PROCESS_KEYS: dict[str, Key] = {
 }
 
 SECTIONS_GEAR = {"gear": GEAR_KEYS, "cutter": CUTTER_KEYS, "process": PROCESS_KEYS, "machine": MACHINE_KEYS}
+#: sections a skiving job may add: the blank's clamping (the cutter's deviations are [cutter.errors], in [cutter])
+SKIVING_OPTIONAL = {"workpiece": WORKPIECE_KEYS}
 
 
 SkivingProcess = section_class("SkivingProcess", PROCESS_KEYS, "[process] of a skiving job (PROCESS_KEYS).", __name__)
@@ -102,6 +114,9 @@ class SkivingJob(Job):
     cutter_options: CutterOptions
     measurement: dict[str, Any]
     modification: Modification | None = None
+    rake: RakeFace = field(default_factory=RakeFace)
+    cutter_errors: CutterErrors = field(default_factory=CutterErrors)
+    clamping: Clamping = field(default_factory=Clamping)
 
     @cached_property
     def skiving(self) -> SkivingSetup:
@@ -115,6 +130,9 @@ class SkivingJob(Job):
             p.feed_direction,
             p.clearance,
             holder_diameter=self.cutter_options.holder_diameter,
+            rake=self.rake,
+            cutter_errors=self.cutter_errors,
+            clamping=self.clamping,
         )
 
 
@@ -126,7 +144,8 @@ def _skiving_machine():
 
 def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
     """Validate a skiving job. Raises :class:`InputError` with every problem."""
-    problems = unknown_sections(data, (*SECTIONS_GEAR, *OPTIONAL_SECTIONS), SECTIONS_GEAR)
+    problems = unknown_sections(data, (*SECTIONS_GEAR, *OPTIONAL_SECTIONS, *SKIVING_OPTIONAL), SECTIONS_GEAR)
+    data, errors_table = _without_cutter_errors(data)
     parsed = parse_sections(data, SECTIONS_GEAR, problems)
     measurement, modification = parse_optional_sections(data, problems)
     machine = parsed["machine"]
@@ -160,6 +179,10 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
                     "use more cutter teeth or a larger x0",
                 )
             )
+    cutter_errors = clamping = None
+    if cutter is not None:
+        cutter_errors = parse_cutter_errors(errors_table, cutter.z, gear.mn, problems)
+        clamping = parse_clamping(data.get("workpiece"), gear.mn, problems)
     if gear is not None and modification is not None:
         problems += design_problems(modification, gear)
     if problems:
@@ -173,11 +196,23 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
         CutterOptions(c["edge"], c["holder_diameter"]),
         measurement,
         modification,
+        rake_face(c),
+        cutter_errors,
+        clamping,
     )
     problems += check_setup(job.skiving)
     if problems:
         raise InputError(problems, source)
     return job
+
+
+def _without_cutter_errors(data: dict[str, Any]) -> tuple[dict[str, Any], Any]:
+    """The job without [cutter.errors] (parsed on its own), and that table (None when absent)."""
+    cutter = data.get("cutter")
+    if not isinstance(cutter, dict) or "errors" not in cutter:
+        return data, None
+    rest = {k: v for k, v in cutter.items() if k != "errors"}
+    return {**data, "cutter": rest}, cutter["errors"]
 
 
 def dexel_spacing(job: SkivingJob):

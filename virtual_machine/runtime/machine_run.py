@@ -417,10 +417,11 @@ class MachineRun:
         delta = (b2 - b2_0) - ratio * (b1 - b1_0) - diff * (p3 - p3_0) - np.asarray(self.corrections)
         q[:, 2:4] /= MM  # P3, X in mm
         segment, pass_index = a[:, 1 + n_ax].astype(int), a[:, 2 + n_ax].astype(int)
-        reach = np.array(
-            [setup.gear.face_width / 2 + setup.engagement_half_length(c) for c in setup.pass_centre_distances]
-        )
-        cutting = (segment == feed) & (np.abs(q[:, 2]) <= reach[np.clip(pass_index, 0, len(reach) - 1)])
+        # the carriage positions where the tip circle's engagement overlaps the face
+        reach = np.array([setup.engagement_range(c) for c in setup.pass_centre_distances])
+        lo, hi = reach[np.clip(pass_index, 0, len(reach) - 1)].T
+        b = setup.gear.face_width / 2
+        cutting = (segment == feed) & (q[:, 2] + lo <= b) & (q[:, 2] + hi >= -b)
         rec = MotionRecord(
             t=a[:, 0],
             q=q,

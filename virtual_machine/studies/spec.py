@@ -34,7 +34,9 @@ from virtual_machine.job import (
     parse_job,
     read_toml,
 )
+from virtual_machine.job.cutter_sections import CUTTER_ERROR_KEYS
 from virtual_machine.job.kinds import GRADED
+from virtual_machine.job.skiving import SKIVING_OPTIONAL
 
 METHODS = ("one-at-a-time", "grid", "monte-carlo")
 DISTRIBUTIONS = ("normal", "uniform")
@@ -139,7 +141,9 @@ def base_value(data: dict[str, Any], key: str) -> Any:
         except KeyError as exc:
             names = ", ".join(f.name for f in fields(SkivingMachineParams))
             raise InputError(Problem(key, None, str(exc.args[0]), f"valid parameters: {names}")) from None
-    sections = {**SECTIONS_GEAR, **OPTIONAL_SECTIONS}
+    sections = {**SECTIONS_GEAR, **OPTIONAL_SECTIONS, **SKIVING_OPTIONAL, "cutter.errors": CUTTER_ERROR_KEYS}
+    if key.startswith("cutter.errors."):  # the one nested table of a job's keys
+        section, rest = "cutter.errors", key[len("cutter.errors.") :]
     if section not in sections:
         valid = ", ".join(sections)
         raise InputError(Problem(key, None, f"unknown job section {section!r}", f"valid sections: {valid}"))

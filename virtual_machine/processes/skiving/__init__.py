@@ -196,11 +196,13 @@ def _cut_motions(job: Job, plan: SkivingPlan, trajectory: Path | None, rep: Repo
 def _cut_summary(report, stl, edge: str, motion: str, workers: int | None, st) -> dict:
     """measurement.json's ``cut``: the edge and motion cut along, the removal's figures, gear.stl, the chips."""
     from cutting.parallel import default_workers
+    from cutting.skiving.tooling import tooling_summary
     from virtual_machine.output.formatting import chip_record
 
     r = report.result
     return {
         "edge": edge,
+        "cutter": tooling_summary(st.rake, st.cutter_errors, st.clamping),
         "motion": motion,
         "sweep_error_um": r.sweep_error * 1e3,
         "pass_sweep_error_um": [r.pass_sweep_error.get(i, 0.0) * 1e3 for i in range(len(st.passes))],

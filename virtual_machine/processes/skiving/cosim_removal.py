@@ -99,8 +99,9 @@ class DexelRemoval:
             if not live.any():
                 continue
             ms, t0, t1 = ms[live], t0[live], t1[live]
-            angle = 2 * np.pi * ((-ms) % z0) / z0
-            table = PassTable.from_windows(motion, t0, t1, angle, self._edge.outline, ms)
+            st = motion.setup
+            frames = st.passage_frames(ms)
+            table = PassTable.from_windows(motion, t0, t1, frames, self._edge.outline, ms, st.blank_frame)
             tables.append(table)
             for k, (m, a, b) in enumerate(zip(ms, t0, t1, strict=True)):
                 # the part of the window the tooth spends in the blank's envelope: where the force acts (every

@@ -23,6 +23,7 @@ from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.passages import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
+from cutting.skiving.tooling import tooling_summary
 from cutting.skiving.trajectory import PassMotion
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut, unmeasured_mesh
@@ -198,6 +199,7 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
         "versions": versions(),
         "seed": None,  # nothing random: the same job gives the same gear
         "machine": {k: getattr(job.machine, k) for k in ("structure", "synchronization", "adaptive_correction")},
+        "cutter": tooling_summary(job.rake, job.cutter_errors, job.clamping),
         "durations_s": {**{k: round(v, 3) for k, v in durations.items()}, "machine": float(rec.t[-1])},
         "wall_split_s": {k: round(v, 3) for k, v in sim.seconds.items()},
         "synchronisation": summary(rec, job.gear.teeth),

@@ -1,0 +1,182 @@
+"""The cutter's deviations and the blank's clamping, cut on the ideal machine and measured on the exact swept surface
+against their first-order signatures (docs/cutter.md, "What each deviation does to the gear").
+
+Known answers, for a spur gear z2 = 20, mn = 1, cut by a z0 = 17, beta0 = 20 deg cutter:
+- clamping eccentricity e: F_r = 2e; the cumulative pitch a once-per-turn sinusoid of amplitude e / cos(alpha_y)
+  on the measuring circle; every tooth's profile slope changes by e * (its evaluation range in roll angle) as a
+  sinusoid round the gear, whose mean stays;
+- clamping tilt tau: every tooth's helix slope changes by tau * L_beta as a sinusoid round the gear;
+- a cutter tooth displaced by f along its pitch circle: the bands of the face it generates move by
+  f cos(alpha_n) cos(beta0) normal to the flank, into the material on the flank it leads with;
+- a cutter centre e_c off the spindle axis: tooth k moves by e_c in a direction fixed on the cutter, so the bands
+  it generates move by e_c cos(beta_b0) cos(theta_k - psi + const) normal to the flank: the deepest and highest
+  bands are +-e_c cos(beta_b0).
+The measurement's datum (the mean tooth position) takes up a constant share of a one-sided change: bands are
+measured from the median of the change along each trace.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from cutting.gear import Gear
+from cutting.skiving.edge import make_edge
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.kinematics import SkivingSetup
+from cutting.skiving.tooling import Clamping, CutterErrors
+from cutting.skiving.trajectory import ideal_passes
+from metrology.measure import MeasureOptions, measure_gear
+
+DEG = math.pi / 180
+UM = 1e3
+
+
+def setup_at(feed: float) -> SkivingSetup:
+    """The default job's gear and cutter in one full-depth pass at ``feed`` mm per work revolution."""
+    return SkivingSetup(Gear(20, 1.0, 20 * DEG, 0.0, 4.0), Gear(17, 1.0, 20 * DEG, 20 * DEG, 10.0), 3000, feed, (2.25,))
+
+
+#: fine feed marks (F_r 0.3 um) for the once-per-turn signatures; the default feed for the cutter's bands
+FINE, COARSE = setup_at(0.05), setup_at(0.2)
+
+
+@functools.cache
+def measured(st: SkivingSetup) -> dict:
+    sv = SweptVolumes(st.gear, make_edge(st, "conjugate"), ideal_passes(st))
+    return measure_gear(sv, st.gear, MeasureOptions())
+
+
+def sinusoid(values: np.ndarray) -> tuple[float, float]:
+    """Amplitude of the once-per-turn sinusoid fitted to one value per tooth, and the largest residual."""
+    z = len(values)
+    th = 2 * np.pi * np.arange(z) / z
+    a = np.stack([np.cos(th), np.sin(th), np.ones(z)], 1)
+    c = np.linalg.lstsq(a, values, rcond=None)[0]
+    return float(np.hypot(c[0], c[1])), float(np.abs(values - a @ c).max())
+
+
+def per_tooth(doc: dict, block: str, side: str, name: str) -> np.ndarray:
+    return np.array([t[name] for t in doc[block][side]["teeth"]])
+
+
+def band_change(base: dict, other: dict, side: str) -> np.ndarray:
+    """The change of every helix trace point [um], from the median change of its trace (the datum's share)."""
+    d = (np.array(other["_traces"]["helix"][side]) - np.array(base["_traces"]["helix"][side])) * UM
+    assert np.isfinite(d).mean() > 0.95
+    return d - np.nanmedian(d, axis=1, keepdims=True)
+
+
+def test_eccentricity_gives_twice_its_runout_and_a_sinusoidal_pitch():
+    e = 0.008
+    base, ecc = measured(FINE), measured(replace(FINE, clamping=Clamping(e, 40 * DEG)))
+    assert base["runout"]["F_r"] < 0.5  # the ideal cut's feed marks alone
+    assert ecc["runout"]["F_r"] == pytest.approx(2 * e * UM, rel=0.05)
+    g = FINE.gear
+    r_p = ecc["evaluation"]["pitch_diameter_mm"] / 2
+    alpha_y = math.acos(g.base_radius / r_p)
+    for side in ("left", "right"):
+        amplitude, residual = sinusoid(np.array(ecc["pitch"][side]["F_pi"]) - np.array(base["pitch"][side]["F_pi"]))
+        assert amplitude == pytest.approx(e * UM / math.cos(alpha_y), rel=0.05)
+        assert residual < 0.3
+        # each tooth's profile slope turns with it; their mean and the helix slopes stay
+        lo, hi = ecc["evaluation"]["profile_roll_mm"]
+        slope = per_tooth(ecc, "profile", side, "f_Halpha") - per_tooth(base, "profile", side, "f_Halpha")
+        assert sinusoid(slope)[0] == pytest.approx(e * UM * (hi - lo) / g.base_radius, rel=0.10)
+        assert abs(ecc["profile"][side]["f_Halpha_mean"] - base["profile"][side]["f_Halpha_mean"]) < 0.3
+        assert abs(ecc["helix"][side]["f_Hbeta_mean"] - base["helix"][side]["f_Hbeta_mean"]) < 0.3
+
+
+def test_tilt_turns_the_helix_slope_round_the_gear():
+    tilt = 0.02  # axial runout at the reference diameter: tau = tilt / d
+    base, tilted = measured(FINE), measured(replace(FINE, clamping=Clamping(tilt=tilt, tilt_phase=30 * DEG)))
+    lo, hi = tilted["evaluation"]["helix_z_mm"]
+    expected = tilt / FINE.gear.reference_diameter * (hi - lo) * UM
+    for side in ("left", "right"):
+        change = per_tooth(tilted, "helix", side, "f_Hbeta") - per_tooth(base, "helix", side, "f_Hbeta")
+        amplitude, residual = sinusoid(change)
+        assert amplitude == pytest.approx(expected, rel=0.10)
+        assert residual < 0.1 * expected
+        assert abs(tilted["helix"][side]["f_Hbeta_mean"] - base["helix"][side]["f_Hbeta_mean"]) < 0.3
+    assert tilted["runout"]["F_r"] < 1.0  # a tilt about mid face leaves the mid section where it was
+
+
+def test_one_cutter_tooth_ahead_cuts_its_bands_deeper_on_its_leading_flank():
+    f = 0.005
+    pitch = [0.0] * 17
+    pitch[5], pitch[6] = f, -f  # tooth 5 alone stands f ahead along +phi of the cutter
+    base, errored = measured(COARSE), measured(replace(COARSE, cutter_errors=CutterErrors(pitch=tuple(pitch))))
+    depth = f * math.cos(COARSE.cutter.alpha_n) * math.cos(COARSE.cutter.helix_angle) * UM
+    # the cutter's left flank faces +phi and generates the gear's left flank (cutting.skiving.edge._mate)
+    left, right = band_change(base, errored, "left"), band_change(base, errored, "right")
+    assert -np.nanmin(left, axis=1) == pytest.approx(np.full(20, depth), rel=0.15)  # every space meets tooth 5
+    assert np.nanmax(right, axis=1) == pytest.approx(np.full(20, depth), rel=0.15)  # material it left
+    assert np.nanmax(left) < 0.3 and np.nanmin(right) > -0.3  # no other tooth moved
+    # the bands where tooth 5 finished are where the kinematics put it: one band of one feed per meeting
+    banded = (left < -depth / 2).mean(axis=1)
+    z_lo, z_hi = errored["evaluation"]["helix_z_mm"]
+    bands = banded * (z_hi - z_lo) / COARSE.axial_feed
+    assert np.all((bands > 0.5) & (bands < 2.6))  # 17 revolutions (3.4 mm of feed) between two meetings
+
+
+def test_cutter_radial_runout_moves_every_band_by_its_tooths_offset():
+    e_c = 0.005
+    errors = CutterErrors(radial_runout=2 * e_c, radial_runout_phase=0.3)
+    base, errored = measured(COARSE), measured(replace(COARSE, cutter_errors=errors))
+    c = COARSE.cutter
+    beta_b0 = math.asin(math.sin(c.helix_angle) * math.cos(c.alpha_n))
+    expected = e_c * math.cos(beta_b0) * UM
+    for side in ("left", "right"):
+        d = (np.array(errored["_traces"]["helix"][side]) - np.array(base["_traces"]["helix"][side])) * UM
+        assert np.nanmax(d) == pytest.approx(expected, rel=0.15)  # the tooth the offset pushes into the space
+        assert -np.nanmin(d) == pytest.approx(expected, rel=0.15)  # and the one it pulls back
+
+
+def _job(**sections) -> dict:
+    import tomllib
+
+    from checks import JOBS
+
+    data = tomllib.loads((JOBS / "default.toml").read_text())
+    for name, table in sections.items():
+        if name == "errors":
+            data["cutter"]["errors"] = table
+        else:
+            data[name] = table
+    return data
+
+
+def test_deviations_are_job_keys_and_bad_ones_are_refused_with_what_to_change():
+    from cutting.errors import InputError
+    from virtual_machine.job import parse_job
+
+    job = parse_job(
+        _job(errors={"radial_runout": 0.006, "radial_runout_phase": 90.0}, workpiece={"eccentricity": 0.004})
+    )
+    st = job.skiving
+    assert st.cutter_errors.radial_runout == 0.006
+    assert st.cutter_errors.radial_runout_phase == pytest.approx(math.pi / 2)
+    assert st.clamping.eccentricity == 0.004
+    from virtual_machine.studies.spec import base_value, set_key
+
+    for key in ("cutter.errors.radial_runout", "workpiece.tilt", "cutter.rake_face_offset"):  # study keys
+        assert base_value(_job(), key) == 0.0
+        assert parse_job(set_key(_job(), key, 0.004)).skiving != parse_job(_job()).skiving
+    random = parse_job(_job(errors={"pitch_tolerance": 0.004, "seed": 7})).skiving.cutter_errors.pitch
+    assert len(random) == 17 and abs(sum(random)) < 1e-12 and max(map(abs, random)) <= 0.004 + 1e-12
+    for bad, key, says in [
+        ({"errors": {"pitch": [0.001] * 17}}, "cutter.errors.pitch", "subtract their mean"),
+        ({"errors": {"pitch": [0.0] * 5}}, "cutter.errors.pitch", "17 numbers"),
+        ({"errors": {"radial_runout": 8.0}}, "cutter.errors.radial_runout", "8 um is 0.008"),
+        ({"errors": {"radial_runot": 0.01}}, "cutter.errors.radial_runot", "did you mean 'radial_runout'"),
+        ({"workpiece": {"eccentricity": -0.01}}, "workpiece.eccentricity", ">= 0"),
+        ({"errors": {"pitch": [0.0] * 17, "pitch_tolerance": 0.01}}, "cutter.errors.pitch", "one of the two"),
+    ]:
+        with pytest.raises(InputError) as info:
+            parse_job(_job(**bad))
+        text = str(info.value)
+        assert key in text and says in text, text
