@@ -185,7 +185,8 @@ def test_a_gear_file_that_does_not_close_leaves_the_exact_measurement_standing(t
     from virtual_machine.processes.skiving.run import measure_written_cut
 
     st, report, doc, _ = small_cut()
-    job = SimpleNamespace(gear=st.gear, skiving=st, measurement=None, modification=None)  # what it reads of a job
+    process = SimpleNamespace(min_working_clearance=1.0)
+    job = SimpleNamespace(gear=st.gear, skiving=st, measurement=None, modification=None, process=process)  # as read
     mesh = to_trimesh(report.result.gear)
     holed = type(mesh)(mesh.vertices, mesh.faces[1:], process=False)
     stl = GearFile(holed, 0.0, len(mesh.faces), 0, False)

@@ -350,7 +350,7 @@ def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) ->
         # micrometres where it generates; an offset or stepped face by tens all along: there the corner is found
         # by where the bound touches the workpiece.
         departure = np.abs(out - th0) * radii
-        if setup.rake == RakeFace():
+        if setup.rake.kind == RakeFace.kind and setup.rake.offset == 0.0:
             corner = departure > CONJUGATE_MAX_DEPARTURE
         else:
             r = _contact_radius(setup, radii, out, at)

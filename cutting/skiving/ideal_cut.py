@@ -20,6 +20,7 @@ from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.passages import CutResult, expected_genus
 from cutting.skiving.removal import DEFAULT_SLAB
 from cutting.skiving.trajectory import ideal_passes
+from cutting.skiving.working_angles import check_working_clearance
 
 
 @dataclass
@@ -57,6 +58,7 @@ def cut_ideal(
     edge = make_edge(setup, edge_kind)
     motions = ideal_passes(setup) if motions is None else motions
     check_holder_side(motions, edge, setup.cutter.face_width, setup.holder_diameter_value)
+    check_working_clearance(setup, edge)  # the relieved flank off the flank it generates
     if removal not in REMOVALS:
         raise ValueError(f"removal {removal!r}: use one of {', '.join(REMOVALS)}")
     if removal == "dexel":

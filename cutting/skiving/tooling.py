@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 RAKE_FACES = ("plane", "stepped")
+#: the teeth's tip clearance when a job gives none [rad]: 6 deg, a guess from shaper-cutter practice (docs/cutter.md)
+DEFAULT_CLEARANCE_ANGLE = math.radians(6.0)
 
 
 @dataclass(frozen=True)
@@ -25,10 +27,13 @@ class RakeFace:
         face normal to its tooth direction on the reference cylinder: a step between neighbouring teeth)
     offset: the face's position along the cutter axis from the axes' common perpendicular [mm] (the face moves
         along +z of the cutter frame; the teeth are designed for it)
+    clearance_angle: the tip clearance alpha_a of the teeth's conical relief behind the face [rad]
+        (:class:`cutting.skiving.working_angles.Relief`; it leaves the edge as it is)
     """
 
     kind: str = "plane"
     offset: float = 0.0
+    clearance_angle: float = DEFAULT_CLEARANCE_ANGLE
 
 
 @dataclass(frozen=True)
@@ -184,6 +189,7 @@ def tooling_summary(rake: RakeFace, errors: CutterErrors, clamping: Clamping) ->
     return {
         "rake_face": rake.kind,
         "rake_face_offset_mm": rake.offset,
+        "clearance_angle_deg": math.degrees(rake.clearance_angle),
         "errors": {
             "radial_runout_mm": errors.radial_runout,
             "radial_runout_phase_deg": deg(errors.radial_runout_phase),

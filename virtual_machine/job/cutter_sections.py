@@ -13,6 +13,14 @@ from cutting.errors import Problem
 from cutting.skiving.tooling import RAKE_FACES, Clamping, CutterErrors, RakeFace, random_pitch
 from virtual_machine.job.keys import Key, at_least, one_of, parse_section
 
+
+def between(lo: float, hi: float):
+    def check(v: float) -> tuple[str, str] | None:
+        return None if lo <= v <= hi else (f"outside {lo:g}..{hi:g}", f"give a value from {lo:g} to {hi:g}")
+
+    return check
+
+
 RAKE_KEYS: dict[str, Key] = {
     "rake_face": Key(
         str,
@@ -23,6 +31,10 @@ RAKE_KEYS: dict[str, Key] = {
     ),
     "rake_face_offset": Key(
         float, 0.0, "mm", "the rake face's position along the cutter axis from the axes' common perpendicular"
+    ),
+    # a guess from shaper-cutter practice (docs/cutter.md, "Relief"): no cutter maker's table was at hand
+    "clearance_angle": Key(
+        float, 6.0, "deg", "tip clearance of the conical relief (the side clearance follows)", between(0.0, 20.0)
     ),
 }
 
@@ -127,4 +139,4 @@ def parse_clamping(table: Any, mn: float, problems: list[Problem]) -> Clamping:
 
 def rake_face(values: dict[str, Any]) -> RakeFace:
     """The rake face of a parsed [cutter] section."""
-    return RakeFace(values["rake_face"], values["rake_face_offset"])
+    return RakeFace(values["rake_face"], values["rake_face_offset"], math.radians(values["clearance_angle"]))

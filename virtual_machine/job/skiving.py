@@ -70,6 +70,10 @@ PROCESS_KEYS: dict[str, Key] = {
     "feed_direction": Key(str, "down", "", "'down' (towards -z) or 'up'", one_of("down", "up")),
     "material": MATERIAL,
     "clearance": Key(float, 1.0, "mm", "axial approach and overrun added to the engagement zone", at_least(0.0)),
+    # a guess: tool makers keep the working clearance a degree or more to keep the flank off the cut surface
+    "min_working_clearance": Key(
+        float, 1.0, "deg", "below this working clearance on the generating edge a run warns", at_least(0.0)
+    ),
     # defaults from benchmarks/bench_mesh_tolerance.py (docs/cutting.md, "The manifold solid's tolerance")
     "sweep_error": Key(
         float,

@@ -45,7 +45,15 @@ class Skiving(Process):
     }
 
     def setup(self, job: Job, options: SheetOptions | None = None) -> Product:
-        return sheet_product(job, self._options("setup", options).structure)
+        """The setting sheet, and the cutter's working angles per pass from the setup alone (docs/cutter.md)."""
+        from cutting.skiving.edge import make_edge
+        from cutting.skiving.working_angles import working_angle_summaries
+
+        sheet = sheet_product(job, self._options("setup", options).structure)
+        st = job.skiving
+        angles = working_angle_summaries(st, make_edge(st, job.cutter_options.edge), job.process.min_working_clearance)
+        doc = {**sheet.data, "working_angles": finite(angles)}
+        return Product("setup", doc, sheet.text + "\n" + format_working_angles(angles), sheet.files, sheet.out)
 
     def simulate(
         self, job: Job, out: Path, options: MachineSimulateOptions | None = None, reporter: Reporter | None = None
@@ -292,4 +300,21 @@ def format_run(run: dict, out: Path, rrd: Path | None) -> str:
         lines.append(f"  modification: {run['modification']}")
     files = ["gear.stl", "measurement.json", "report.html", "charts/"]
     lines.append(f"  files: {', '.join(str(out / x) for x in files)}" + (f", {rrd}" if rrd else ""))
+    return "\n".join(lines)
+
+
+def format_working_angles(passes: list[dict]) -> str:
+    """The working angles' extremes per pass, a line each."""
+    lines = ["working angles (ISO 3002-2, tool in use), the middle passage of each pass:"]
+    for p in passes:
+        at = p.get("clearance_min_at") or {}
+        lines.append(
+            f"  pass {p['pass']}: rake {p['rake_min_deg']:.1f} .. {p['rake_max_deg']:.1f} deg; clearance on the "
+            f"generated flank >= {p['clearance_min_deg']:.2f} deg ({at.get('edge', '-')} edge, "
+            f"{at.get('edge_position_mm', float('nan')):.2f} mm along it), on the engaged edge >= "
+            f"{p['clearance_min_engaged_deg']:.1f} deg; inclination <= {p['inclination_max_deg']:.1f} deg; uncut chip "
+            f"<= {p['chip_thickness_max_mm'] * 1e3:.0f} um; cutting speed <= {p['cutting_speed_max_m_min']:.0f} m/min"
+        )
+        if "warning" in p:
+            lines.append(f"    warning: {p['warning']}")
     return "\n".join(lines)

@@ -40,6 +40,7 @@ from cutting.skiving.passages import (
 from cutting.skiving.path_correction import PathCorrection
 from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
+from cutting.skiving.working_angles import check_working_clearance
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.job import Job, dexel_spacing
 from virtual_machine.processes.skiving.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
@@ -173,6 +174,7 @@ class CuttingRun:
         cut = self.force if forces else _no_force  # no force: the work accounting runs alike
         self.machine = MachineRun(job, params, servo_substeps, correction=correction, plan=plan, cut=cut)
         check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
+        check_working_clearance(setup, edge)  # the relieved flank off the flank it generates
         self.removal = _removal(job, setup, edge, plans, removal, workers)
         self.workers, self.snapshots_per_pass = workers, snapshots_per_pass
         # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the

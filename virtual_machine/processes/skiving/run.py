@@ -25,6 +25,7 @@ from cutting.skiving.passages import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
 from cutting.skiving.tooling import tooling_summary
 from cutting.skiving.trajectory import PassMotion
+from cutting.skiving.working_angles import working_angle_summaries
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
@@ -148,8 +149,10 @@ def measure_written_cut(
     except InputError as exc:  # the file does not close: say so beside the exact measurement, which stands
         measurement, _ = measure_cut(job.gear, exact, None, opts, bound)
         measurement["mesh"] = unmeasured_mesh(str(stl_path), str(exc), len(stl.mesh.faces))
+        measurement["working_angles"] = working_angle_summaries(job.skiving, edge, job.process.min_working_clearance)
         return measurement
     measurement, _ = measure_cut(job.gear, exact, mesh, opts, bound, str(stl_path), stl.simplification)
+    measurement["working_angles"] = working_angle_summaries(job.skiving, edge, job.process.min_working_clearance)
     return measurement
 
 
