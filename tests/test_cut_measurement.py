@@ -185,7 +185,7 @@ def test_a_gear_file_that_does_not_close_leaves_the_exact_measurement_standing(t
     from virtual_machine.processes.skiving.run import measure_written_cut
 
     st, report, doc, _ = small_cut()
-    process = SimpleNamespace(min_working_clearance=1.0)
+    process = SimpleNamespace(min_working_clearance=1.0, material="16MnCr5")
     job = SimpleNamespace(gear=st.gear, skiving=st, measurement=None, modification=None, process=process)  # as read
     mesh = to_trimesh(report.result.gear)
     holed = type(mesh)(mesh.vertices, mesh.faces[1:], process=False)

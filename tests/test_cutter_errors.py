@@ -111,7 +111,7 @@ def test_one_cutter_tooth_ahead_cuts_its_bands_deeper_on_its_leading_flank():
     pitch[5], pitch[6] = f, -f  # tooth 5 alone stands f ahead along +phi of the cutter
     base, errored = measured(COARSE), measured(replace(COARSE, cutter_errors=CutterErrors(pitch=tuple(pitch))))
     depth = f * math.cos(COARSE.cutter.alpha_n) * math.cos(COARSE.cutter.helix_angle) * UM
-    # the cutter's left flank faces +phi and generates the gear's left flank (cutting.skiving.edge._mate)
+    # the cutter's left flank faces +phi and generates the gear's left flank (cutting.skiving.edge.mate_flank)
     left, right = band_change(base, errored, "left"), band_change(base, errored, "right")
     assert -np.nanmin(left, axis=1) == pytest.approx(np.full(20, depth), rel=0.15)  # every space meets tooth 5
     assert np.nanmax(right, axis=1) == pytest.approx(np.full(20, depth), rel=0.15)  # material it left
@@ -166,12 +166,15 @@ def test_deviations_are_job_keys_and_bad_ones_are_refused_with_what_to_change():
     for key in ("cutter.errors.radial_runout", "workpiece.tilt", "cutter.rake_face_offset"):  # study keys
         assert base_value(_job(), key) == 0.0
         assert parse_job(set_key(_job(), key, 0.004)).skiving != parse_job(_job()).skiving
+    profiled = parse_job(_job(errors={"profile_slope_left": 0.004, "profile_form_right": -0.002})).skiving
+    assert profiled.cutter_errors.profile_slope == (0.004, 0.0) and profiled.cutter_errors.profile_form == (0.0, -0.002)
     random = parse_job(_job(errors={"pitch_tolerance": 0.004, "seed": 7})).skiving.cutter_errors.pitch
     assert len(random) == 17 and abs(sum(random)) < 1e-12 and max(map(abs, random)) <= 0.004 + 1e-12
     for bad, key, says in [
         ({"errors": {"pitch": [0.001] * 17}}, "cutter.errors.pitch", "subtract their mean"),
         ({"errors": {"pitch": [0.0] * 5}}, "cutter.errors.pitch", "17 numbers"),
         ({"errors": {"radial_runout": 8.0}}, "cutter.errors.radial_runout", "8 um is 0.008"),
+        ({"errors": {"profile_slope_left": -5.0}}, "cutter.errors.profile_slope_left", "8 um is 0.008"),
         ({"errors": {"radial_runot": 0.01}}, "cutter.errors.radial_runot", "did you mean 'radial_runout'"),
         ({"workpiece": {"eccentricity": -0.01}}, "workpiece.eccentricity", ">= 0"),
         ({"errors": {"pitch": [0.0] * 17, "pitch_tolerance": 0.01}}, "cutter.errors.pitch", "one of the two"),
@@ -180,3 +183,56 @@ def test_deviations_are_job_keys_and_bad_ones_are_refused_with_what_to_change():
             parse_job(_job(**bad))
         text = str(info.value)
         assert key in text and says in text, text
+
+
+@pytest.mark.parametrize("slope, form", [((0.005, -0.005), (0.0, 0.0)), ((0.0, 0.0), (0.005, 0.005))])
+def test_a_cutter_profile_deviation_maps_through_the_generating_onto_the_gear(slope, form):
+    """The cutter's profile deviation e(u) (u along its active flank by roll length, docs/cutter.md) moves the gear's
+    flank where the envelope says each edge radius generates it: by -e cos(beta_b0) along the normal (a spur gear's
+    transverse deviation). Predicted over the gear's evaluation range from the roll map (gear roll -> cutter roll),
+    against the exact measurement of the cut: f_Halpha within 10 %, f_falpha within 10 % plus the feed marks."""
+    from cutting.skiving.cutter_profile import active_flank, roll_map
+
+    base = measured(FINE)
+    errored = measured(replace(FINE, cutter_errors=CutterErrors(profile_slope=slope, profile_form=form)))
+    c = FINE.cutter
+    cos_bb0 = math.cos(math.asin(math.sin(c.helix_angle) * math.cos(c.alpha_n)))
+    lo, hi = errored["evaluation"]["profile_roll_mm"]
+    edge = make_edge(FINE, "conjugate")
+    for k, side in enumerate(("left", "right")):
+        l2, l0 = roll_map(FINE, edge, side)
+        at_tip, at_form = active_flank(FINE, edge, side)
+        roll = np.linspace(lo, hi, 200)
+        u = (np.interp(roll, l2, l0) - (at_tip + at_form) / 2) / (at_form - at_tip)
+        gear = -(slope[k] * u + form[k] * (4 * u**2 - 1 / 3)) * cos_bb0 * UM
+        line = np.polyfit(roll, gear, 1)
+        f_h, f_f = line[0] * (hi - lo), np.ptp(gear - np.polyval(line, roll))
+        change = errored["profile"][side]["f_Halpha_mean"] - base["profile"][side]["f_Halpha_mean"]
+        assert change == pytest.approx(f_h, rel=0.10)
+        if form[k]:
+            assert abs(errored["profile"][side]["f_falpha"] - f_f) <= 0.1 * f_f + base["profile"][side]["f_falpha"]
+
+
+def test_the_tooth_ahead_takes_more_of_the_chip_and_the_next_one_in_its_space_less():
+    """The load on every cutter tooth from the chips of the cut (cutting/skiving/tool_load.py): on the ideal cutter
+    all teeth take the same largest chip; with tooth 5 standing 5 um ahead, the finishing pass's chip energy grows
+    most on tooth 5 and falls most on the tooth that visits its space next, one work revolution later:
+    (5 - z2) mod z0 = 2 (passage m + z2, tooth (-m - z2) mod z0)."""
+    from cutting.materials import material
+    from cutting.skiving.ideal_cut import cut_ideal
+    from cutting.skiving.tool_load import tool_load
+
+    pitch = [0.0] * 17
+    pitch[5], pitch[6] = 0.005, -0.005
+    loads = []
+    for errors in (CutterErrors(), CutterErrors(pitch=tuple(pitch))):
+        st = replace(COARSE, passes=(1.75, 0.5), cutter_errors=errors)
+        loads.append(tool_load(cut_ideal(st, "conjugate", 0.01, 0.02).result.chips, st, material("16MnCr5")))
+    base, errored = loads
+    for p in base:
+        assert p["chip_thickness_spread"] < 1.01
+        paths = np.array([t["cut_length_m"] for t in p["teeth"]])
+        assert (paths > 0).all() and paths.max() / paths.min() < 1.05
+    energy = [np.array([t["chip_energy_J"] for t in load[-1]["teeth"]]) for load in (base, errored)]
+    change = energy[1] / energy[0] - 1
+    assert int(np.argmax(change)) == 5 and int(np.argmin(change)) == (5 - 20) % 17

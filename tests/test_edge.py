@@ -8,12 +8,12 @@ from scipy.optimize import minimize_scalar
 
 from cutting.gear import Gear
 from cutting.skiving.edge import (
-    _envelope_bound,
-    _mate,
     _on_flank,
     conjugate_edge,
+    envelope_bound,
     involute_edge,
     make_edge,
+    mate_flank,
     tooth_intrusion,
 )
 from cutting.skiving.kinematics import SkivingSetup
@@ -120,8 +120,8 @@ def test_vectorized_refinement_matches_a_scalar_bounded_search(probe_edges):
     band = (g.base_radius, g.tip_radius)
     idx = np.array([0, 12, 24, 42, 54])  # below the generating zone (no bound), at its lower end, over it
     for side, sgn in (("left", 1.0), ("right", -1.0)):
-        mate = _mate(st, side)
-        vec, _ = _envelope_bound(st, ie.radii[idx], ie.theta[side][idx], mate, sgn, phi, band)
+        mate = mate_flank(st, side)
+        vec, _ = envelope_bound(st, ie.radii[idx], ie.theta[side][idx], mate, sgn, phi, band)
         refined_by = []
         for j, i in enumerate(idx):
             grid, scalar = scalar_envelope_bound(st, ie.radii[i], ie.theta[side][i], mate, sgn, phi, band)

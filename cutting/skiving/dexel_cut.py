@@ -15,14 +15,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import manifold3d as mf
+import numpy as np
 
 from cutting.gear import Gear
 from cutting.skiving.dexel import DexelChip, DexelWorkpiece
 from cutting.skiving.dexel_lines import DexelSpacing, gear_phase
 from cutting.skiving.dexel_solid import dexel_solid
 from cutting.skiving.edge import CuttingEdge
-from cutting.skiving.exact_sweep import PassTable
-from cutting.skiving.passages import Chip, CutResult
+from cutting.skiving.exact_sweep import PassTable, coarse_outline
+from cutting.skiving.passages import Chip, CutResult, blank_window_of
 
 #: passages cut per call (a progress step)
 CHUNK = 256
@@ -108,9 +109,14 @@ def cut_dexel(
         t0 = time.perf_counter()
         table = PassTable.build(motion, edge)
         total = len(table.m)
+        points = coarse_outline(np.ascontiguousarray(edge.outline, dtype=float).tobytes(), len(edge.outline))
         for a in range(0, total, CHUNK):
-            for dexel in wp.cut([table.rows(a, min(a + CHUNK, total))]):
-                result.chips.append(chip_of(dexel, motion.setup, motion))
+            rows = table.rows(a, min(a + CHUNK, total))
+            for k, dexel in enumerate(wp.cut([rows])):
+                # the part of the window the tooth spends in the blank's envelope: its cutting path (tool load)
+                found = blank_window_of(gear, points, rows.t[k], rows.rot[k], rows.origin[k]) if dexel.volume else None
+                window = found[:2] if found is not None else (0.0, 0.0)
+                result.chips.append(chip_of(dexel, motion.setup, motion, *window))
             if progress is not None:
                 progress(motion.index, min(a + CHUNK, total), total)
         cut.pass_seconds.append(time.perf_counter() - t0)

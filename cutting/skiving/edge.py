@@ -85,7 +85,7 @@ def involute_edge(setup: SkivingSetup, points: int = 120) -> CuttingEdge:
         theta[side] = np.arctan2(p[:, 1], p[:, 0])
         if not end_plane:
             theta[side] = _section(setup, radii, theta[side], side)
-    return _assemble("involute", radii, theta, r_low)
+    return assemble_edge("involute", radii, theta, r_low)
 
 
 def _section(setup: SkivingSetup, radii: np.ndarray, start: np.ndarray, side: Side) -> np.ndarray:
@@ -109,7 +109,7 @@ def _section(setup: SkivingSetup, radii: np.ndarray, start: np.ndarray, side: Si
     return th
 
 
-def _assemble(kind: str, radii: np.ndarray, theta: dict[str, np.ndarray], r_low: float) -> CuttingEdge:
+def assemble_edge(kind: str, radii: np.ndarray, theta: dict[str, np.ndarray], r_low: float) -> CuttingEdge:
     # the cutter is external: its left flank is on the +theta side of tooth 0
     right = np.stack([radii * np.cos(theta["right"]), radii * np.sin(theta["right"])], -1)
     left = np.stack([radii * np.cos(theta["left"]), radii * np.sin(theta["left"])], -1)[::-1]
@@ -119,7 +119,7 @@ def _assemble(kind: str, radii: np.ndarray, theta: dict[str, np.ndarray], r_low:
     return CuttingEdge(kind, outline, radii, theta, r_low, float(radii[-1]))
 
 
-def _mate(setup: SkivingSetup, side: Side) -> Side:
+def mate_flank(setup: SkivingSetup, side: Side) -> Side:
     """The workpiece flank that the cutter flank ``side`` generates (checked at the mesh position)."""
     c = setup.cutter
     xi = math.sqrt(max(c.reference_radius**2 - c.base_radius**2, 0.0)) / c.base_radius
@@ -273,7 +273,7 @@ def _golden_section_min(
     return best, at
 
 
-def _envelope_bound(
+def envelope_bound(
     setup: SkivingSetup,
     radii: np.ndarray,
     th0: np.ndarray,
@@ -319,7 +319,7 @@ def _envelope_bound(
 CORNER = 1e-4
 
 
-def _contact_radius(setup: SkivingSetup, radii: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+def contact_radius(setup: SkivingSetup, radii: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """The work-frame radius of the rake-face points (radii, theta) at cutter angles phi (nan where phi is)."""
     out = np.full(len(radii), np.nan)
     ok = np.isfinite(phi) & np.isfinite(theta)
@@ -343,7 +343,7 @@ def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) ->
     for side in SIDES:
         sgn = 1.0 if side == "left" else -1.0  # the direction in which the cutter tooth grows thicker
         th0 = inv_edge.theta[side]
-        bound, at = _envelope_bound(setup, radii, th0, _mate(setup, side), sgn, phi_grid, band)
+        bound, at = envelope_bound(setup, radii, th0, mate_flank(setup, side), sgn, phi_grid, band)
         out = np.where(np.isfinite(bound), sgn * bound, th0)  # no instant bounds the edge: keep the involute
         # Below the generating zone the "envelope" comes from the workpiece's tip corner: keep the section there (it
         # never meets the flank). A plane rake face through the axes' crossing departs from the section by a few
@@ -353,12 +353,12 @@ def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) ->
         if setup.rake.kind == RakeFace.kind and setup.rake.offset == 0.0:
             corner = departure > CONJUGATE_MAX_DEPARTURE
         else:
-            r = _contact_radius(setup, radii, out, at)
+            r = contact_radius(setup, radii, out, at)
             corner = np.abs(r - g.tip_radius) < CORNER
         out = np.where(corner, th0, out)
         # then make sure no point enters the whole nominal tooth (involute and tip circle)
         theta[side] = _clear_tip_corners(setup, radii, out, th0, phi_grid)
-    return _assemble("conjugate", radii, theta, inv_edge.r_low)
+    return assemble_edge("conjugate", radii, theta, inv_edge.r_low)
 
 
 def tooth_intrusion(setup: SkivingSetup, pts: np.ndarray, phi_grid: np.ndarray) -> np.ndarray:
@@ -409,4 +409,9 @@ def make_edge(setup: SkivingSetup, kind: str, points: int = 120) -> CuttingEdge:
     several stages; the edge is immutable)."""
     if kind not in EDGE_KINDS:
         raise ValueError(f"cutter.edge = {kind!r}: unknown edge; use 'involute' or 'conjugate'")
-    return involute_edge(setup, points) if kind == "involute" else conjugate_edge(setup, points)
+    edge = involute_edge(setup, points) if kind == "involute" else conjugate_edge(setup, points)
+    if setup.cutter_errors.profile:  # the cutter as made: its profile deviations on the edge as designed
+        from cutting.skiving.cutter_profile import deviated_edge
+
+        edge = deviated_edge(setup, edge)
+    return edge

@@ -225,7 +225,7 @@ class PassTable:
         rot, origin = pose_table(motion, t.ravel()) or motion.pose(t.ravel())
         rot, origin = _in_blank(rot.reshape(n, SAMPLES, 3, 3), origin.reshape(n, SAMPLES, 3), tooth[:, None], blank)
         # balls and boxes from the outline simplified to 20 um; the margin covers that and the bulge between samples
-        coarse = _coarse_outline(np.ascontiguousarray(outline, dtype=float).tobytes(), len(outline))
+        coarse = coarse_outline(np.ascontiguousarray(outline, dtype=float).tobytes(), len(outline))
         bounds = sweep_bounds(rot, origin, np.ascontiguousarray(coarse, dtype=float), SUBWINDOWS, 0.1)
         m = np.arange(n) if m is None else m
         return cls(motion, m, t, rot, origin, tooth, blank, *bounds)
@@ -272,7 +272,7 @@ def _in_blank(rot: np.ndarray, origin: np.ndarray, tooth: np.ndarray, blank: np.
 
 
 @functools.lru_cache(maxsize=16)
-def _coarse_outline(outline: bytes, n: int) -> np.ndarray:
+def coarse_outline(outline: bytes, n: int) -> np.ndarray:
     """The outline simplified to 20 um, as the balls and boxes bound it (kept: a run asks for it per passage)."""
     return outline_points(simplify_outline(np.frombuffer(outline).reshape(n, 2), 0.02)[0])
 

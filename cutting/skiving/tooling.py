@@ -47,6 +47,8 @@ class CutterErrors:
     pitch: single pitch deviations f_pt [mm], one per cutter pitch (pitch k lies between teeth k - 1 and k, counted
         along +phi of the cutter), summing to zero; () for a cutter without pitch deviations. The reference circle's
         arc: tooth k stands (f_pt,1 + ... + f_pt,k) / r0 ahead of its nominal angle.
+    profile_slope, profile_form: each flank's (left, right) profile slope f_H and form f_f deviation [mm], the same
+        on every tooth (:mod:`cutting.skiving.cutter_profile`)
     """
 
     radial_runout: float = 0.0
@@ -54,10 +56,17 @@ class CutterErrors:
     axial_runout: float = 0.0
     axial_runout_phase: float = 0.0
     pitch: tuple[float, ...] = ()
+    profile_slope: tuple[float, float] = (0.0, 0.0)
+    profile_form: tuple[float, float] = (0.0, 0.0)
 
     @property
     def any(self) -> bool:
-        return bool(self.radial_runout or self.axial_runout or any(self.pitch))
+        return bool(self.radial_runout or self.axial_runout or any(self.pitch) or self.profile)
+
+    @property
+    def profile(self) -> bool:
+        """Whether the edge carries profile deviations."""
+        return any(self.profile_slope) or any(self.profile_form)
 
 
 @dataclass(frozen=True)
@@ -196,6 +205,8 @@ def tooling_summary(rake: RakeFace, errors: CutterErrors, clamping: Clamping) ->
             "axial_runout_mm": errors.axial_runout,
             "axial_runout_phase_deg": deg(errors.axial_runout_phase),
             "pitch_mm": list(errors.pitch),
+            "profile_slope_mm": {"left": errors.profile_slope[0], "right": errors.profile_slope[1]},
+            "profile_form_mm": {"left": errors.profile_form[0], "right": errors.profile_form[1]},
         },
         "clamping": {
             "eccentricity_mm": clamping.eccentricity,

@@ -16,7 +16,7 @@ import numpy as np
 from cutting.errors import InputError, Problem
 from cutting.flank import flank_normals, flank_points
 from cutting.gear import Gear
-from cutting.skiving.edge import CuttingEdge, _contact_radius, _envelope_bound, _mate
+from cutting.skiving.edge import CuttingEdge, contact_radius, envelope_bound, mate_flank
 from cutting.skiving.exact_sweep import PassTable, SweptVolumes
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.passages import passage_range, tooth_pose
@@ -421,9 +421,9 @@ def contact_angles(
         sgn = 1.0 if side == "left" else -1.0
         idx = np.arange(m) if side == "right" else n - 1 - np.arange(m)  # outline order: right up, left down
         theta = np.arctan2(frames.points[idx, 1], frames.points[idx, 0])
-        bound, at = _envelope_bound(st, edge.radii, theta, _mate(st, side), sgn, phi_grid, band)
+        bound, at = envelope_bound(st, edge.radii, theta, mate_flank(st, side), sgn, phi_grid, band)
         touches = _on_trend((sgn * bound - theta) * edge.radii)
-        r = _contact_radius(st, edge.radii, theta, at)
+        r = contact_radius(st, edge.radii, theta, at)
         # contacts strictly on the involute: off its ends (the tip corner, the form circle) by CONTACT_MARGIN mn
         fillet = g.rack.rho_f * (1 - math.sin(g.alpha_n)) * g.mn  # the root fillet's height on the rack
         lo, hi = (

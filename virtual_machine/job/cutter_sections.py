@@ -50,6 +50,11 @@ CUTTER_ERROR_KEYS: dict[str, Key] = {
     "pitch": Key(list, None, "mm", "single pitch deviations f_pt, one per cutter pitch (pitch k: teeth k-1 to k)"),
     "pitch_tolerance": Key(float, None, "mm", "a random cutter: single pitch deviations within +-this", at_least(0)),
     "seed": Key(int, 0, "", "the random cutter's seed (with pitch_tolerance)"),
+    **{
+        f"profile_{kind}_{side}": Key(float, 0.0, "mm", f"the {side} flanks' profile {kind} deviation ({doc})")
+        for kind, doc in (("slope", "f_H over the active flank, + more tool material towards its tip"), ("form", "f_f"))
+        for side in ("left", "right")
+    },
 }
 
 WORKPIECE_KEYS: dict[str, Key] = {
@@ -86,7 +91,10 @@ def parse_cutter_errors(table: Any, teeth: int, mn: float, problems: list[Proble
     v = parse_section("cutter.errors", table if table is not None else {}, CUTTER_ERROR_KEYS, problems)
     if len(problems) > before or not v:  # a key in error has no value: the problems say what to change
         return CutterErrors()
-    problems += _size_problems("cutter.errors", v, ("radial_runout", "axial_runout", "pitch_tolerance"), mn)
+    sizes = ("radial_runout", "axial_runout", "pitch_tolerance", *(k for k in v if k.startswith("profile_")))
+    problems += _size_problems(
+        "cutter.errors", {k: abs(x) if isinstance(x, float) else x for k, x in v.items()}, sizes, mn
+    )
     pitch: tuple[float, ...] = ()
     if v.get("pitch") is not None and v.get("pitch_tolerance") is not None:
         problems.append(Problem("cutter.errors.pitch", v["pitch"], "given with pitch_tolerance", "give one of the two"))
@@ -100,6 +108,8 @@ def parse_cutter_errors(table: Any, teeth: int, mn: float, problems: list[Proble
         v["axial_runout"],
         math.radians(v["axial_runout_phase"]),
         pitch,
+        (v["profile_slope_left"], v["profile_slope_right"]),
+        (v["profile_form_left"], v["profile_form_right"]),
     )
 
 

@@ -18,11 +18,13 @@ import numpy as np
 
 from cutting.errors import InputError, Problem, UnmeasurableError, UnmeasurableGearError
 from cutting.gear_file import GearFile, write_gear_stl
+from cutting.materials import material
 from cutting.parallel import default_workers
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.passages import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
+from cutting.skiving.tool_load import tool_load
 from cutting.skiving.tooling import tooling_summary
 from cutting.skiving.trajectory import PassMotion
 from cutting.skiving.working_angles import working_angle_summaries
@@ -149,10 +151,16 @@ def measure_written_cut(
     except InputError as exc:  # the file does not close: say so beside the exact measurement, which stands
         measurement, _ = measure_cut(job.gear, exact, None, opts, bound)
         measurement["mesh"] = unmeasured_mesh(str(stl_path), str(exc), len(stl.mesh.faces))
-        measurement["working_angles"] = working_angle_summaries(job.skiving, edge, job.process.min_working_clearance)
-        return measurement
+        return _with_the_tool(measurement, job, edge, cut)
     measurement, _ = measure_cut(job.gear, exact, mesh, opts, bound, str(stl_path), stl.simplification)
+    return _with_the_tool(measurement, job, edge, cut)
+
+
+def _with_the_tool(measurement: dict[str, Any], job: Job, edge: CuttingEdge, cut: CutResult) -> dict[str, Any]:
+    """The cutter's side of the cut beside the gear's measurement: its working angles per pass (from the setup) and
+    the load each of its teeth took (from the chips)."""
     measurement["working_angles"] = working_angle_summaries(job.skiving, edge, job.process.min_working_clearance)
+    measurement["tool_load"] = tool_load(cut.chips, job.skiving, material(job.process.material))
     return measurement
 
 

@@ -1,0 +1,74 @@
+"""The cutter's profile deviations: a slope and a form deviation of each flank of its edge, the same on every tooth,
+as a cutter measuring machine reports them (transverse, along the base tangent, in the rake face), over the active
+flank: the part of the edge that generates the gear's flank from its form circle to its tip.
+
+With u the position along that part of the cutter's flank by its roll length L0 (-1/2 where it generates the gear's
+tip, +1/2 where it generates the gear's form circle: towards the cutter's tip), a flank's deviation is
+
+    e(u) = f_H u + f_f (4 u^2 - 1/3)      [mm, + more tool material]
+
+a slope f_H across the active flank and a parabola of range f_f about its mean line. The edge's polar angle moves by
+e / r_b0 (a transverse base-tangent deviation on an involute is a turn of the flank by e / r_b0).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cutting.skiving.edge import CuttingEdge, assemble_edge, contact_radius, envelope_bound, mate_flank
+from cutting.skiving.kinematics import SkivingSetup
+
+#: an edge radius generates the flank where it lies this close [mm] to the envelope (the involute edge is a few
+#: micrometres off it, the radii below the generating zone tens)
+TOUCHING = 0.005
+
+
+def roll_map(setup: SkivingSetup, edge: CuttingEdge, side: str) -> tuple[np.ndarray, np.ndarray]:
+    """Where flank ``side`` of the edge generates the gear's flank: the gear's roll lengths L2 [mm] (increasing) and
+    the cutter's L0 [mm] of the edge radii that generate them (the envelope's contacts, :mod:`cutting.skiving.edge`)."""
+    g, c = setup.gear, setup.cutter
+    sgn = 1.0 if side == "left" else -1.0
+    band = (g.tip_radius, g.root_radius) if g.internal else (g.base_radius, g.tip_radius)
+    grid = np.linspace(-0.5 * math.pi, 0.5 * math.pi, 1500)
+    theta = edge.theta[side]
+    bound, at = envelope_bound(setup, edge.radii, theta, mate_flank(setup, side), sgn, grid, band)
+    r = contact_radius(setup, edge.radii, theta, at)
+    touching = np.isfinite(r) & (np.abs(sgn * bound - theta) * edge.radii < TOUCHING)
+    if touching.sum() < 3:
+        raise ValueError(f"the {side} edge generates no flank: no profile deviation can be placed on it")
+    l0 = np.sqrt(np.maximum(edge.radii[touching] ** 2 - c.base_radius**2, 0.0))
+    l2 = np.sqrt(np.maximum(r[touching] ** 2 - g.base_radius**2, 0.0))
+    order = np.argsort(l2)
+    return l2[order], l0[order]
+
+
+def active_flank(setup: SkivingSetup, edge: CuttingEdge, side: str) -> tuple[float, float]:
+    """The cutter roll lengths L0 [mm] of the edge radii that generate the gear's tip and its form circle on flank
+    ``side`` (:func:`roll_map`, interpolated)."""
+    g = setup.gear
+    l2, l0 = roll_map(setup, edge, side)
+    form = max(g.base_radius, g.rack_form_diameter / 2) if not g.internal else g.root_radius
+    ends = [math.sqrt(max(x**2 - g.base_radius**2, 0.0)) for x in (g.tip_radius, form)]
+    at_tip, at_form = (float(np.interp(e, l2, l0)) for e in ends)
+    return at_tip, at_form
+
+
+def deviated_edge(setup: SkivingSetup, edge: CuttingEdge) -> CuttingEdge:
+    """``edge`` with the setup's cutter profile deviations (:attr:`CutterErrors.profile_slope`, ``profile_form``,
+    each (left, right) [mm])."""
+    err = setup.cutter_errors
+    c = setup.cutter
+    theta = dict(edge.theta)
+    for k, side in enumerate(("left", "right")):
+        f_h, f_f = err.profile_slope[k], err.profile_form[k]
+        if not (f_h or f_f):
+            continue
+        at_tip, at_form = active_flank(setup, edge, side)
+        l0 = np.sqrt(np.maximum(edge.radii**2 - c.base_radius**2, 0.0))
+        u = (l0 - (at_tip + at_form) / 2) / (at_form - at_tip)
+        e = f_h * u + f_f * (4 * u**2 - 1 / 3)
+        # more tool material: the left flank (on +theta of the tooth) turns to +theta, the right one to -theta
+        theta[side] = theta[side] + (1.0 if side == "left" else -1.0) * e / c.base_radius
+    return assemble_edge(edge.kind, edge.radii, theta, edge.r_low)
