@@ -75,3 +75,36 @@ def test_frames_compose_and_invert():
     mount = chain(st.tooth_frames[0], inverse(chain(np.hstack([np.eye(3), np.zeros((3, 1))]), st.rake_frame)))
     assert np.hypot(mount[0, 3], mount[1, 3]) == pytest.approx(0.005, abs=1e-12)
     assert math.atan2(mount[1, 3], mount[0, 3]) == pytest.approx(0.4, abs=1e-12)
+
+
+def test_a_reground_tool_cuts_the_profile_slope_its_relief_predicts():
+    """A regrind of d takes d tan(alpha_a) / mn off the teeth's profile shift: the face cuts a thinner section of the
+    relieved teeth, the shop sets it to the same tooth thickness (a smaller centre distance), and the edge keeps the
+    new tool's departure from its involute section at each roll length L0 (docs/cutter.md, "Regrind"). The reground
+    cutter would need its own envelope's departure; the difference, mapped onto the gear through the generating
+    (-cos(beta_b0) along the normal), predicts the profile error the regrind makes: f_Halpha within 10 %."""
+    from cutting.skiving.cutter_profile import roll_map
+    from cutting.skiving.kinematics import reground
+
+    new, worn = FINE, reground(FINE, 1.5)
+    assert worn.cutter.x == pytest.approx(-1.5 * math.tan(6 * DEG) / FINE.cutter.mn)
+    assert worn.generated_root_diameter == pytest.approx(new.generated_root_diameter, abs=1e-9)
+    cut = {}
+    for name, st in (("new", new), ("worn", worn)):
+        sweep = SweptVolumes(st.gear, make_edge(st, "conjugate"), ideal_passes(st))
+        cut[name] = measure_gear(sweep, st.gear, MeasureOptions())
+    fresh = replace(worn, rake=replace(worn.rake, regrind=0.0))  # the reground cutter, designed afresh
+    edge, ideal = make_edge(worn, "conjugate"), make_edge(fresh, "conjugate")
+    c = worn.cutter
+    rb, cos_bb0 = c.base_radius, math.cos(math.asin(math.sin(c.helix_angle) * math.cos(c.alpha_n)))
+    lo, hi = cut["worn"]["evaluation"]["profile_roll_mm"]
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        more_tool = sign * (edge.theta[side] - ideal.theta[side]) * rb
+        l2, l0 = roll_map(fresh, ideal, side)
+        roll = np.linspace(lo, hi, 200)
+        at = np.interp(np.interp(roll, l2, l0), np.sqrt(np.maximum(edge.radii**2 - rb**2, 0.0)), more_tool)
+        line = np.polyfit(roll, -at * cos_bb0 * 1e3, 1)
+        change = cut["worn"]["profile"][side]["f_Halpha_mean"] - cut["new"]["profile"][side]["f_Halpha_mean"]
+        assert change == pytest.approx(line[0] * (hi - lo), rel=0.10)
+        assert abs(change) > 2.0  # the shops' known problem: a regrind tilts the profile
+        assert abs(cut["worn"]["pitch"][side]["f_p"] - cut["new"]["pitch"][side]["f_p"]) < 0.3

@@ -409,9 +409,32 @@ def make_edge(setup: SkivingSetup, kind: str, points: int = 120) -> CuttingEdge:
     several stages; the edge is immutable)."""
     if kind not in EDGE_KINDS:
         raise ValueError(f"cutter.edge = {kind!r}: unknown edge; use 'involute' or 'conjugate'")
+    if setup.rake.regrind:  # the tool as reground: the relieved teeth cut deeper, as designed when new
+        return reground_edge(setup, make_edge(setup.new_tool(), kind, points), points)
     edge = involute_edge(setup, points) if kind == "involute" else conjugate_edge(setup, points)
     if setup.cutter_errors.profile:  # the cutter as made: its profile deviations on the edge as designed
         from cutting.skiving.cutter_profile import deviated_edge
 
         edge = deviated_edge(setup, edge)
     return edge
+
+
+def reground_edge(setup: SkivingSetup, new_edge: CuttingEdge, points: int = 120) -> CuttingEdge:
+    """The edge of the reground tool of ``setup``: the rake face's section of its relieved teeth. The teeth were
+    ground with the new tool's design: its edge's departure from its involute section (the envelope's correction,
+    and any profile deviation), a base-tangent deviation along the cutter's roll length L0, is on the relieved flank
+    at every depth; the reground section is the reground cutter's involute section plus that departure at the same
+    L0 (docs/cutter.md, "Regrind")."""
+    new = setup.new_tool()
+    rb = setup.cutter.base_radius  # the relief changes the profile shift, not the base circle
+    inv_new = involute_edge(new, points)
+    inv = involute_edge(setup, points)
+
+    def roll(radii: np.ndarray) -> np.ndarray:
+        return np.sqrt(np.maximum(radii**2 - rb**2, 0.0))
+
+    theta = {}
+    for side in SIDES:
+        departure = (new_edge.theta[side] - inv_new.theta[side]) * rb  # base-tangent, signed as the angle
+        theta[side] = inv.theta[side] + np.interp(roll(inv.radii), roll(new_edge.radii), departure) / rb
+    return assemble_edge(new_edge.kind, inv.radii, theta, inv.r_low)

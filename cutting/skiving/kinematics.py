@@ -19,7 +19,7 @@ cutter climbs so the same space stays under the cutter.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -294,6 +294,19 @@ class SkivingSetup:
         centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1)
         return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
 
+    def new_tool(self) -> SkivingSetup:
+        """This setup with the tool as it was new (no regrind): the edge is designed for it. A regrind of depth d
+        along the axis took d tan(alpha_a) off the tip radius and d tan(alpha_a) / mn off the profile shift (the
+        relief of :class:`cutting.skiving.working_angles.Relief`)."""
+        r = self.rake
+        if not r.regrind:
+            return self
+        d = r.relief_depth(self.cutter.helix_angle) * math.tan(r.clearance_angle)
+        cutter = replace(
+            self.cutter, profile_shift=self.cutter.x + d / self.cutter.mn, tip_diameter=self.cutter_tip_diameter + 2 * d
+        )
+        return replace(self, cutter=cutter, rake=replace(r, regrind=0.0))
+
     @cached_property
     def rake_frame(self) -> np.ndarray:
         """Tooth 0's rake frame in the cutter's frame as designed (no deviations), (3, 4): what the edge is made in."""
@@ -516,3 +529,16 @@ def _interference_problem(setup: SkivingSetup) -> Problem | None:
             + ", another cutter helix angle, or change the profile shifts",
         )
     return None
+
+
+def reground(setup: SkivingSetup, regrind: float) -> SkivingSetup:
+    """``setup`` (a new tool) with ``regrind`` [mm] ground off its rake face: the cutter is the relieved tooth's
+    section that much deeper (its profile shift and tip smaller, :meth:`SkivingSetup.new_tool` undoes it); the
+    finishing centre distance follows from it, as a shop sets the reground tool to the same tooth thickness."""
+    if not regrind:
+        return setup
+    r = replace(setup.rake, regrind=regrind)
+    d = r.relief_depth(setup.cutter.helix_angle) * math.tan(r.clearance_angle)
+    c = setup.cutter
+    cutter = replace(c, profile_shift=c.x - d / c.mn, tip_diameter=setup.cutter_tip_diameter - 2 * d)
+    return replace(setup, cutter=cutter, rake=r)

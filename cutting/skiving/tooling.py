@@ -28,12 +28,20 @@ class RakeFace:
     offset: the face's position along the cutter axis from the axes' common perpendicular [mm] (the face moves
         along +z of the cutter frame; the teeth are designed for it)
     clearance_angle: the tip clearance alpha_a of the teeth's conical relief behind the face [rad]
-        (:class:`cutting.skiving.working_angles.Relief`; it leaves the edge as it is)
+        (:class:`cutting.skiving.working_angles.Relief`)
+    regrind: what has been ground off the face since the tool was new [mm, along the face's normal]: the face now
+        cuts the relieved teeth that much deeper (:func:`relief_depth`); the tool is set again with its face at
+        ``offset``
     """
 
     kind: str = "plane"
     offset: float = 0.0
     clearance_angle: float = DEFAULT_CLEARANCE_ANGLE
+    regrind: float = 0.0
+
+    def relief_depth(self, helix_angle: float) -> float:
+        """The regrind's depth along the cutter axis [mm] (a stepped face's normal leans by the helix angle)."""
+        return self.regrind / (1.0 if self.kind == "plane" else math.cos(helix_angle))
 
 
 @dataclass(frozen=True)
@@ -199,6 +207,7 @@ def tooling_summary(rake: RakeFace, errors: CutterErrors, clamping: Clamping) ->
         "rake_face": rake.kind,
         "rake_face_offset_mm": rake.offset,
         "clearance_angle_deg": math.degrees(rake.clearance_angle),
+        "regrind_mm": rake.regrind,
         "errors": {
             "radial_runout_mm": errors.radial_runout,
             "radial_runout_phase_deg": deg(errors.radial_runout_phase),

@@ -36,6 +36,7 @@ RAKE_KEYS: dict[str, Key] = {
     "clearance_angle": Key(
         float, 6.0, "deg", "tip clearance of the conical relief (the side clearance follows)", between(0.0, 20.0)
     ),
+    "regrind": Key(float, 0.0, "mm", "ground off the rake face since the tool was new", at_least(0.0)),
 }
 
 CUTTER_ERROR_KEYS: dict[str, Key] = {
@@ -149,4 +150,32 @@ def parse_clamping(table: Any, mn: float, problems: list[Problem]) -> Clamping:
 
 def rake_face(values: dict[str, Any]) -> RakeFace:
     """The rake face of a parsed [cutter] section."""
-    return RakeFace(values["rake_face"], values["rake_face_offset"], math.radians(values["clearance_angle"]))
+    return RakeFace(
+        values["rake_face"], values["rake_face_offset"], math.radians(values["clearance_angle"]), values["regrind"]
+    )
+
+
+def regrind_problems(setup, regrind: float, width: float) -> list[Problem]:
+    """Why the tool of ``setup`` (new) cannot be reground by ``regrind`` [mm]: the body it has, the relieved teeth
+    it leaves (their profile shift falls by d tan(alpha_a) / mn: under the cutter's undercut limit they are
+    undercut)."""
+    if not regrind:
+        return []
+    r, c = setup.rake, setup.cutter
+    depth = RakeFace(r.kind, r.offset, r.clearance_angle, regrind).relief_depth(c.helix_angle)
+    if depth >= width:
+        return [Problem("cutter.regrind", regrind, f"the cutter body is {width:g} mm wide", "a new tool")]
+    per_mm = math.tan(r.clearance_angle) / c.mn * depth / regrind if r.clearance_angle else 0.0
+    x_left = c.x - per_mm * regrind
+    if per_mm and x_left < c.min_profile_shift - 1e-9:
+        most = (c.x - c.min_profile_shift) / per_mm
+        return [
+            Problem(
+                "cutter.regrind",
+                regrind,
+                f"the reground teeth would be undercut (x0 {c.x:+.3f} -> {x_left:+.3f}, "
+                f"below {c.min_profile_shift:+.3f})",
+                f"regrind at most {most:.2f} mm: beyond, a new tool",
+            )
+        ]
+    return []

@@ -11,6 +11,7 @@ the dexel workpiece and gear.stl (mm). Its [machine] is the skiving machine of s
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -19,7 +20,7 @@ from typing import Any, ClassVar
 from cutting.errors import InputError, Problem
 from cutting.gear import Gear, check_gear
 from cutting.modification import Modification, design_problems
-from cutting.skiving.kinematics import SkivingSetup, check_setup
+from cutting.skiving.kinematics import SkivingSetup, check_setup, reground
 from cutting.skiving.tooling import Clamping, CutterErrors, RakeFace
 from virtual_machine.job.cutter_sections import (
     RAKE_KEYS,
@@ -27,6 +28,7 @@ from virtual_machine.job.cutter_sections import (
     parse_clamping,
     parse_cutter_errors,
     rake_face,
+    regrind_problems,
 )
 from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, helix, parse_optional_sections
 from virtual_machine.job.head import MACHINE_KEYS, Job, MachineSection, model_problems
@@ -124,6 +126,12 @@ class SkivingJob(Job):
 
     @cached_property
     def skiving(self) -> SkivingSetup:
+        """The setup of the tool as it is: designed new, then reground by ``rake.regrind``."""
+        return reground(self.new_tool, self.rake.regrind)
+
+    @cached_property
+    def new_tool(self) -> SkivingSetup:
+        """The setup with the tool as new (what its edge is designed for)."""
         p = self.process
         return SkivingSetup(
             self.gear,
@@ -134,7 +142,7 @@ class SkivingJob(Job):
             p.feed_direction,
             p.clearance,
             holder_diameter=self.cutter_options.holder_diameter,
-            rake=self.rake,
+            rake=dataclasses.replace(self.rake, regrind=0.0),
             cutter_errors=self.cutter_errors,
             clamping=self.clamping,
         )
@@ -204,6 +212,9 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
         cutter_errors,
         clamping,
     )
+    problems += regrind_problems(job.new_tool, job.rake.regrind, job.cutter.face_width)
+    if problems:
+        raise InputError(problems, source)
     problems += check_setup(job.skiving)
     if problems:
         raise InputError(problems, source)
