@@ -62,8 +62,9 @@ def runs(tmp_path_factory):
 @pytest.mark.slow
 def test_run_writes_every_file(runs) -> None:
     tmp, ((out, text), _), (sim, _) = runs
-    for name in ("charts/profile.png", "charts/topography.png", "charts/run.png"):
-        assert (out / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
+    charts = ("profile.png", "topography.png", "run.png", "working_angles.png", "tool_load.png")  # the cutter's too
+    for name in charts:
+        assert (out / "charts" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", name
     assert "RUN" in text and "machine and cut" in text and "engagements" in text
     job = parse_job(tomllib.loads(SMALL_JOB))
     # gear.stl is the cut gear: closed, its volume the co-simulation's solid's within what its simplification may
@@ -86,6 +87,12 @@ def test_run_writes_every_file(runs) -> None:
     for section in ("profile", "helix", "pitch"):
         assert all(math.isfinite(v) for side in ("left", "right") for v in _numbers(doc[section][side]))
     assert math.isfinite(doc["runout"]["F_r"]) and doc["runout"]["F_r"] >= 0
+    # the cutter's side: the working angles per pass (the issue's names) and the load on each of its teeth
+    angles = doc["working_angles"]
+    assert [a["pass"] for a in angles] == list(range(1, len(job.skiving.passes) + 1))
+    assert all(a["clearance_min_deg"] > 0 and a["chip_thickness_max_mm"] > 0 for a in angles)
+    assert {t["tooth"] for p in doc["tool_load"] for t in p["teeth"]} <= set(range(job.cutter.teeth))
+    assert doc["run"]["cutter"]["clearance_angle_deg"] == pytest.approx(6.0)
     # the run's figures are the co-simulation's: its stages' times, its machine time, its passages and chips
     durations = run["durations_s"]
     assert set(durations) >= {"machine and cut", "measurement", "report", "recording", "machine"}
@@ -113,7 +120,8 @@ def test_run_writes_every_file(runs) -> None:
     pulse_um = 2 * math.pi * job.gear.reference_radius / sheet["constants"]["p_cmd"] * 1e3
     assert abs(sync["mean_um"]) <= pulse_um
     page = (out / "report.html").read_text()
-    assert page.count("data:image/png;base64,") == 5  # profile, helix, pitch, topography, run
+    # profile, helix, pitch, topography, run, and the cutter's working angles and tool load
+    assert page.count("data:image/png;base64,") == 7
     for text_part in ("ISO 1328-1", "Setting sheet", "kx", "teeth = 18", "peak cutting force"):
         assert text_part in page
 

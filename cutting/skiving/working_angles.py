@@ -511,14 +511,21 @@ def check_working_clearance(setup: SkivingSetup, edge: CuttingEdge, source: str 
     return passes
 
 
-def working_angle_summaries(setup: SkivingSetup, edge: CuttingEdge, min_clearance_deg: float = 0.0) -> list[dict]:
-    """measurement.json's ``working_angles``: per pass the extremes of :func:`passage_angles` (the middle passage of
-    the ideal motion), with a ``warning`` where the generating clearance is under ``min_clearance_deg``."""
+def working_angle_maps(setup: SkivingSetup, edge: CuttingEdge) -> list[PassageAngles]:
+    """:func:`passage_angles` of every pass (the middle passage of the ideal motion), with the job's relief."""
     motions = ideal_passes(setup)
     relief = Relief(setup.rake.clearance_angle, setup.cutter.alpha_n)
+    return [passage_angles(setup, edge, relief, k, motions) for k in range(len(setup.passes))]
+
+
+def working_angle_summaries(
+    setup: SkivingSetup, edge: CuttingEdge, min_clearance_deg: float = 0.0, maps: list[PassageAngles] | None = None
+) -> list[dict]:
+    """measurement.json's ``working_angles``: per pass the extremes of its map (:func:`working_angle_maps`, or
+    ``maps`` already made), with a ``warning`` where the generating clearance is under ``min_clearance_deg``."""
     out = []
-    for k in range(len(setup.passes)):
-        entry = passage_angles(setup, edge, relief, k, motions).summary()
+    for pa in maps if maps is not None else working_angle_maps(setup, edge):
+        entry = pa.summary()
         c = entry.get("clearance_min_deg", math.nan)
         if c < min_clearance_deg:
             entry["warning"] = (

@@ -101,6 +101,7 @@ class Skiving(Process):
         from cutting.skiving.ideal_cut import cut_ideal
         from metrology.charts import write_charts
         from virtual_machine.job import dexel_spacing
+        from virtual_machine.output.cutter_charts import write_cutter_charts
         from virtual_machine.output.formatting import format_gear_stl, format_measurement, format_removal
         from virtual_machine.processes.skiving.run import measure_written_cut, with_mesh_tolerance
 
@@ -144,6 +145,7 @@ class Skiving(Process):
         doc = finite(result)
         write_json(out / "measurement.json", doc)
         write_charts(out, result)
+        write_cutter_charts(out, result)
         lines = [format_measurement(doc, str(out / "gear.stl"))]
         if path is not None:
             lines.append(format_path(doc["modification_path"]))

@@ -27,12 +27,13 @@ from cutting.skiving.sampled_motion import sampled_passes
 from cutting.skiving.tool_load import tool_load
 from cutting.skiving.tooling import tooling_summary
 from cutting.skiving.trajectory import PassMotion
-from cutting.skiving.working_angles import working_angle_summaries
+from cutting.skiving.working_angles import working_angle_maps, working_angle_summaries
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions
 from virtual_machine.job import Job, load_job
+from virtual_machine.output.cutter_charts import write_cutter_charts
 from virtual_machine.output.formatting import format_sheet
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.motion_io import summary
@@ -96,7 +97,7 @@ def run_job(
     durations["measurement"] = time.perf_counter() - t0
     announce("report")
     t0 = time.perf_counter()
-    charts = write_charts(out / "charts", measurement)
+    charts = write_charts(out / "charts", measurement) + write_cutter_charts(out / "charts", measurement)
     chips = [(a.load.t[len(a.load.t) // 2], a.load.volume) for a in sim.loads]
     run_png = run_chart(out / "charts" / "run.png", sim.record, sim.load_rows, chips)
     durations["report"] = time.perf_counter() - t0
@@ -159,7 +160,9 @@ def measure_written_cut(
 def _with_the_tool(measurement: dict[str, Any], job: Job, edge: CuttingEdge, cut: CutResult) -> dict[str, Any]:
     """The cutter's side of the cut beside the gear's measurement: its working angles per pass (from the setup) and
     the load each of its teeth took (from the chips)."""
-    measurement["working_angles"] = working_angle_summaries(job.skiving, edge, job.process.min_working_clearance)
+    maps = working_angle_maps(job.skiving, edge)
+    measurement["working_angles"] = working_angle_summaries(job.skiving, edge, job.process.min_working_clearance, maps)
+    measurement["_working_angle_maps"] = maps  # for the charts (not in measurement.json)
     measurement["tool_load"] = tool_load(cut.chips, job.skiving, material(job.process.material))
     return measurement
 
