@@ -138,3 +138,19 @@ def test_measurement_entries_carry_the_named_extremes_of_every_pass():
         assert 0 < p["chip_thickness_max_mm"] <= max(st.passes) + 0.1 * st.gear.mn
     # pass 1's generating clearance (1.3 deg) is under the 1.5 deg asked for: a warning, not a refusal
     assert "warning" in passes[0] and "warning" not in passes[1]
+
+
+def test_the_body_lies_behind_the_rake_face_against_the_cutting_direction():
+    """External jobs cut along +z of the cutter frame (v . z_c = +0.94 at the default's pitch point), the internal one
+    along -z_c: the relief, the working angles and the holder check put the body on -z and +z."""
+    from virtual_machine.job import load_job
+
+    for name, side in (("default", -1.0), ("spur_external", -1.0), ("helical_internal", 1.0)):
+        st = load_job(JOBS / f"{name}.toml").skiving
+        motion = ideal_passes(st)[-1]
+        p = np.array([st.cutter.reference_radius, 0.0, 0.0])
+        t = np.array([-1e-6, 0.0, 1e-6])
+        rot, trans = motion.pose(t)
+        v = (rot[2] @ p + trans[2] - rot[0] @ p - trans[0]) / 2e-6
+        along = float(v @ rot[1][:, 2]) / np.linalg.norm(v)
+        assert abs(along) > 0.9 and st.body_side == side == -math.copysign(1.0, along)

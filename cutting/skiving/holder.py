@@ -57,12 +57,18 @@ def check_holder_side(
     """
     if not motions:
         return
-    g = motions[0].setup.gear
+    setup = motions[0].setup
+    g = setup.gear
     r_tip, b2, eps = g.tip_radius, g.face_width / 2, 1e-3
     r_outer = g.root_radius + 3 * g.mn  # the ring's outside (cutting.skiving.solids.blank)
     rings = holder_side_rings(edge.r_low, width, holder_diameter / 2)
     pts = holder_side_points(edge.r_low, width, holder_diameter / 2).reshape(len(rings), RING_POINTS, 3)
-    hub = (rings[:, 1] > -width - 1e-9) & (rings[:, 0] <= edge.r_low + 1e-9)  # for the message
+    # the body behind the rake face: on -z of the cutter frame for an external job, on +z for an internal one;
+    # from the rake face's place along the axis
+    flip, shift = -setup.body_side, float(setup.rake_frame[2, 3])
+    rings = np.column_stack([rings[:, 0], flip * rings[:, 1] + shift])
+    pts = pts * np.array([1.0, 1.0, flip]) + np.array([0.0, 0.0, shift])
+    hub = (flip * (rings[:, 1] - shift) > -width - 1e-9) & (rings[:, 0] <= edge.r_low + 1e-9)  # for the message
     for motion in motions:
         t = np.linspace(0.0, motion.duration, samples)
         rot, trans = motion.pose(t)

@@ -319,6 +319,17 @@ class SkivingSetup:
         return rot @ q[:, :3], t + rot @ q[:, 3]
 
     @cached_property
+    def body_side(self) -> float:
+        """+1 when the cutter body lies on the cutter frame's +z side of the rake face, -1 on its -z side: behind the
+        face, which faces the cutting direction (the relative velocity of tooth 0's pitch point at the mesh; the
+        feed, under 1 % of it, left out). External jobs cut along +z of the cutter frame, internal ones along -z."""
+        p = np.array([self.cutter.reference_radius, 0.0, 0.0])
+        h = 1e-7
+        (r0, t0), (r1, t1) = self.cutter_pose(np.array([-h])), self.cutter_pose(np.array([h]))
+        v = (r1[0] @ p + t1[0]) - (r0[0] @ p + t0[0])
+        return -1.0 if float(v @ self.cutter_pose(np.array([0.0]))[0][0][:, 2]) > 0 else 1.0
+
+    @cached_property
     def tooth_frames(self) -> np.ndarray:
         """Every cutter tooth's rake frame in the tool spindle's frame, (z0, 3, 4): its angle, pitch deviation, the
         rake face and the cutter's runout (:func:`cutting.skiving.tooling.tooth_frames`)."""

@@ -22,9 +22,8 @@ from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.passages import passage_range, tooth_pose
 from cutting.skiving.trajectory import PassMotion, ideal_passes
 
-#: instants sampled over a passage's window; the velocity's central-difference step [s per s of window]
+#: instants sampled over a passage's window
 INSTANTS = 41
-VELOCITY_STEP = 1e-4
 #: the uncut chip thickness is sought this far [mn] past the deepest pass's radial stock, at every (instant, edge
 #: point) of this stride (nan between)
 CHIP_REACH = 0.1
@@ -53,17 +52,11 @@ class Relief:
         return math.atan(math.tan(self.clearance_angle) * math.sin(self.pressure_angle))
 
 
-def body_side(setup: SkivingSetup, motion: PassMotion) -> float:
+def body_side(setup: SkivingSetup, motion: PassMotion | None = None) -> float:
     """+1 when the cutter body lies on the cutter axis's +z side of the rake face, -1 on its -z side: behind the
-    rake face, which faces the cutting direction at the mesh (the relative velocity of tooth 0's pitch point)."""
-    c = setup.cutter
-    p = np.array([c.reference_radius, 0.0, 0.0])
-    t = np.array([0.0])
-    h = VELOCITY_STEP
-    (r0, o0), (r1, o1) = (motion.pose(t - h), motion.pose(t + h))
-    v = ((r1[0] @ p + o1[0]) - (r0[0] @ p + o0[0])) / (2 * h)
-    axis = motion.pose(t)[0][0][:, 2]
-    return -1.0 if float(v @ axis) > 0 else 1.0
+    rake face, which faces the cutting direction at the mesh (:attr:`SkivingSetup.body_side`; ``motion`` is not
+    needed: the feed does not turn the cutting direction over)."""
+    return setup.body_side
 
 
 @dataclass(frozen=True)
