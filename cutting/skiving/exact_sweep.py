@@ -304,6 +304,8 @@ class SweptVolumes:
         self._radius = np.concatenate([tb.ball_radius.ravel() for tb in self.tables])
         self._owner = np.concatenate([np.full(tb.ball_radius.size, k) for k, tb in enumerate(self.tables)])
         self._offset = np.concatenate([[0], np.cumsum([tb.ball_radius.size for tb in self.tables])])
+        #: each table's first passage in the tables' numbering (the compiled solver's g)
+        self._first_passage = np.concatenate([[0], np.cumsum([len(tb.m) for tb in self.tables])])
         self._tree = cKDTree(centres)
         self._compiled = _CompiledTables(self.tables, centres, self._radius, self.outline)
         #: the compiled item solve when every motion has a compiled pose (else None: the numpy path)
@@ -554,13 +556,34 @@ class SweptVolumes:
         if todo.size:
             li, pa, lo_j, hi_j = li[todo], pa[todo], lo_j[todo], hi_j[todo]
             n = len(li)
-            q = (p[li][:, None, :] + ds[None, :, None] * u[li][:, None, :]).reshape(-1, 3)
-            m = self._margin_exact(tb, rep(pa, k), rep(lo_j, k), rep(hi_j, k), q).reshape(n, k)
+            solver = self._solver
+            if solver is not None:  # compiled: the same margins and roots to rounding
+                g = pa + self._first_passage[self.tables.index(tb)]
+                lines_k, samples = rep(np.arange(n), k), np.tile(np.arange(k), n)
+                pl, ul = p[li], u[li]
+                m = solver.margins(pl, ul, ds, lines_k, rep(g, k), samples, rep(lo_j, k), rep(hi_j, k)).reshape(n, k)
+            else:
+                q = (p[li][:, None, :] + ds[None, :, None] * u[li][:, None, :]).reshape(-1, 3)
+                m = self._margin_exact(tb, rep(pa, k), rep(lo_j, k), rep(hi_j, k), q).reshape(n, k)
             state = m > 0
             row, c = np.nonzero(state[:, :-1] != state[:, 1:])
-            root = self._root(
-                tb, pa[row], lo_j[row], hi_j[row], p[li[row]], u[li[row]], ds[c], ds[c + 1], m[row, c], m[row, c + 1]
-            )
+            if solver is not None:
+                root = solver.roots(
+                    pl, ul, ds, row, g[row], lo_j[row], hi_j[row], c, m[row, c], m[row, c + 1], CROSSING_TOLERANCE
+                )
+            else:
+                root = self._root(
+                    tb,
+                    pa[row],
+                    lo_j[row],
+                    hi_j[row],
+                    p[li[row]],
+                    u[li[row]],
+                    ds[c],
+                    ds[c + 1],
+                    m[row, c],
+                    m[row, c + 1],
+                )
             # breakpoints: a removal starts at ds[0] if removed there, at each rising root; ends at each falling
             # root and at ds[-1] if removed there; per pair they alternate in d
             rising = state[row, c + 1]
