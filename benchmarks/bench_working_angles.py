@@ -18,7 +18,7 @@ from virtual_machine.job import load_job
 def main(path: str) -> None:
     st = load_job(path).skiving
     edge = make_edge(st, "conjugate")
-    relief = Relief(st.rake.clearance_angle, st.cutter.alpha_n)
+    relief = Relief.of(st)
     motions = ideal_passes(st)
     total = time.perf_counter()
     for k in range(len(st.passes)):

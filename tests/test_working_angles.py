@@ -20,7 +20,6 @@ from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.trajectory import ideal_passes
 from cutting.skiving.working_angles import (
     Relief,
-    body_side,
     check_working_clearance,
     chip_thickness,
     contact_angles,
@@ -64,7 +63,7 @@ def test_a_hand_worked_point_the_pitch_point_of_a_spur_gear_and_a_helical_cutter
     st = default_setup(clearance_angle=clearance)
     edge = make_edge(st, "conjugate")
     relief = Relief(clearance * DEG, st.cutter.alpha_n)
-    frames = edge_frames(st, edge, relief, body_side(st, ideal_passes(st)[-1]))
+    frames = edge_frames(st, edge, relief)
     rake, clear = contact_angles(st, edge, relief, frames, len(st.passes) - 1)
     c = st.cutter
     gamma = math.atan(math.tan(c.helix_angle) * math.cos(c.transverse_pressure_angle))

@@ -33,7 +33,7 @@ from cutting.skiving.exact_kernels import PACKED, pack_table, segment_distances,
 from cutting.skiving.exact_solve import ItemSolver, compiled_outline, pose_table
 from cutting.skiving.passages import passage_range
 from cutting.skiving.sweep import outline_points, simplify_outline
-from cutting.skiving.tooling import IDENTITY
+from cutting.skiving.tooling import IDENTITY, in_blank_frame
 from cutting.skiving.trajectory import PassMotion
 
 #: a line's crossing is solved to this [mm] (and the rake-plane instant to 1e-10 mm of the plane's distance)
@@ -223,7 +223,8 @@ class PassTable:
         n = len(t0)
         t = t0[:, None] + np.linspace(0.0, 1.0, SAMPLES)[None, :] * (t1 - t0)[:, None]
         rot, origin = pose_table(motion, t.ravel()) or motion.pose(t.ravel())
-        rot, origin = _in_blank(rot.reshape(n, SAMPLES, 3, 3), origin.reshape(n, SAMPLES, 3), tooth[:, None], blank)
+        rot, origin = rot.reshape(n, SAMPLES, 3, 3), origin.reshape(n, SAMPLES, 3)
+        rot, origin = in_blank_frame(rot, origin, tooth[:, None], blank)
         # balls and boxes from the outline simplified to 20 um; the margin covers that and the bulge between samples
         coarse = coarse_outline(np.ascontiguousarray(outline, dtype=float).tobytes(), len(outline))
         bounds = sweep_bounds(rot, origin, np.ascontiguousarray(coarse, dtype=float), SUBWINDOWS, 0.1)
@@ -258,17 +259,7 @@ class PassTable:
     def exact_pose(self, passage: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The tooth frame of the passages at times t, from the motion itself."""
         rot, origin = self.motion.pose(t)
-        return _in_blank(rot, origin, self.tooth[passage], self.blank)
-
-
-def _in_blank(rot: np.ndarray, origin: np.ndarray, tooth: np.ndarray, blank: np.ndarray):
-    """The rake frame ``tooth`` of a spindle at poses (rot, origin) in the work spindle's frame, in the blank's
-    frame: blank o pose o tooth (contiguous arrays: the kernels read them)."""
-    r = rot @ tooth[..., :3]
-    o = (rot @ tooth[..., 3:])[..., 0] + origin
-    r = np.ascontiguousarray(blank[:, :3] @ r)
-    o = np.ascontiguousarray(o @ blank[:, :3].T + blank[:, 3])
-    return r, o
+        return in_blank_frame(rot, origin, self.tooth[passage], self.blank)
 
 
 @functools.lru_cache(maxsize=16)

@@ -27,7 +27,7 @@ import numpy as np
 from cutting.errors import Problem
 from cutting.flank import SIDES, flank_points
 from cutting.gear import MIN_TIP_THICKNESS, Gear
-from cutting.skiving.tooling import Clamping, CutterErrors, RakeFace, blank_frame, chain, rake_frame, tooth_frames
+from cutting.skiving.tooling import Clamping, CutterErrors, RakeFace, blank_frame, rake_frame, tooth_frames
 
 #: Below this shaft angle the sliding speed is under ~3.5 % of the cutter's peripheral speed:
 #: the edge rubs instead of cutting. Modern practice is 10-30 deg (domain.md section 1).
@@ -346,13 +346,6 @@ class SkivingSetup:
     def passage_frames(self, m: np.ndarray) -> np.ndarray:
         """The rake frames of the teeth at the mesh at cutter pitches ``m`` (tooth (-m) mod z0), (n, 3, 4)."""
         return self.tooth_frames[(-np.asarray(m, dtype=np.int64)) % self.cutter.teeth]
-
-    def in_blank(self, rot: np.ndarray, trans: np.ndarray, tooth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Poses (rot (..., 3, 3), trans (..., 3)) of the cutter spindle in the work spindle's frame turned into
-        poses of the rake frame ``tooth`` ((3, 4), or one per pose) in the blank's frame."""
-        spindle = np.concatenate([rot, np.asarray(trans)[..., None]], -1)
-        out = chain(self.blank_frame, spindle, tooth)
-        return out[..., :3], out[..., 3]
 
     def edge_in_work_frame(self, edge: np.ndarray, phi0: np.ndarray) -> np.ndarray:
         """Edge points of every cutter tooth for each cutter angle, in the work frame (s = 0), shape (n, m, 3)."""

@@ -16,6 +16,7 @@ from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_solve import pose_table
 from cutting.skiving.sweep import outline_points, place, place_few
+from cutting.skiving.tooling import in_blank_frame
 from cutting.skiving.trajectory import PassMotion
 
 
@@ -127,7 +128,7 @@ def tooth_pose(motion: PassMotion, m: int):
 
     def pose(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         rot, trans = pose_table(motion, t) or motion.pose(t)  # compiled where the motion has it: the same values
-        return st.in_blank(rot, trans, tooth)
+        return in_blank_frame(rot, trans, tooth, st.blank_frame)
 
     return pose
 

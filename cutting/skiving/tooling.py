@@ -46,7 +46,7 @@ class RakeFace:
 
 @dataclass(frozen=True)
 class CutterErrors:
-    """The cutter's deviations from its design (shaper-cutter practice: DIN 1829-2 / ISO 4468 classes AA, A, B).
+    """The cutter's deviations from its design (shaper-cutter tolerance classes AA, A, B).
 
     radial_runout: total indicator reading at the tip [mm]: the cutter's centre is radial_runout / 2 off the spindle
         axis, towards ``radial_runout_phase`` [rad] from tooth 0 (the tooth at that angle runs farthest out)
@@ -68,10 +68,6 @@ class CutterErrors:
     profile_form: tuple[float, float] = (0.0, 0.0)
 
     @property
-    def any(self) -> bool:
-        return bool(self.radial_runout or self.axial_runout or any(self.pitch) or self.profile)
-
-    @property
     def profile(self) -> bool:
         """Whether the edge carries profile deviations."""
         return any(self.profile_slope) or any(self.profile_form)
@@ -91,10 +87,6 @@ class Clamping:
     eccentricity_phase: float = 0.0
     tilt: float = 0.0
     tilt_phase: float = 0.0
-
-    @property
-    def any(self) -> bool:
-        return bool(self.eccentricity or self.tilt)
 
 
 IDENTITY = np.hstack([np.eye(3), np.zeros((3, 1))])
@@ -118,6 +110,19 @@ def chain(*frames: np.ndarray) -> np.ndarray:
 def inverse(f: np.ndarray) -> np.ndarray:
     rt = np.swapaxes(f[..., :3], -1, -2)
     return np.concatenate([rt, -(rt @ f[..., 3:])], -1)
+
+
+def in_blank_frame(
+    rot: np.ndarray, origin: np.ndarray, tooth: np.ndarray, blank: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (rot (..., 3, 3), origin (..., 3)) of the cutter spindle in the work spindle's frame turned into poses
+    of the rake frame ``tooth`` ((..., 3, 4)) in the blank's frame: blank o pose o tooth (contiguous arrays: the
+    kernels read them)."""
+    r = rot @ tooth[..., :3]
+    o = (rot @ tooth[..., 3:])[..., 0] + origin
+    r = np.ascontiguousarray(blank[:, :3] @ r)
+    o = np.ascontiguousarray(o @ blank[:, :3].T + blank[:, 3])
+    return r, o
 
 
 def rotation(axis: np.ndarray | tuple[float, float, float], angle: float) -> np.ndarray:

@@ -19,7 +19,7 @@ from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge, contact_radius, envelope_bound, mate_flank
 from cutting.skiving.exact_sweep import PassTable, SweptVolumes
 from cutting.skiving.kinematics import SkivingSetup
-from cutting.skiving.passages import passage_range, tooth_pose
+from cutting.skiving.passages import in_blank_envelope, passage_range, tooth_pose
 from cutting.skiving.trajectory import PassMotion, ideal_passes
 
 #: instants sampled over a passage's window
@@ -47,16 +47,14 @@ class Relief:
     clearance_angle: float  # rad
     pressure_angle: float  # rad, the cutter's normal pressure angle
 
+    @classmethod
+    def of(cls, setup: SkivingSetup) -> Relief:
+        """The relief of the setup's cutter (its rake face's clearance angle)."""
+        return cls(setup.rake.clearance_angle, setup.cutter.alpha_n)
+
     @property
     def side_clearance(self) -> float:
         return math.atan(math.tan(self.clearance_angle) * math.sin(self.pressure_angle))
-
-
-def body_side(setup: SkivingSetup, motion: PassMotion | None = None) -> float:
-    """+1 when the cutter body lies on the cutter axis's +z side of the rake face, -1 on its -z side: behind the
-    rake face, which faces the cutting direction at the mesh (:attr:`SkivingSetup.body_side`; ``motion`` is not
-    needed: the feed does not turn the cutting direction over)."""
-    return setup.body_side
 
 
 @dataclass(frozen=True)
@@ -73,8 +71,8 @@ class EdgeFrames:
     part: np.ndarray
 
 
-def edge_frames(setup: SkivingSetup, edge: CuttingEdge, relief: Relief, side: float) -> EdgeFrames:
-    """The edge's frames (see :class:`EdgeFrames`); ``side``: :func:`body_side`."""
+def edge_frames(setup: SkivingSetup, edge: CuttingEdge, relief: Relief) -> EdgeFrames:
+    """The edge's frames (see :class:`EdgeFrames`); the body behind the rake face on :attr:`SkivingSetup.body_side`."""
     m = len(edge.radii)
     n = len(edge.outline)
     part = np.array(["right"] * m + ["tip"] * (n - 2 * m) + ["left"] * m)
@@ -84,7 +82,7 @@ def edge_frames(setup: SkivingSetup, edge: CuttingEdge, relief: Relief, side: fl
     position = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
     q = setup.rake_frame  # rake frame -> cutter frame
     axis = q[:, :3].T @ np.array([0.0, 0.0, 1.0])  # the cutter axis in the rake frame
-    into_body = side * axis
+    into_body = setup.body_side * axis
     rake = np.broadcast_to(np.array([0.0, 0.0, 1.0]) * (1.0 if rake_faces_chip(into_body) else -1.0), pts.shape)
     c = setup.cutter
     cut = pts @ q[:, :3].T + q[:, 3]  # the points in the cutter frame
@@ -144,8 +142,10 @@ class PassageAngles:
         clearance is."""
         on = self.cutting
         nan = float("nan")
-        if not on.any():
-            return {"pass": self.pass_index + 1, "cutting_points": 0}
+        if not on.any():  # the passage meets no material: the same entry, no figures
+            names = ("rake_min_deg", "rake_max_deg", "clearance_min_deg", "clearance_min_engaged_deg")
+            names += ("inclination_max_deg", "chip_thickness_max_mm", "cutting_speed_max_m_min")
+            return {"pass": self.pass_index + 1, **dict.fromkeys(names, nan), "clearance_min_at": None}
         deg = np.degrees
         clearance = np.where(on, self.clearance, np.inf)
         i, j = np.unravel_index(int(np.argmin(clearance)), clearance.shape)
@@ -171,11 +171,9 @@ class PassageAngles:
         }
 
 
-def working_angles(
-    frames: EdgeFrames, rot: np.ndarray, origin: np.ndarray, velocity: np.ndarray
-) -> tuple[np.ndarray, ...]:
-    """The working angles at every (instant, edge point) from the rake frame's poses (rot (n, 3, 3), origin (n, 3))
-    and the edge points' velocities relative to the work (n, k, 3) [mm/s].
+def working_angles(frames: EdgeFrames, rot: np.ndarray, velocity: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The working angles at every (instant, edge point) from the rake frame's rotations (n, 3, 3) and the edge
+    points' velocities relative to the work (n, k, 3) [mm/s].
 
     In the working normal plane P_ne (normal to the edge) at an edge point with resultant cutting velocity v: e1 is
     v's direction in P_ne, e2 the direction in P_ne normal to e1 on the side away from the flank. With the rake face's
@@ -262,10 +260,7 @@ class _Blank:
         self.gear = gear
 
     def inside(self, q: np.ndarray) -> np.ndarray:
-        g = self.gear
-        r = np.hypot(q[..., 0], q[..., 1])
-        radial = r >= g.tip_radius if g.internal else r <= g.tip_radius
-        return radial & (np.abs(q[..., 2]) <= g.face_width / 2)
+        return in_blank_envelope(self.gear, q)
 
 
 def nearby_passages(
@@ -337,13 +332,13 @@ def passage_angles(
     t = np.linspace(motion.time_at_angle(m * pitch - half), motion.time_at_angle(m * pitch + half), instants)
     pose = tooth_pose(motion, m)
     rot, origin = pose(t)
-    frames = edge_frames(setup, edge, relief, body_side(setup, motion))
+    frames = edge_frames(setup, edge, relief)
     h = 1e-6  # s: central differences of the pose (positions ~10 mm, speeds ~1 m/s)
     (r0, o0), (r1, o1) = pose(t - h), pose(t + h)
     place = lambda r, o: np.einsum("nij,kj->nki", r, frames.points) + o[:, None, :]  # noqa: E731
     w = place(rot, origin)
     velocity = (place(r1, o1) - place(r0, o0)) / (2 * h)
-    rake, clearance, wedge, inclination, speed = working_angles(frames, rot, origin, velocity)
+    rake, clearance, wedge, inclination, speed = working_angles(frames, rot, velocity)
     reach = max(setup.passes) + CHIP_REACH * setup.gear.mn  # past the deepest pass's stock
     candidates = _Blank(setup.gear).inside(w)
     thickness = np.full(w.shape[:2], np.nan)
@@ -465,9 +460,8 @@ def pass_setup(setup: SkivingSetup, pass_index: int) -> SkivingSetup:
 def clearance_of_passes(setup: SkivingSetup, edge: CuttingEdge) -> list[dict]:
     """Every pass's least working clearance where the edge generates its flank (:func:`contact_clearance`), with
     where on the edge: [{"pass", "clearance_min_deg", "edge", "edge_position_mm"}] (from the setup alone)."""
-    motions = ideal_passes(setup)
-    relief = Relief(setup.rake.clearance_angle, setup.cutter.alpha_n)
-    frames = edge_frames(setup, edge, relief, body_side(setup, motions[-1]))
+    relief = Relief.of(setup)
+    frames = edge_frames(setup, edge, relief)
     out = []
     for k in range(len(setup.passes)):
         c = contact_clearance(setup, edge, relief, frames, k)
@@ -507,7 +501,7 @@ def check_working_clearance(setup: SkivingSetup, edge: CuttingEdge, source: str 
 def working_angle_maps(setup: SkivingSetup, edge: CuttingEdge) -> list[PassageAngles]:
     """:func:`passage_angles` of every pass (the middle passage of the ideal motion), with the job's relief."""
     motions = ideal_passes(setup)
-    relief = Relief(setup.rake.clearance_angle, setup.cutter.alpha_n)
+    relief = Relief.of(setup)
     return [passage_angles(setup, edge, relief, k, motions) for k in range(len(setup.passes))]
 
 

@@ -65,8 +65,8 @@ WORKPIECE_KEYS: dict[str, Key] = {
     "tilt_phase": Key(float, 0.0, "deg", "where the face runs farthest along +z"),
 }
 
-#: A deviation above this share of the module is a slip of units (8 for 0.008 mm), not a tolerance: the largest
-#: shaper-cutter tolerances (DIN 1829-2 class B, ISO 4468) and clamping runouts are a few hundredths of a module.
+#: A deviation above this share of the module is taken for a slip of units (8 for 0.008 mm), not a tolerance: a guess
+#: at a guard, not a tolerance figure (cutter and clamping tolerances are micrometres, far below it).
 LARGEST_DEVIATION = 0.1
 
 
