@@ -163,9 +163,12 @@ def test_deviations_are_job_keys_and_bad_ones_are_refused_with_what_to_change():
     assert st.clamping.eccentricity == 0.004
     from virtual_machine.studies.spec import base_value, set_key
 
-    for key in ("cutter.errors.radial_runout", "workpiece.tilt", "cutter.rake_face_offset"):  # study keys
-        assert base_value(_job(), key) == 0.0
+    for key in ("cutter.errors.radial_runout", "workpiece.tilt", "cutter.rake_face_offset", "cutter.rake_angle"):
+        assert base_value(_job(), key) == 0.0  # study keys
         assert parse_job(set_key(_job(), key, 0.004)).skiving != parse_job(_job()).skiving
+    assert parse_job(set_key(_job(), "cutter.rake_angle", 5.0)).skiving.rake.rake_angle == pytest.approx(5 * DEG)
+    with pytest.raises(InputError, match=r"cutter\.rake_angle.*from -20 to 20"):
+        parse_job(set_key(_job(), "cutter.rake_angle", 25.0))
     profiled = parse_job(_job(errors={"profile_slope_left": 0.004, "profile_form_right": -0.002})).skiving
     assert profiled.cutter_errors.profile_slope == (0.004, 0.0) and profiled.cutter_errors.profile_form == (0.0, -0.002)
     random = parse_job(_job(errors={"pitch_tolerance": 0.004, "seed": 7})).skiving.cutter_errors.pitch

@@ -29,6 +29,7 @@ SHIPPED = {
 #: a value for every option any stage takes, to offer to the stages that do not take it
 VALUES = {
     "structure": "mechanical",
+    "balance_passes": True,
     "rrd": Path("run.rrd"),
     "duration": 0.1,
     "synchronization": "master-slave",

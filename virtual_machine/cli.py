@@ -73,8 +73,14 @@ def main() -> None:
 @click.argument("job", required=False, type=click.Path(path_type=Path))
 @click.option("--structure", type=click.Choice(STRUCTURES), help="Machine structure (default: the job's).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
-def setup(job: Path | None, structure: str | None, as_json: bool) -> None:
-    sheet = _perform("setup", job or default_job_path(), structure=structure)
+@click.option(
+    "--balance-passes",
+    is_flag=True,
+    default=None,
+    help="Skiving: also propose radial increments giving every pass the same largest uncut chip (takes ~5-40 s).",
+)
+def setup(job: Path | None, structure: str | None, as_json: bool, balance_passes: bool | None) -> None:
+    sheet = _perform("setup", job or default_job_path(), structure=structure, balance_passes=balance_passes)
     click.echo(sheet.json() if as_json else sheet.text)
 
 

@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 
+from cutting.flank import flank_normals, flank_points
 from cutting.skiving.edge import CuttingEdge, assemble_edge, contact_radius, envelope_bound, mate_flank
 from cutting.skiving.kinematics import SkivingSetup
 
@@ -28,6 +29,16 @@ TOUCHING = 0.005
 def roll_map(setup: SkivingSetup, edge: CuttingEdge, side: str) -> tuple[np.ndarray, np.ndarray]:
     """Where flank ``side`` of the edge generates the gear's flank: the gear's roll lengths L2 [mm] (increasing) and
     the cutter's L0 [mm] of the edge radii that generate them (the envelope's contacts, :mod:`cutting.skiving.edge`)."""
+    l2, l0, _ = generating_map(setup, edge, side)
+    return l2, l0
+
+
+def generating_map(setup: SkivingSetup, edge: CuttingEdge, side: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`roll_map` and, per contact, the transfer k: the gear flank's normal deviation per unit of the edge's
+    transverse base-tangent deviation m (a turn of the edge point by m / r_b0 in the rake face moves it r m / r_b0
+    along the face's e_theta; the gear flank moves by that times |e_theta . n| with n the gear flank's normal at the
+    contact). On the end plane through the axes' crossing k = cos(beta_b0) (n is the cutter helicoid's normal
+    there); an offset face meets the gear where the helicoids are not tangent, and k departs from it."""
     g, c = setup.gear, setup.cutter
     sgn = 1.0 if side == "left" else -1.0
     band = (g.tip_radius, g.root_radius) if g.internal else (g.base_radius, g.tip_radius)
@@ -40,8 +51,21 @@ def roll_map(setup: SkivingSetup, edge: CuttingEdge, side: str) -> tuple[np.ndar
         raise ValueError(f"the {side} edge generates no flank: no profile deviation can be placed on it")
     l0 = np.sqrt(np.maximum(edge.radii[touching] ** 2 - c.base_radius**2, 0.0))
     l2 = np.sqrt(np.maximum(r[touching] ** 2 - g.base_radius**2, 0.0))
+    rho, th = edge.radii[touching], theta[touching]
+    rot, t = setup.rake_pose(at[touching])
+    w = np.einsum("nij,nj->ni", rot, np.stack([rho * np.cos(th), rho * np.sin(th), 0 * th], -1)) + t
+    e_theta = np.einsum("nij,nj->ni", rot, np.stack([-np.sin(th), np.cos(th), 0 * th], -1))
+    mate = mate_flank(setup, side)
+    xi = l2 / g.base_radius
+    normal = flank_normals(g, mate, xi, w[:, 2], 0)
+    nominal = flank_points(g, mate, xi, w[:, 2], 0)
+    turn = np.arctan2(w[:, 1], w[:, 0]) - np.arctan2(nominal[:, 1], nominal[:, 0])  # the normal at w's own angle
+    cs, sn = np.cos(turn), np.sin(turn)
+    n_xy = np.stack([cs * normal[:, 0] - sn * normal[:, 1], sn * normal[:, 0] + cs * normal[:, 1]], -1)
+    dot = np.abs(e_theta[:, 0] * n_xy[:, 0] + e_theta[:, 1] * n_xy[:, 1] + e_theta[:, 2] * normal[:, 2])
+    k = dot * rho / c.base_radius
     order = np.argsort(l2)
-    return l2[order], l0[order]
+    return l2[order], l0[order], k[order]
 
 
 def active_flank(setup: SkivingSetup, edge: CuttingEdge, side: str) -> tuple[float, float]:

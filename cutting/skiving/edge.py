@@ -67,8 +67,9 @@ def edge_radii(setup: SkivingSetup, points: int) -> tuple[np.ndarray, float]:
     # the workpiece's tip circle seen from the cutter axis
     reach = g.tip_radius - setup.final_centre_distance if g.internal else setup.final_centre_distance - g.tip_radius
     r_low = max(0.3 * ra0, min(reach, ra0 - setup.full_depth) - 0.3 * g.mn)
-    # uniform in roll length above the base circle keeps the chord error of the outline even
-    return np.linspace(r_low, ra0, points), r_low
+    # the rake frame's radii: a rake angle tilts the face, so the tip circle lies a little farther out in it
+    r_low, r_top = setup.face_radius(r_low), setup.face_radius(ra0)
+    return np.linspace(r_low, r_top, points), r_low
 
 
 def involute_edge(setup: SkivingSetup, points: int = 120) -> CuttingEdge:
@@ -83,8 +84,8 @@ def involute_edge(setup: SkivingSetup, points: int = 120) -> CuttingEdge:
     for side in SIDES:
         p = flank_points(c, side, xi, float(q[2, 3]), 0)  # the end plane at the rake face's offset
         theta[side] = np.arctan2(p[:, 1], p[:, 0])
-        if not end_plane:
-            theta[side] = _section(setup, radii, theta[side], side)
+        if not end_plane:  # from the end plane's angles, turned into the face's own axes
+            theta[side] = _section(setup, radii, theta[side] - math.atan2(q[1, 0], q[0, 0]), side)
     return assemble_edge("involute", radii, theta, r_low)
 
 

@@ -64,8 +64,8 @@ def check_holder_side(
     rings = holder_side_rings(edge.r_low, width, holder_diameter / 2)
     pts = holder_side_points(edge.r_low, width, holder_diameter / 2).reshape(len(rings), RING_POINTS, 3)
     # the body behind the rake face: on -z of the cutter frame for an external job, on +z for an internal one;
-    # from the rake face's place along the axis
-    flip, shift = -setup.body_side, float(setup.rake_frame[2, 3])
+    # from the rake face's place along the axis (at the hub: a rake angle lowers the face inwards)
+    flip, shift = -setup.body_side, setup.face_height(edge.r_low)
     rings = np.column_stack([rings[:, 0], flip * rings[:, 1] + shift])
     pts = pts * np.array([1.0, 1.0, flip]) + np.array([0.0, 0.0, shift])
     hub = (flip * (rings[:, 1] - shift) > -width - 1e-9) & (rings[:, 0] <= edge.r_low + 1e-9)  # for the message

@@ -210,7 +210,7 @@ class SkivingSetup:
         """Axial extent [z_lo, z_hi] [mm], from the carriage position s, of the part of the rake face's tip circle
         inside the blank at ``centre_distance`` (symmetric about s unless the rake face is offset along the axis)."""
         ra0 = self.cutter_tip_diameter / 2
-        h = float(self.rake_frame[2, 3])
+        h = self.face_height(ra0)
         sgn = 1.0 if self.gear.internal else -1.0
         if h == 0.0:  # the tip circle through the axes' common perpendicular: symmetric, half a turn is enough
             t = np.linspace(0.0, math.pi, 20001)
@@ -310,7 +310,38 @@ class SkivingSetup:
     @cached_property
     def rake_frame(self) -> np.ndarray:
         """Tooth 0's rake frame in the cutter's frame as designed (no deviations), (3, 4): what the edge is made in."""
-        return rake_frame(self.rake, self.cutter.helix_angle)
+        c = self.cutter
+        return rake_frame(self.rake, c.helix_angle, c.reference_radius, *self._face_layout)
+
+    @property
+    def _face_layout(self) -> tuple[float, float]:
+        """(body side, tooth 0's centre angle at the face) for :func:`cutting.skiving.tooling.rake_frame` (the end
+        plane without a rake angle needs neither)."""
+        r = self.rake
+        if r.kind == "plane" and not r.rake_angle:
+            return -1.0, 0.0
+        c = self.cutter
+        xi = math.sqrt(max(c.reference_radius**2 - c.base_radius**2, 0.0)) / c.base_radius
+        centre = sum(float(np.arctan2(*flank_points(c, s, xi, r.offset, 0)[1::-1])) for s in ("left", "right")) / 2
+        return (self.body_side if r.rake_angle else -1.0), centre
+
+    def face_height(self, radius: float) -> float:
+        """Where the rake face of tooth 0 crosses its radial line at ``radius`` along the cutter axis [mm] (the
+        offset; a rake angle moves it by tan(gamma) per mm off the reference circle)."""
+        return float(self.rake_frame[2, 3] + self.rake_frame[2, 0] * self.face_radius(radius))
+
+    def face_radius(self, radius: float) -> float:
+        """The rake frame's x on tooth 0's centre line (y = 0) that lies at ``radius`` from the cutter axis: the same
+        unless a rake angle tilts the face about its tangential axis (then the reference circle's point stays)."""
+        q = self.rake_frame
+        if not self.rake.rake_angle:
+            return radius
+        x = float(radius)
+        for _ in range(4):  # the radius is linear in x but for the stepped face's lean: Newton converges at once
+            p, d = q[:, 0] * x + q[:, 3], q[:, 0]
+            r = math.hypot(p[0], p[1])
+            x -= (r - radius) / ((p[0] * d[0] + p[1] * d[1]) / r)
+        return x
 
     def rake_pose(self, phi0: np.ndarray, s: np.ndarray | float = 0.0, centre_distance: float | None = None):
         """:meth:`cutter_pose` of tooth 0's designed rake frame (its edge's plane): ``(R, t)`` as there."""
@@ -335,7 +366,13 @@ class SkivingSetup:
         rake face and the cutter's runout (:func:`cutting.skiving.tooling.tooth_frames`)."""
         c = self.cutter
         return tooth_frames(
-            self.rake, self.cutter_errors, c.teeth, c.helix_angle, c.reference_radius, self.cutter_tip_diameter / 2
+            self.rake,
+            self.cutter_errors,
+            c.teeth,
+            c.helix_angle,
+            c.reference_radius,
+            self.cutter_tip_diameter / 2,
+            *self._face_layout,
         )
 
     @cached_property

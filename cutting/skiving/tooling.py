@@ -32,16 +32,23 @@ class RakeFace:
     regrind: what has been ground off the face since the tool was new [mm, along the face's normal]: the face now
         cuts the relieved teeth that much deeper (:func:`relief_depth`); the tool is set again with its face at
         ``offset``
+    rake_angle: the rake angle gamma [rad] of the face along each tooth's radial line: the face falls away behind
+        the tip edge towards the body by tan(gamma) per mm inwards, through the reference circle at ``offset``.
+        A conical face (the plane face) is ground as a cone; over one tooth it is its tangent plane along the
+        tooth's centre line (:func:`rake_frame`; the cone departs from it by tan(gamma) y^2 / 2r, docs/cutter.md)
     """
 
     kind: str = "plane"
     offset: float = 0.0
     clearance_angle: float = DEFAULT_CLEARANCE_ANGLE
     regrind: float = 0.0
+    rake_angle: float = 0.0
 
     def relief_depth(self, helix_angle: float) -> float:
-        """The regrind's depth along the cutter axis [mm] (a stepped face's normal leans by the helix angle)."""
-        return self.regrind / (1.0 if self.kind == "plane" else math.cos(helix_angle))
+        """The regrind's depth along the cutter axis [mm]: the face's normal leans by the rake angle (and a stepped
+        face's by the helix angle)."""
+        lean = math.cos(self.rake_angle) * (1.0 if self.kind == "plane" else math.cos(helix_angle))
+        return self.regrind / lean
 
 
 @dataclass(frozen=True)
@@ -145,13 +152,31 @@ def _tilt(amount: float, phase: float) -> np.ndarray:
     return rotation((math.sin(phase), -math.cos(phase), 0.0), amount)
 
 
-def rake_frame(rake: RakeFace, helix_angle: float) -> np.ndarray:
-    """Tooth 0's rake frame in the cutter body's frame (tooth 0 on +x): the end plane moved to ``rake.offset``; a
-    stepped face turned about the tooth's radial line (x) so that its normal is the tooth direction on the
-    reference cylinder, (0, sin beta0, cos beta0) for a helix angle beta0 (right hand positive, the convention
-    of :func:`cutting.flank.flank_points`)."""
-    rot = np.eye(3) if rake.kind == "plane" else rotation((1.0, 0.0, 0.0), -helix_angle)
-    return frame(rot, (0.0, 0.0, rake.offset))
+def rake_frame(
+    rake: RakeFace,
+    helix_angle: float,
+    reference_radius: float = 0.0,
+    body_side: float = -1.0,
+    centre_angle: float = 0.0,
+) -> np.ndarray:
+    """Tooth 0's rake frame in the cutter body's frame (tooth 0 about +x): the end plane moved to ``rake.offset``.
+
+    Any other face is laid out about the tooth's centre line in it: turned about the axis by ``centre_angle`` (where
+    the tooth's centre crosses the reference circle at the face's height: a helical cutter's teeth wind, so an offset
+    face meets tooth 0 off +x), then a stepped face turned about that radial line (x) so that its normal is the tooth
+    direction on the reference cylinder, (0, sin beta0, cos beta0) for a helix angle beta0 (right hand positive, the
+    convention of :func:`cutting.flank.flank_points`), then a rake angle gamma turns the face about its tangential
+    axis (y) through the reference circle's point (r0, 0) by body_side * gamma: inwards of r0 the face recedes towards
+    the body (``body_side``: +1 on the cutter frame's +z, :attr:`SkivingSetup.body_side`), the wedge sharpens. The
+    plane face without a rake angle keeps the end plane's own axes (bit for bit the cut it always made)."""
+    if rake.kind == "plane" and not rake.rake_angle:
+        return frame(np.eye(3), (0.0, 0.0, rake.offset))
+    turn = turn_z(centre_angle)
+    step = np.eye(3) if rake.kind == "plane" else rotation((1.0, 0.0, 0.0), -helix_angle)
+    tilt = rotation((0.0, 1.0, 0.0), body_side * rake.rake_angle)
+    pivot = np.array([reference_radius, 0.0, 0.0])
+    rot = turn @ step
+    return frame(rot @ tilt, rot @ (pivot - tilt @ pivot) + np.array([0.0, 0.0, rake.offset]))
 
 
 def mount_frame(errors: CutterErrors, tip_radius: float) -> np.ndarray:
@@ -171,12 +196,19 @@ def pitch_positions(pitch: tuple[float, ...], teeth: int) -> np.ndarray:
 
 
 def tooth_frames(
-    rake: RakeFace, errors: CutterErrors, teeth: int, helix_angle: float, reference_radius: float, tip_radius: float
+    rake: RakeFace,
+    errors: CutterErrors,
+    teeth: int,
+    helix_angle: float,
+    reference_radius: float,
+    tip_radius: float,
+    body_side: float = -1.0,
+    centre_angle: float = 0.0,
 ) -> np.ndarray:
     """Every tooth's rake frame in the tool spindle's frame, (z0, 3, 4): tooth k turned by 2 pi k / z0 plus its
     cumulative pitch deviation over r0, on a body mounted with its runout."""
     mount = mount_frame(errors, tip_radius)
-    rake0 = rake_frame(rake, helix_angle)
+    rake0 = rake_frame(rake, helix_angle, reference_radius, body_side, centre_angle)
     fp = pitch_positions(errors.pitch, teeth)
     return np.stack(
         [chain(mount, frame(turn_z(2 * math.pi * k / teeth + fp[k] / reference_radius)), rake0) for k in range(teeth)]
@@ -213,6 +245,7 @@ def tooling_summary(rake: RakeFace, errors: CutterErrors, clamping: Clamping) ->
         "rake_face_offset_mm": rake.offset,
         "clearance_angle_deg": math.degrees(rake.clearance_angle),
         "regrind_mm": rake.regrind,
+        "rake_angle_deg": math.degrees(rake.rake_angle),
         "errors": {
             "radial_runout_mm": errors.radial_runout,
             "radial_runout_phase_deg": deg(errors.radial_runout_phase),

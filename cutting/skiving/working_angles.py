@@ -215,21 +215,19 @@ def angles_of(t: np.ndarray, n_g: np.ndarray, n_a: np.ndarray, velocity: np.ndar
 
 def chip_thickness(before, own: SweptVolumes, points: np.ndarray, directions: np.ndarray, reach: float) -> np.ndarray:
     """The uncut chip thickness [mm] at each edge point along its unit direction (into what the passage removes):
-    the material the passages ``before`` left from the point on, as far as the passage's own sweep ``own`` goes on
-    along the line (beyond, the material stays: the other side of the chip), exact on both (the removed intervals
-    of the lines, :meth:`SweptVolumes.removed_intervals`); ``reach`` [mm] where both go on."""
+    the material the passages ``before`` left from the point on (inside the blank's envelope), as far as the passage's
+    own sweep ``own`` goes on along the line (beyond, the material stays: the other side of the chip), exact on both
+    (the removed intervals of the lines, :meth:`SweptVolumes.removed_intervals`); ``reach`` [mm] where both go on."""
     p = np.asarray(points, dtype=float).reshape(-1, 3)
     u = np.asarray(directions, dtype=float).reshape(-1, 3)
     n = len(p)
     if not n:
         return np.zeros(0)
+    material = _blank_reach(own.gear, p, u, reach)  # the blank's outside ends the material
     if isinstance(before, SweptVolumes):
         line, start, end = before.removed_intervals(p, u, reach)
-        ahead = end > 0  # the first removed part in front of the point ends the material
-        material = np.full(n, reach)
+        ahead = end > 0  # and the first removed part in front of the point
         np.minimum.at(material, line[ahead], np.maximum(start[ahead], 0.0))
-    else:  # the blank alone: its outside
-        material = _blank_reach(before.gear, p, u, reach)
     line, start, end = own.removed_intervals(p, u, reach)
     return np.minimum(material, _covered_from_zero(n, line, start, end))
 
@@ -246,11 +244,23 @@ def _covered_from_zero(n: int, line: np.ndarray, start: np.ndarray, end: np.ndar
 
 
 def _blank_reach(gear: Gear, p: np.ndarray, u: np.ndarray, reach: float) -> np.ndarray:
-    """How far along each line the blank goes on from its point (sampled to a hundredth of ``reach``)."""
-    d = np.linspace(0.0, reach, 101)
-    inside = _Blank(gear).inside(p[:, None, :] + d[None, :, None] * u[:, None, :])
-    leaves = ~inside
-    return np.where(leaves.any(axis=1), d[np.argmax(leaves, axis=1)], reach)
+    """How far along each unit line from its point (inside the blank's envelope) the envelope goes on, exactly: the
+    first crossing of an end face (|z| = b / 2) or the tip cylinder (a ring gear: the bore), at most ``reach``."""
+    half = gear.face_width / 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        face = np.where(
+            u[:, 2] > 0, (half - p[:, 2]) / u[:, 2], np.where(u[:, 2] < 0, (-half - p[:, 2]) / u[:, 2], np.inf)
+        )
+        a = u[:, 0] ** 2 + u[:, 1] ** 2
+        b = p[:, 0] * u[:, 0] + p[:, 1] * u[:, 1]
+        c = p[:, 0] ** 2 + p[:, 1] ** 2 - gear.tip_radius**2
+        disc = b * b - a * c
+        root = np.sqrt(np.maximum(disc, 0.0))
+        if gear.internal:  # outside the bore: it leaves where it enters the bore, if it heads into it
+            radial = np.where((disc > 0) & (b < 0) & (a > 0), (-b - root) / a, np.inf)
+        else:  # inside the tip cylinder: it leaves through it unless it runs along the axis
+            radial = np.where(a > 0, (-b + root) / a, np.inf)
+    return np.clip(np.minimum(face, radial), 0.0, reach)
 
 
 class _Blank:
@@ -321,6 +331,7 @@ def passage_angles(
     pass_index: int,
     motions: list[PassMotion] | None = None,
     instants: int = INSTANTS,
+    stride: tuple[int, int] = THICKNESS_STRIDE,
 ) -> PassageAngles:
     """The working angles and chip thickness of the passage at the middle of pass ``pass_index`` (the steady state of
     the ideal motion: every passage of the pass's middle meets the same material), over its window."""
@@ -359,8 +370,8 @@ def passage_angles(
             own = own_sweep(setup, edge, motion, m)
             # the thickness on a coarser grid than the angles: each ray is an exact line probe of both sweeps
             probe = cutting.copy()
-            probe[1 :: THICKNESS_STRIDE[0]] = False
-            probe[:, np.arange(probe.shape[1]) % THICKNESS_STRIDE[1] != 0] = False
+            probe[np.arange(probe.shape[0]) % stride[0] != 0] = False
+            probe[:, np.arange(probe.shape[1]) % stride[1] != 0] = False
             thickness[probe] = chip_thickness(material, own, w[probe], n_h[probe], reach)
     generating = motion.omega0 * t - m * pitch
     return PassageAngles(
@@ -498,11 +509,14 @@ def check_working_clearance(setup: SkivingSetup, edge: CuttingEdge, source: str 
     return passes
 
 
-def working_angle_maps(setup: SkivingSetup, edge: CuttingEdge) -> list[PassageAngles]:
-    """:func:`passage_angles` of every pass (the middle passage of the ideal motion), with the job's relief."""
+def working_angle_maps(
+    setup: SkivingSetup, edge: CuttingEdge, stride: tuple[int, int] = THICKNESS_STRIDE
+) -> list[PassageAngles]:
+    """:func:`passage_angles` of every pass (the middle passage of the ideal motion), with the job's relief; the chip
+    thickness on every ``stride`` = (instants, edge points) of the map."""
     motions = ideal_passes(setup)
     relief = Relief.of(setup)
-    return [passage_angles(setup, edge, relief, k, motions) for k in range(len(setup.passes))]
+    return [passage_angles(setup, edge, relief, k, motions, stride=stride) for k in range(len(setup.passes))]
 
 
 def working_angle_summaries(

@@ -6,6 +6,7 @@ Every deviation is a study key like any other (``cutter.errors.radial_runout``);
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -37,6 +38,13 @@ RAKE_KEYS: dict[str, Key] = {
         float, 6.0, "deg", "tip clearance of the conical relief (the side clearance follows)", between(0.0, 20.0)
     ),
     "regrind": Key(float, 0.0, "mm", "ground off the rake face since the tool was new", at_least(0.0)),
+    "rake_angle": Key(
+        float,
+        0.0,
+        "deg",
+        "rake angle gamma: the face inclined into a cone, receding into the body inwards of the tip edge",
+        between(-20.0, 20.0),
+    ),
 }
 
 CUTTER_ERROR_KEYS: dict[str, Key] = {
@@ -151,7 +159,11 @@ def parse_clamping(table: Any, mn: float, problems: list[Problem]) -> Clamping:
 def rake_face(values: dict[str, Any]) -> RakeFace:
     """The rake face of a parsed [cutter] section."""
     return RakeFace(
-        values["rake_face"], values["rake_face_offset"], math.radians(values["clearance_angle"]), values["regrind"]
+        values["rake_face"],
+        values["rake_face_offset"],
+        math.radians(values["clearance_angle"]),
+        values["regrind"],
+        math.radians(values["rake_angle"]),
     )
 
 
@@ -162,7 +174,7 @@ def regrind_problems(setup, regrind: float, width: float) -> list[Problem]:
     if not regrind:
         return []
     r, c = setup.rake, setup.cutter
-    depth = RakeFace(r.kind, r.offset, r.clearance_angle, regrind).relief_depth(c.helix_angle)
+    depth = dataclasses.replace(r, regrind=regrind).relief_depth(c.helix_angle)
     if depth >= width:
         return [Problem("cutter.regrind", regrind, f"the cutter body is {width:g} mm wide", "a new tool")]
     per_mm = math.tan(r.clearance_angle) / c.mn * depth / regrind if r.clearance_angle else 0.0

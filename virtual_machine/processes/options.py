@@ -30,6 +30,14 @@ class SheetOptions(StageOptions):
 
 
 @dataclass(frozen=True)
+class SkivingSheetOptions(SheetOptions):
+    """The skiving setting sheet; ``balance_passes``: also propose radial increments that give every pass the same
+    largest uncut chip (:func:`cutting.skiving.pass_balance.balance_passes`)."""
+
+    balance_passes: bool = False
+
+
+@dataclass(frozen=True)
 class RecordedOptions(StageOptions):
     """A stage that can write a Rerun recording (``rrd``: its path)."""
 

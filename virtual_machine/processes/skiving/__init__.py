@@ -23,9 +23,9 @@ from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, reporter_or_default, written
 from virtual_machine.processes.options import (
     MachineSimulateOptions,
-    SheetOptions,
     SkivingCutOptions,
     SkivingRunOptions,
+    SkivingSheetOptions,
     StageOptions,
 )
 from virtual_machine.processes.sheets import sheet_product
@@ -38,22 +38,30 @@ class Skiving(Process):
     kind = "skiving"
     title = "gear skiving"
     stages: ClassVar[dict[str, type[StageOptions]]] = {
-        "setup": SheetOptions,
+        "setup": SkivingSheetOptions,
         "simulate": MachineSimulateOptions,
         "cut": SkivingCutOptions,
         "run": SkivingRunOptions,
     }
 
-    def setup(self, job: Job, options: SheetOptions | None = None) -> Product:
-        """The setting sheet, and the cutter's working angles per pass from the setup alone (docs/cutter.md)."""
+    def setup(self, job: Job, options: SkivingSheetOptions | None = None) -> Product:
+        """The setting sheet, the cutter's working angles per pass from the setup alone (docs/cutter.md) and the
+        passes' balance; with ``balance_passes`` the increments that would balance them."""
         from cutting.skiving.edge import make_edge
         from cutting.skiving.working_angles import working_angle_summaries
 
-        sheet = sheet_product(job, self._options("setup", options).structure)
+        o = self._options("setup", options)
+        sheet = sheet_product(job, o.structure)
         st = job.skiving
-        angles = working_angle_summaries(st, make_edge(st, job.cutter_options.edge), job.process.min_working_clearance)
+        edge = make_edge(st, job.cutter_options.edge)
+        angles = working_angle_summaries(st, edge, job.process.min_working_clearance)
         doc = {**sheet.data, "working_angles": finite(angles)}
-        return Product("setup", doc, sheet.text + "\n" + format_working_angles(angles), sheet.files, sheet.out)
+        text = sheet.text + "\n" + format_working_angles(angles)
+        if o.balance_passes:
+            balance = _balance(st, edge)
+            doc["pass_balance"] = finite(balance.as_dict())
+            text += "\n" + format_balance(balance)
+        return Product("setup", doc, text, sheet.files, sheet.out)
 
     def simulate(
         self, job: Job, out: Path, options: MachineSimulateOptions | None = None, reporter: Reporter | None = None
@@ -305,6 +313,40 @@ def format_run(run: dict, out: Path, rrd: Path | None) -> str:
     return "\n".join(lines)
 
 
+def _balance(setup, edge):
+    """The pass balance with a line of progress per map evaluation (it takes a few seconds each)."""
+    from cutting.skiving.pass_balance import balance_passes
+
+    rep = reporter_or_default(None)
+    rep.stage(f"balancing {len(setup.passes)} passes (a working-angle map of every pass per step, at most 7 steps)")
+
+    def told(step: int, passes: tuple[float, ...], chips: tuple[float, ...]) -> None:
+        rep.stage(
+            f"  step {step}: increments {', '.join(f'{d:.3f}' for d in passes)} mm -> largest chips "
+            f"{', '.join(f'{h * 1e3:.0f}' for h in chips)} um"
+        )
+
+    return balance_passes(setup, edge, progress=told)
+
+
+def format_balance(b) -> str:
+    """The proposal of :func:`cutting.skiving.pass_balance.balance_passes` (a :class:`PassBalance`), for the sheet."""
+
+    def um(chips: tuple[float, ...]) -> str:
+        return " / ".join(f"{h * 1e3:.0f}" for h in chips)
+
+    job_spread = max(b.before_chips) / min(b.before_chips)
+    return "\n".join(
+        [
+            "pass balance (the largest uncut chip of each pass, every point of its map):",
+            f"  the job's  process.passes = [{', '.join(f'{d:g}' for d in b.before_passes)}]: "
+            f"{um(b.before_chips)} um (largest / smallest {job_spread:.2f})",
+            f"  proposed   process.passes = [{', '.join(f'{d:.3f}' for d in b.passes)}]: "
+            f"{um(b.chips)} um (largest / smallest {b.spread:.2f}, {b.steps} map evaluations)",
+        ]
+    )
+
+
 def format_working_angles(passes: list[dict]) -> str:
     """The working angles' extremes per pass, a line each."""
     lines = ["working angles (ISO 3002-2, tool in use), the middle passage of each pass:"]
@@ -319,4 +361,10 @@ def format_working_angles(passes: list[dict]) -> str:
         )
         if "warning" in p:
             lines.append(f"    warning: {p['warning']}")
+    chips = [p["chip_thickness_max_mm"] for p in passes if p.get("chip_thickness_max_mm", 0) > 0]
+    if len(chips) > 1:
+        lines.append(
+            f"passes' balance: largest uncut chip {' / '.join(f'{h * 1e3:.0f}' for h in chips)} um (largest / smallest "
+            f"{max(chips) / min(chips):.2f}); `skive setup --balance-passes` proposes increments that even them"
+        )
     return "\n".join(lines)
