@@ -363,13 +363,14 @@ def conjugate_edge(setup: SkivingSetup, points: int = 120, steps: int = 1500) ->
 
 
 def tooth_intrusion(setup: SkivingSetup, pts: np.ndarray, phi_grid: np.ndarray) -> np.ndarray:
-    """Deepest intrusion [mm] of each rake-plane point (m, 2) into the nominal teeth over the cutter angles.
+    """Deepest intrusion [mm] of each rake-plane point (m, 2), or rake-frame point (m, 3), into the nominal teeth over
+    the cutter angles.
 
     Material: inside a tooth's involute outline between the form circle and the tip circle.
     """
     g = setup.gear
     rot, t = setup.rake_pose(phi_grid)
-    q = np.column_stack([pts, np.zeros(len(pts))])
+    q = pts if pts.shape[1] == 3 else np.column_stack([pts, np.zeros(len(pts))])
     w = np.matmul(rot, q.T).transpose(0, 2, 1) + t[:, None, :]  # (angles, points, 3); a batched matmul: einsum is slow
     r = np.hypot(w[..., 0], w[..., 1])
     pitch = 2 * math.pi / g.teeth

@@ -16,6 +16,7 @@ from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import CuttingEdge, make_edge
 from cutting.skiving.engine import cut_passes
 from cutting.skiving.holder import check_holder_side
+from cutting.skiving.interference import check_body_interference
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.passages import CutResult, expected_genus
 from cutting.skiving.removal import DEFAULT_SLAB
@@ -59,6 +60,7 @@ def cut_ideal(
     motions = ideal_passes(setup) if motions is None else motions
     check_holder_side(motions, edge, setup.cutter.face_width, setup.holder_diameter_value)
     check_working_clearance(setup, edge)  # the relieved flank off the flank it generates
+    check_body_interference(setup, edge)  # and the relieved tooth off the finished teeth over the whole mesh
     if removal not in REMOVALS:
         raise ValueError(f"removal {removal!r}: use one of {', '.join(REMOVALS)}")
     if removal == "dexel":

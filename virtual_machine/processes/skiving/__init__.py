@@ -48,6 +48,7 @@ class Skiving(Process):
         """The setting sheet, the cutter's working angles per pass from the setup alone (docs/cutter.md) and the
         passes' balance; with ``balance_passes`` the increments that would balance them."""
         from cutting.skiving.edge import make_edge
+        from cutting.skiving.interference import body_interference
         from cutting.skiving.working_angles import working_angle_summaries
 
         o = self._options("setup", options)
@@ -55,8 +56,9 @@ class Skiving(Process):
         st = job.skiving
         edge = make_edge(st, job.cutter_options.edge)
         angles = working_angle_summaries(st, edge, job.process.min_working_clearance)
-        doc = {**sheet.data, "working_angles": finite(angles)}
-        text = sheet.text + "\n" + format_working_angles(angles)
+        body = body_interference(st, edge)
+        doc = {**sheet.data, "working_angles": finite(angles), "body_interference": finite(body)}
+        text = sheet.text + "\n" + format_working_angles(angles) + "\n" + format_body(body)
         if o.balance_passes:
             balance = _balance(st, edge)
             doc["pass_balance"] = finite(balance.as_dict())
@@ -327,6 +329,20 @@ def _balance(setup, edge):
         )
 
     return balance_passes(setup, edge, progress=told)
+
+
+def format_body(p: dict) -> str:
+    """The relieved tooth against the finished teeth (:func:`cutting.skiving.interference.body_interference`)."""
+    from cutting.skiving.interference import TOLERANCE
+
+    where = f"{p['depth_mm']:.2f} mm behind the {p['edge']} edge, {p['edge_position_mm']:.2f} mm along it"
+    if p["body_intrusion_max_mm"] > TOLERANCE:
+        return (
+            f"relieved tooth: ENTERS the finished teeth by {p['body_intrusion_max_mm'] * 1e3:.2f} um ({where}): "
+            "`skive cut` and `skive run` refuse this cutter"
+        )
+    clear = -p["body_intrusion_max_mm"] * 1e3
+    return f"relieved tooth: clear of the finished teeth over the whole mesh by >= {clear:.2f} um ({where})"
 
 
 def format_balance(b) -> str:

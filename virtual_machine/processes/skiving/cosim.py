@@ -28,6 +28,7 @@ from cutting.materials import Material, material
 from cutting.skiving.dexel_cut import removal_summary
 from cutting.skiving.edge import CuttingEdge, make_edge
 from cutting.skiving.holder import check_holder_side
+from cutting.skiving.interference import check_body_interference
 from cutting.skiving.passages import (
     Chip,
     CutResult,
@@ -175,6 +176,7 @@ class CuttingRun:
         self.machine = MachineRun(job, params, servo_substeps, correction=correction, plan=plan, cut=cut)
         check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
         check_working_clearance(setup, edge)  # the relieved flank off the flank it generates
+        check_body_interference(setup, edge)  # and the relieved tooth off the finished teeth over the whole mesh
         self.removal = _removal(job, setup, edge, plans, removal, workers)
         self.workers, self.snapshots_per_pass = workers, snapshots_per_pass
         # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
