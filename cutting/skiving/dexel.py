@@ -30,7 +30,7 @@ from cutting.skiving.dexel_lines import DexelLines, DexelSpacing, LineSet
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_kernels import pack_table
 from cutting.skiving.exact_solve import ItemSolver
-from cutting.skiving.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, Outline, PassTable
+from cutting.skiving.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, PassTable, outline_of
 
 #: the rasters of the outline's signed distance for the march [mm]: a fine one (cell, band of exact distances) near
 #: the edge, a coarse one (cell, pad: exact over all of it) beyond, so that steps far from the edge are long. An
@@ -82,7 +82,7 @@ class DexelWorkpiece:
         self.mat_lo[:, 0], self.mat_hi[:, 0] = entry, length
         self.mat_n = (length > entry).astype(np.int64)
         self.flags = np.zeros(n, np.int64)
-        self.outline = Outline(edge.outline)
+        self.outline = outline_of(edge.outline)
         fine, f_lo = self.outline.exact_raster(FINE_CELL, FINE_BAND, FINE_BAND)
         coarse, c_lo = self.outline.exact_raster(COARSE_CELL, COARSE_PAD, 2 * COARSE_PAD, COARSE_EXACT)
         w = [*f_lo, FINE_CELL, FINE_BAND, 0.71 * FINE_CELL + 0.00025]

@@ -5,6 +5,7 @@ workpiece (:mod:`cutting.skiving.dexel_cut`) and the manifold reference (:mod:`c
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -90,16 +91,23 @@ def expected_genus(gear: Gear) -> int:
 
 def engagement_half_angle(motion: PassMotion, edge: CuttingEdge) -> float:
     """Cutter rotation from the mesh [rad] beyond which no point of a tooth reaches the blank's radius range."""
-    g = motion.setup.gear
+    outline = np.ascontiguousarray(edge.outline, dtype=float)
+    return _engagement_half_angle(motion.setup, motion.centre_distance, motion.index, outline.shape, outline.tobytes())
+
+
+@functools.lru_cache(maxsize=64)
+def _engagement_half_angle(setup, centre_distance: float | None, index: int, shape: tuple, data: bytes) -> float:
+    """:func:`engagement_half_angle`, kept per setup, centre distance and edge (a pass asks for it often)."""
+    g = setup.gear
     phi = np.linspace(-math.pi, math.pi, 3601)
-    rot, trans = motion.setup.rake_pose(phi, 0.0, motion.centre_distance)  # tooth 0's edge in its rake face
-    w = place(outline_points(edge.outline), rot, trans)
+    rot, trans = setup.rake_pose(phi, 0.0, centre_distance)  # tooth 0's edge in its rake face
+    w = place(outline_points(np.frombuffer(data, dtype=float).reshape(shape)), rot, trans)
     r = np.hypot(w[..., 0], w[..., 1])
     inside = (r > g.tip_radius).any(axis=1) if g.internal else (r < g.tip_radius).any(axis=1)
     if not inside.any():
         raise ValueError(
-            f"pass {motion.index + 1}: the cutter never reaches the blank at a = "
-            f"{motion.centre_distance:.4f} mm; check process.passes and the cutter tip diameter"
+            f"pass {index + 1}: the cutter never reaches the blank at a = "
+            f"{centre_distance:.4f} mm; check process.passes and the cutter tip diameter"
         )
     return float(np.abs(phi[inside]).max()) + 0.02
 
