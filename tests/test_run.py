@@ -93,6 +93,9 @@ def test_run_writes_every_file(runs) -> None:
     assert all(a["clearance_min_deg"] > 0 and a["chip_thickness_max_mm"] > 0 for a in angles)
     assert {t["tooth"] for p in doc["tool_load"] for t in p["teeth"]} <= set(range(job.cutter.teeth))
     assert doc["run"]["cutter"]["clearance_angle_deg"] == pytest.approx(6.0)
+    assert doc["run"]["cutter"]["rake_angle_deg"] == 0.0
+    body = doc["body_interference"]  # the relieved tooth off the finished teeth by about the side clearance
+    assert -0.0005 < body["body_intrusion_max_mm"] < 0 and body["depth_mm"] == pytest.approx(0.01)
     # the run's figures are the co-simulation's: its stages' times, its machine time, its passages and chips
     durations = run["durations_s"]
     assert set(durations) >= {"machine and cut", "measurement", "report", "recording", "machine"}

@@ -22,6 +22,7 @@ from cutting.materials import material
 from cutting.parallel import default_workers
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.interference import body_interference
 from cutting.skiving.passages import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
 from cutting.skiving.tool_load import tool_load
@@ -158,10 +159,11 @@ def measure_written_cut(
 
 
 def _with_the_tool(measurement: dict[str, Any], job: Job, edge: CuttingEdge, cut: CutResult) -> dict[str, Any]:
-    """The cutter's side of the cut beside the gear's measurement: its working angles per pass (from the setup) and
-    the load each of its teeth took (from the chips)."""
+    """The cutter's side of the cut beside the gear's measurement: its working angles per pass and the relieved
+    tooth's clearance to the finished teeth (from the setup), and the load each of its teeth took (from the chips)."""
     maps = working_angle_maps(job.skiving, edge)
     measurement["working_angles"] = working_angle_summaries(job.skiving, edge, job.process.min_working_clearance, maps)
+    measurement["body_interference"] = body_interference(job.skiving, edge)
     measurement["_working_angle_maps"] = maps  # for the charts (not in measurement.json)
     measurement["tool_load"] = tool_load(cut.chips, job.skiving, material(job.process.material))
     return measurement
