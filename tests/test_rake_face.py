@@ -156,16 +156,6 @@ def regrind_prediction(worn: SkivingSetup) -> tuple[dict, dict, float]:
     return predicted, fitted, (lo, hi)
 
 
-def measured_change(new: SkivingSetup, worn: SkivingSetup, side: str, rolls: np.ndarray, span: float) -> float:
-    """The change of the gear's mean profile slope [um over ``span``] from the new tool's cut to the worn one's,
-    fitted over the gear ``rolls`` (exact measurement)."""
-    cuts = [measured_setup(st) for st in (new, worn)]
-    L = np.asarray(cuts[0]["_traces"]["L_mm"])
-    dev = (np.asarray(cuts[1]["_traces"]["profile"][side]) - np.asarray(cuts[0]["_traces"]["profile"][side])).mean(0)
-    sel = (L >= rolls.min() - 1e-9) & (L <= rolls.max() + 1e-9)
-    return float(np.polyfit(L[sel], dev[sel] * UM, 1)[0] * span)
-
-
 @functools.cache
 def measured_setup(st: SkivingSetup) -> dict:
     return measure_gear(SweptVolumes(st.gear, make_edge(st, "conjugate"), ideal_passes(st)), st.gear, MeasureOptions())
@@ -176,31 +166,29 @@ ROOMY = replace(FINE, cutter=replace(FINE.cutter, profile_shift=0.25))
 
 
 @pytest.mark.parametrize(
-    "new, regrind, tolerance",
-    [
-        (FINE, 1.5, 0.10),
-        (replace(ROOMY, rake=replace(RAKE5, offset=0.0)), 2.0, 0.10),
-        # the issue's tool: its face 3 mm off the common perpendicular; the first order holds to 2-10 % on one flank
-        # and 9-18 % on the other (docs/cutter.md: open)
-        (replace(ROOMY, rake=RAKE5), 2.0, 0.15),
-    ],
-    ids=["plane", "rake5", "rake5-offset3"],
+    "new, regrind",
+    [(FINE, 1.5), (replace(ROOMY, rake=replace(RAKE5, offset=0.0)), 2.0), (replace(ROOMY, rake=RAKE5), 2.0)],
+    ids=["plane", "rake5", "rake5-offset3"],  # the last: the issue's tool, its face 3 mm off the common perpendicular
 )
-def test_a_reground_tool_cuts_the_profile_slope_its_relief_predicts(new: SkivingSetup, regrind: float, tolerance):
+def test_a_reground_tool_cuts_the_profile_slope_its_relief_predicts(new: SkivingSetup, regrind: float):
     """A regrind of d takes d' tan(alpha_a) / mn off the teeth's profile shift (d' = d / cos(gamma) along the axis): the
     face cuts a thinner section of the relieved teeth, the shop sets it to the same tooth thickness (a smaller centre
     distance), and the edge keeps the new tool's departure from its involute section at each roll length L0
-    (docs/cutter.md, "Regrind"); the gear's profile slope changes as :func:`regrind_prediction` says."""
+    (docs/cutter.md, "Regrind"); the gear's profile slope departs from the ideal gear's (the one the reground cutter,
+    designed afresh, cuts at the same setting) as :func:`regrind_prediction` says, within 10 %. The new tool's own gear
+    is not the reference: near its corner a new cutter with x0 = 0.25 on an offset face leaves 1.3 um at the start of
+    the evaluation range, which the regrind does not make."""
     from cutting.skiving.kinematics import reground
 
     worn = reground(new, regrind)
+    fresh = replace(worn, rake=replace(worn.rake, regrind=0.0))
     depth = regrind / math.cos(new.rake.rake_angle)
     assert worn.cutter.x == pytest.approx(new.cutter.x - depth * math.tan(6 * DEG) / FINE.cutter.mn)
     assert worn.generated_root_diameter == pytest.approx(new.generated_root_diameter, abs=1e-9)
-    predicted, rolls, (lo, hi) = regrind_prediction(worn)
-    before, after = measured_setup(new), measured_setup(worn)
+    predicted, _, _ = regrind_prediction(worn)
+    before, after, ideal = measured_setup(new), measured_setup(worn), measured_setup(fresh)
     for side in ("left", "right"):
-        change = measured_change(new, worn, side, rolls[side], hi - lo)
-        assert change == pytest.approx(predicted[side], rel=tolerance)
+        change = after["profile"][side]["f_Halpha_mean"] - ideal["profile"][side]["f_Halpha_mean"]
+        assert change == pytest.approx(predicted[side], rel=0.10)
         assert abs(change) > 2.0  # the shops' known problem: a regrind tilts the profile
         assert abs(after["pitch"][side]["f_p"] - before["pitch"][side]["f_p"]) < 0.3
