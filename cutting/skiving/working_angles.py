@@ -513,10 +513,21 @@ def working_angle_maps(
     setup: SkivingSetup, edge: CuttingEdge, stride: tuple[int, int] = THICKNESS_STRIDE
 ) -> list[PassageAngles]:
     """:func:`passage_angles` of every pass (the middle passage of the ideal motion), with the job's relief; the chip
-    thickness on every ``stride`` = (instants, edge points) of the map."""
-    motions = ideal_passes(setup)
-    relief = Relief.of(setup)
-    return [passage_angles(setup, edge, relief, k, motions, stride=stride) for k in range(len(setup.passes))]
+    thickness on every ``stride`` = (instants, edge points) of the map. Kept for the last few setups and edges (a
+    setting sheet per machine structure, a cut and its run ask for the same maps; the maps are not changed)."""
+    key = (setup, edge.kind, np.ascontiguousarray(edge.outline, dtype=float).tobytes(), tuple(stride))
+    if key not in _MAPS:
+        motions = ideal_passes(setup)
+        relief = Relief.of(setup)
+        _MAPS[key] = [passage_angles(setup, edge, relief, k, motions, stride=stride) for k in range(len(setup.passes))]
+        while len(_MAPS) > MAPS_KEPT:
+            _MAPS.pop(next(iter(_MAPS)))
+    return list(_MAPS[key])
+
+
+#: the working-angle maps kept (a few setups' worth: each pass's map holds ~10k points x 8 fields)
+MAPS_KEPT = 4
+_MAPS: dict[tuple, list[PassageAngles]] = {}
 
 
 def working_angle_summaries(
