@@ -254,3 +254,31 @@ def test_recorder_writes_what_a_process_logs(tmp_path):
     (mesh,) = chunks(path, "/workpiece", static=True)
     assert len(instances([mesh], "Mesh3D:vertex_positions")) == len(box.vertices)
     assert {t for c in RrdReader(path).stream().to_chunks() for t in c.timeline_names} <= {"sim_time"}
+
+
+def test_each_run_is_its_own_recording():
+    """Two runs of the same job get two recording ids (its hash and each run's start): a viewer opens them side by
+    side instead of merging them; the id is the job's (the same text and start give the same id)."""
+    import datetime
+
+    from virtual_machine.output.recorder import run_recording_id
+    from virtual_machine.processes.base import run_identity
+
+    a, b = run_identity(load_job(JOB)), run_identity(load_job(JOB))
+    assert a["recording_id"] != b["recording_id"]
+    assert a["recording_id"].split("-")[0] == b["recording_id"].split("-")[0]  # the same job
+    assert a["documents"]["job"] == JOB.read_text()
+    at = datetime.datetime(2026, 11, 28, 12, 0, 0, 1234, tzinfo=datetime.UTC)
+    assert run_recording_id("x = 1", at) == run_recording_id("x = 1", at) != run_recording_id("x = 2", at)
+
+
+def test_every_series_is_drawn_min_max(run):
+    """The viewer's default averages the samples under a pixel (a 4 kHz force's peaks vanish when zoomed out):
+    every series declares the min-max aggregation, so the extremes stay visible at any zoom."""
+    static = [c for c in RrdReader(run["path"]).stream().to_chunks() if c.is_static]
+    policies = [
+        c.to_record_batch().column("SeriesLines:aggregation_policy").to_pylist()[0]
+        for c in static
+        if "SeriesLines:aggregation_policy" in c.to_record_batch().schema.names
+    ]
+    assert len(policies) >= 7 and all(p == [5] for p in policies)  # 5: AggregationPolicy.MinMax

@@ -150,6 +150,27 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
     blank = [c for c in chunks if c.entity_path == "/machine/work_spindle/blank_frame/blank" and not c.is_static]
     # the stock as it is cut: the dexel removal's solid once per pass (the small job has one)
     assert sum(c.num_rows for c in blank) == len(load_job(tmp / "small.toml").skiving.passes)
+    # one recording of this run (not merged with another run's in a viewer), with the job and its setting sheet
+    (entry,) = RrdReader(tmp / "run.rrd").recordings()
+    assert entry.application_id == "skive" and entry.recording_id != "skive" and "-" in entry.recording_id
+
+    def text(entity: str) -> str:
+        (doc,) = [c for c in chunks if c.entity_path == entity]
+        return doc.to_record_batch().column("TextDocument:text").to_pylist()[0][0]
+
+    assert text("/run/job") == (tmp / "small.toml").read_text()
+    assert "kx" in text("/run/setting_sheet") and "passes:" in text("/run/setting_sheet")
+    # every signal drawn min-max, and the cutting force's largest sample is the run's peak force
+    policies = [
+        c.to_record_batch().column("SeriesLines:aggregation_policy").to_pylist()[0]
+        for c in chunks
+        if c.is_static and "SeriesLines:aggregation_policy" in c.to_record_batch().schema.names
+    ]
+    assert len(policies) >= 8 and all(p == [5] for p in policies)  # 5: AggregationPolicy.MinMax
+    force = [c for c in chunks if c.entity_path == "/signals/extra/cutting_force_N" and not c.is_static]
+    peak = max(max(v) for c in force for v in c.to_record_batch().column("Scalars:scalars").to_pylist())
+    doc = json.loads((tmp / "out0" / "measurement.json").read_text())
+    assert peak == pytest.approx(doc["run"]["forces"]["peak_force_N"], rel=0.01)
 
 
 @pytest.mark.slow

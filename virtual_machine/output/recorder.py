@@ -12,7 +12,9 @@ made it: lengths in mm, timeline ``sim_time`` = simulated seconds, static entiti
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import datetime
+import hashlib
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -21,13 +23,27 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 TIMELINE = "sim_time"
+#: every process's recordings show under one application; each run is its own recording (run_recording_id)
+APP_ID = "skive"
+#: how the viewer draws many samples per pixel: the least and the largest, so a 4 kHz signal keeps its peaks at any
+#: zoom (the viewer's default averages them: a 1,118 N force peak showed as ~995 N)
+AGGREGATION = "MinMax"
+
+
+def run_recording_id(job_text: str, started: datetime.datetime | None = None) -> str:
+    """A recording id of one run: the job's hash (its text's SHA-256, 12 hex digits) and the run's start (UTC, to the
+    microsecond), so that two runs of the same job open side by side in one viewer instead of merging."""
+    at = started or datetime.datetime.now(datetime.UTC)
+    digest = hashlib.sha256(job_text.encode("utf-8")).hexdigest()[:12]
+    return f"{digest}-{at.strftime('%Y%m%dT%H%M%S%fZ')}"
 
 
 class Recorder:
     """One .rrd file. ``app_id``: the application the viewer shows; ``recording_id``: the recording's id and name
-    (default: Rerun's random id); ``blueprint``: the default layout. Use as a context manager (the file is flushed
-    and closed on exit, also when logging fails); ``stream`` is the underlying RecordingStream for the archetypes
-    this interface does not wrap."""
+    (default: Rerun's random id; a run's: :func:`run_recording_id`); ``blueprint``: the default layout;
+    ``documents``: texts the run is read with (name -> text, under ``/run/<name>``: the job, the setting sheet).
+    Use as a context manager (the file is flushed and closed on exit, also when logging fails); ``stream`` is the
+    underlying RecordingStream for the archetypes this interface does not wrap."""
 
     def __init__(
         self,
@@ -36,6 +52,7 @@ class Recorder:
         *,
         recording_id: str | None = None,
         blueprint: rrb.Blueprint | None = None,
+        documents: Mapping[str, str] | None = None,
     ) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -45,6 +62,8 @@ class Recorder:
         rr.set_log_time_enabled(False, recording=self.stream)  # no wall clock: the same run, the same timeline
         if recording_id is not None:
             self.stream.send_recording_name(recording_id)
+        for name, text in (documents or {}).items():  # the run's job text, setting sheet, ... under /run
+            self.stream.log(f"/run/{name}", rr.TextDocument(text, media_type=rr.MediaType.TEXT), static=True)
 
     def __enter__(self) -> Recorder:
         return self
@@ -85,8 +104,8 @@ class Recorder:
 
 
 def send_series(stream: rr.RecordingStream, entity: str, t: np.ndarray, values: np.ndarray, names: list[str]) -> None:
-    """A bulk scalar series with its line names (static SeriesLines) on the ``sim_time`` timeline."""
-    stream.log(entity, rr.SeriesLines(names=names), static=True)
+    """A bulk scalar series with its line names (static SeriesLines, drawn min-max) on the ``sim_time`` timeline."""
+    stream.log(entity, rr.SeriesLines(names=names, aggregation_policy=AGGREGATION), static=True)
     stream.send_columns(
         entity,
         indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))],

@@ -32,7 +32,7 @@ import rerun.blueprint as rrb
 
 from cutting.flank import SIDES, base_tangent_deviation
 from cutting.gear import Gear
-from virtual_machine.output.recorder import TIMELINE, Recorder, send_series
+from virtual_machine.output.recorder import APP_ID, TIMELINE, Recorder, send_series
 from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory
 from virtual_machine.runtime.physics import AXES
 
@@ -64,7 +64,8 @@ def write_recording(
     charts: Sequence[str | Path] = (),
     series: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
     rate_hz: float = 200.0,
-    recording_id: str = "skive",
+    recording_id: str | None = None,
+    documents: Mapping[str, str] | None = None,
 ) -> Path:
     """Write one .rrd file of the run with its default blueprint; returns the path.
 
@@ -79,7 +80,9 @@ def write_recording(
     charts: PNG files (e.g. from :func:`metrology.charts.write_charts`)
     series: extra time series, name -> (t [s], values (n,) or (n, k))
     rate_hz: rate of the body poses [Hz] (the record is decimated to it)
-    recording_id: the recording's id and name
+    recording_id: the recording's id and name (a run's: :func:`virtual_machine.output.recorder.run_recording_id`;
+        None: Rerun's random id)
+    documents: texts to read the run with (name -> text, under ``/run/<name>``: the job, the setting sheet)
 
     Raises
     ------
@@ -90,7 +93,7 @@ def write_recording(
     _check_inputs(model, motion, snapshots, gear_mesh, series, charts, rate_hz)
     path = Path(path)
     blueprint = recording_blueprint(series, [Path(c).stem for c in charts])
-    with Recorder(path, "skive", recording_id=recording_id, blueprint=blueprint) as recorder:
+    with Recorder(path, APP_ID, recording_id=recording_id, blueprint=blueprint, documents=documents) as recorder:
         rec = recorder.stream
         first_snapshot = min((float(s[0]) for s in snapshots), default=None)
         log_machine(rec, model, motion, rate_hz, first_snapshot)

@@ -146,5 +146,16 @@ class Process:
         return self.stages[stage]() if options is None else options
 
 
+def run_identity(job: Job, **documents: str) -> dict[str, Any]:
+    """What a run's recording is known by (:class:`virtual_machine.output.recorder.Recorder`'s keywords): its own
+    recording id, from the job's text and the run's start, and the job text (and any ``documents``, e.g. the setting
+    sheet) to read beside it."""
+    from virtual_machine.output.recorder import run_recording_id
+
+    source = Path(job.source)
+    text = source.read_text(encoding="utf-8") if source.is_file() else f"# job {job.source}: not a file\n"
+    return {"recording_id": run_recording_id(text), "documents": {"job": text, **documents}}
+
+
 def reporter_or_default(reporter: Reporter | None) -> Reporter:
     return reporter if reporter is not None else Reporter()

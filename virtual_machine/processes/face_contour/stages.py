@@ -290,16 +290,17 @@ def run_face_job(job: Job, path: Path, out: Path, progress=None, stage=None, rrd
     _report(out / "report.html", path, doc, job)
     if rrd is not None:
         stage("recording")
-        _record(rrd, record, out / "coupling.stl")
+        _record(rrd, record, out / "coupling.stl", job)
     return doc
 
 
-def _record(rrd: Path, record, stl: Path) -> None:
+def _record(rrd: Path, record, stl: Path, job: Job) -> None:
     """The axes, the synchronisation errors over machine time and the coupling."""
-    from virtual_machine.output.recorder import Recorder
+    from virtual_machine.output.recorder import APP_ID, Recorder
+    from virtual_machine.processes.base import run_identity
 
     t = np.asarray(record.trace_t, dtype=float)
-    with Recorder(rrd, "skive_face_contour") as rec:
+    with Recorder(rrd, APP_ID, **run_identity(job)) as rec:
         rec.series("machine/axes", t, record.trace_q, ["A [rad]", "phi [rad]", "E [rad]", "Z [mm]"])
         rec.series(
             "machine/synchronisation",

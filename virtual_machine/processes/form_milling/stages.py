@@ -606,10 +606,11 @@ def _report(page: Path, path: Path, doc: dict[str, Any], charts: list[Path], pla
 
 def _record(rrd: Path, job: Job, record, stl_path: Path, doc: dict[str, Any], charts: list[Path]) -> None:
     """A Rerun recording: the axes and the encoders' following errors over machine time, the gear, the charts."""
-    from virtual_machine.output.recorder import Recorder
+    from virtual_machine.output.recorder import APP_ID, Recorder
+    from virtual_machine.processes.base import run_identity
 
     t = np.asarray(record.trace_t, dtype=float)
-    with Recorder(rrd, "skive_form_milling") as rec:
+    with Recorder(rrd, APP_ID, **run_identity(job)) as rec:
         rec.series("machine/axes", t, record.trace_q[:, :5], ["A [rad]", "X [mm]", "Y [mm]", "Z [mm]", "B [rad]"])
         errors = ["A [arcsec]", "X [um]", "Y [um]", "Z [um]", "B [arcsec]"]
         rec.series("machine/following_error", t, record.trace_error, errors)

@@ -20,7 +20,7 @@ from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
-from virtual_machine.processes.base import Process, Product, reporter_or_default, written
+from virtual_machine.processes.base import Process, Product, reporter_or_default, run_identity, written
 from virtual_machine.processes.options import (
     MachineSimulateOptions,
     SkivingCutOptions,
@@ -99,7 +99,14 @@ class Skiving(Process):
         if rrd is not None:
             from virtual_machine.output.recording import write_recording
 
-            write_recording(rrd, model_xml=rec.model_xml, motion=rec, setup=st, charts=[out / "sync_error.png"])
+            write_recording(
+                rrd,
+                model_xml=rec.model_xml,
+                motion=rec,
+                setup=st,
+                charts=[out / "sync_error.png"],
+                **run_identity(job, setting_sheet=sheet_product(job, None).text),
+            )
             doc["recording"] = str(rrd)
         files = written(out, "trajectory.npz", "motion.npz", "simulation.json", "sync_error.png", "*.xml")
         return Product("simulate", doc, format_simulation(doc, job, wall, out), files + ([rrd] if rrd else []), out)

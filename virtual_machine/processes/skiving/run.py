@@ -39,6 +39,8 @@ from virtual_machine.output.formatting import format_sheet
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.motion_io import summary
 from virtual_machine.output.report import run_chart, write_report
+from virtual_machine.processes.base import run_identity
+from virtual_machine.processes.sheets import sheet_product
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.version import versions
@@ -274,4 +276,5 @@ def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, cha
         measurement=measurement,
         charts=charts,
         series=series,
+        **run_identity(job, setting_sheet=sheet_product(job, None).text),
     )

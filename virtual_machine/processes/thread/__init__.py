@@ -15,7 +15,7 @@ from typing import ClassVar
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.progress import Reporter
-from virtual_machine.processes.base import Process, Product, written
+from virtual_machine.processes.base import Process, Product, run_identity, written
 from virtual_machine.processes.options import MachineSimulateOptions, RecordedOptions, SheetOptions, StageOptions
 from virtual_machine.processes.sheets import sheet_product
 
@@ -89,9 +89,9 @@ def _stroke(job: Job, out: Path, duration: float | None, measurement: bool, rrd:
     }
     write_json(out / "simulation.json", doc)
     if rrd is not None:
-        from virtual_machine.output.recorder import Recorder
+        from virtual_machine.output.recorder import APP_ID, Recorder
 
-        with Recorder(rrd, "skive_thread") as r:
+        with Recorder(rrd, APP_ID, **run_identity(job)) as r:
             r.series("lathe/spindle", rec.t, rec.b1, ["B1 [rad]"])
             r.series("lathe/carriage", rec.t, rec.p2, ["P2 [mm]"])
             r.series("lathe/lead_error", rec.t, rec.lead_error_um, ["lead error [um]"])

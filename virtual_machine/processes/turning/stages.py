@@ -449,13 +449,14 @@ def _force_table(f: dict[str, Any]) -> list[str]:
 
 def _record(rrd: Path, rec, sampled: SampledTurning, job: Job) -> None:
     """The carriage's path against the command and the uncut chip thickness over machine time."""
-    from virtual_machine.output.recorder import Recorder
+    from virtual_machine.output.recorder import APP_ID, Recorder
+    from virtual_machine.processes.base import run_identity
 
     commanded = commanded_path(job, sampled)
     k0 = len(rec.t) - len(sampled.theta)
     t = rec.t[k0:]
     thickness = np.asarray(sampled.uncut_thickness(sampled.theta))
-    with Recorder(rrd, "skive_turning") as stream:
+    with Recorder(rrd, APP_ID, **run_identity(job)) as stream:
         stream.series("lathe/carriage_mm", t, np.column_stack([sampled.z, commanded]), ["made", "commanded"])
         stream.series("lathe/uncut_chip_mm", t, np.clip(thickness, -1.0, 1.0)[:, None], ["uncut chip"])
         if rec.force is not None:
