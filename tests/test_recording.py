@@ -92,7 +92,9 @@ def test_entities_and_timeline(run):
         "/signals/sync_error",
         "/signals/torque",
         "/signals/axes/spindles",
-        "/signals/axes/slides",
+        "/signals/axes/carriage",
+        "/signals/axes/radial_slide",
+        "/signals/legend",
         "/signals/program/segment",
         "/signals/program/events",
         "/signals/extra/cutting_force",
@@ -112,9 +114,9 @@ def test_entities_and_timeline(run):
     reader = RrdReader(run["path"])
     (blueprint,) = reader.blueprints()
     views = {c.entity_path for c in reader.stream(store=blueprint).to_chunks() if c.entity_path.count("/") == 2}
-    # 3D machine and gear; sync, torques, spindles, slides, program, 1 extra; 4 charts (profile, helix, pitch,
-    # topography), 2 documents, events
-    assert sum(v.startswith("/view/") for v in views) == 2 + 6 + 7
+    # 3D machine and gear; sync, torques, spindle speeds, carriage, radial slide, program, 1 extra; 4 charts
+    # (profile, helix, pitch, topography), 2 documents, events, the signals' legend
+    assert sum(v.startswith("/view/") for v in views) == 2 + 7 + 8
 
 
 def test_row_counts(run):
@@ -125,12 +127,20 @@ def test_row_counts(run):
     assert frames == round(DURATION * RATE) == 160
     for body in ("work_spindle", "tool_spindle", "carriage", "lead_screw"):
         assert rows(path, f"/machine/{body}") == frames
-    for entity in ("/signals/sync_error", "/signals/torque", "/signals/axes/slides", "/signals/extra/cutting_force"):
-        assert rows(path, entity) == n
+    signals = ("sync_error", "torque", "axes/spindles", "axes/carriage", "axes/radial_slide", "extra/cutting_force")
+    for entity in signals:
+        assert rows(path, f"/signals/{entity}") == n
     torque = column(chunks(path, "/signals/torque", static=False), "Scalars:scalars")  # 3 instances per row
     assert np.allclose(np.array(torque), motion.torque)
-    slides = column(chunks(path, "/signals/axes/slides", static=False), "Scalars:scalars")
-    assert np.allclose(np.array(slides), motion.q[:, 2:4])  # P3, X [mm]
+    for entity, k in (("carriage", 2), ("radial_slide", 3)):  # P3, X [mm]
+        slide = instances(chunks(path, f"/signals/axes/{entity}", static=False), "Scalars:scalars")
+        assert np.allclose(np.ravel(slide), motion.q[:, k])
+    # the spindles' speeds [rpm]: B1, B2 and TV turn as the kinematics say
+    speeds = np.array(column(chunks(path, "/signals/axes/spindles", static=False), "Scalars:scalars"))
+    assert np.allclose(speeds, np.gradient(motion.q[:, [0, 1, 4]], motion.t, axis=0) * 60 / (2 * math.pi))
+    ratio = abs(np.median(speeds[n // 2 :, 1] / speeds[n // 2 :, 0]))  # work / tool = z0 / z2, opposite senses
+    st = run["job"].skiving
+    assert ratio == pytest.approx(st.cutter.teeth / st.gear.teeth, rel=0.02)
     sync = instances(chunks(path, "/signals/sync_error", static=False), "Scalars:scalars")
     assert np.allclose(np.ravel(sync), motion.sync_um)
     events = instances(chunks(path, "/signals/program/events", static=False), "TextLog:text")
@@ -270,6 +280,20 @@ def test_each_run_is_its_own_recording():
     assert a["documents"]["job"] == JOB.read_text()
     at = datetime.datetime(2026, 11, 28, 12, 0, 0, 1234, tzinfo=datetime.UTC)
     assert run_recording_id("x = 1", at) == run_recording_id("x = 1", at) != run_recording_id("x = 2", at)
+
+
+def test_signals_are_named_as_the_machine_names_its_elements(run):
+    """Each line named by its element as the seeds name it, with its unit in the label (not the entity), distinct
+    colours within a view, and a legend document."""
+    static = {c.entity_path: c for c in RrdReader(run["path"]).stream().to_chunks() if c.is_static}
+    names = static["/signals/torque"].to_record_batch().column("SeriesLines:names").to_pylist()[0]
+    assert names == ["M1 tool-spindle motor [N m]", "M2 work-spindle motor [N m]", "M3 lead-screw motor [N m]"]
+    colours = static["/signals/torque"].to_record_batch().column("SeriesLines:colors").to_pylist()[0]
+    assert len(set(colours)) == 3
+    spindles = static["/signals/axes/spindles"].to_record_batch().column("SeriesLines:names").to_pylist()[0]
+    assert spindles == ["B1 tool spindle [rpm]", "B2 work spindle [rpm]", "TV lead screw [rpm]"]
+    legend = static["/signals/legend"].to_record_batch().column("TextDocument:text").to_pylist()[0][0]
+    assert "| TV | lead screw |" in legend and "| M3 | lead-screw motor |" in legend
 
 
 def test_every_series_is_drawn_min_max(run):

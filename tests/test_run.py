@@ -141,9 +141,9 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
     entities = {c.entity_path for c in chunks}
     assert {
         "/gear/finished",
-        "/signals/extra/cutting_force_N",
-        "/signals/extra/chip_volume_mm3",
-        "/signals/extra/cutting_torque_work_axis_Nm",
+        "/signals/extra/cutting_force",
+        "/signals/extra/chip_volume",
+        "/signals/extra/cutting_torque_about_the_work_axis",
         "/machine/work_spindle/blank_frame/blank",
         "/measurement/profile",
     } <= entities
@@ -167,7 +167,7 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
         if c.is_static and "SeriesLines:aggregation_policy" in c.to_record_batch().schema.names
     ]
     assert len(policies) >= 8 and all(p == [5] for p in policies)  # 5: AggregationPolicy.MinMax
-    force = [c for c in chunks if c.entity_path == "/signals/extra/cutting_force_N" and not c.is_static]
+    force = [c for c in chunks if c.entity_path == "/signals/extra/cutting_force" and not c.is_static]
     peak = max(max(v) for c in force for v in c.to_record_batch().column("Scalars:scalars").to_pylist())
     doc = json.loads((tmp / "out0" / "measurement.json").read_text())
     assert peak == pytest.approx(doc["run"]["forces"]["peak_force_N"], rel=0.01)

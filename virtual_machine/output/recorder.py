@@ -103,9 +103,18 @@ class Recorder:
         self.stream.log(entity, rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
 
 
-def send_series(stream: rr.RecordingStream, entity: str, t: np.ndarray, values: np.ndarray, names: list[str]) -> None:
-    """A bulk scalar series with its line names (static SeriesLines, drawn min-max) on the ``sim_time`` timeline."""
-    stream.log(entity, rr.SeriesLines(names=names, aggregation_policy=AGGREGATION), static=True)
+def send_series(
+    stream: rr.RecordingStream,
+    entity: str,
+    t: np.ndarray,
+    values: np.ndarray,
+    names: list[str],
+    colours: Sequence[tuple[int, int, int]] | None = None,
+) -> None:
+    """A bulk scalar series with its line names (static SeriesLines, drawn min-max; ``colours``: one per line from
+    the start of the sequence) on the ``sim_time`` timeline."""
+    style: dict[str, Any] = {"colors": [colours[k % len(colours)] for k in range(len(names))]} if colours else {}
+    stream.log(entity, rr.SeriesLines(names=names, aggregation_policy=AGGREGATION, **style), static=True)
     stream.send_columns(
         entity,
         indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))],

@@ -8,9 +8,11 @@ Entities (lengths in mm everywhere, timeline ``sim_time`` = simulated seconds):
   in the body frame); ``/machine/<blank body>/blank_frame/blank``: the blank snapshots (``Mesh3D`` at their times);
 - ``/gear/cutter_path/pass_<i>``: the cutter centre in the blank frame per feed stroke; ``/gear/finished``: the
   finished gear coloured by deviation (blue -limit, white 0, red +limit, grey off the flanks);
-- ``/signals/axes/spindles`` (B1, B2, TV [rad]), ``/signals/axes/slides`` (P3, X [mm]), ``/signals/sync_error``,
-  ``/signals/torque``, ``/signals/program/{segment,cutting,events}``, ``/signals/extra/<name>``: time series at
-  the record's full rate (``send_columns``);
+- ``/signals/axes/spindles`` (B1, B2, TV speeds [rpm]), ``/signals/axes/carriage`` (P3 [mm]),
+  ``/signals/axes/radial_slide`` (X [mm]), ``/signals/sync_error``, ``/signals/torque`` (the structure's motors),
+  ``/signals/program/{segment,cutting,events}``, ``/signals/extra/<name>`` (the label's unit in its line name, not
+  the entity): time series at the record's full rate (``send_columns``), drawn min-max; ``/signals/legend``: what
+  the element names mean;
 - ``/measurement/<chart stem>`` (PNG), ``/measurement/summary`` (ISO 1328 class table),
   ``/measurement/flank_deviation`` (range of the colour map's data).
 
@@ -43,7 +45,28 @@ MACHINE, GEAR, SIGNALS, MEASUREMENT = "/machine", "/gear", "/signals", "/measure
 BLANK_SITE = "blank_frame"
 REQUIRED_BODIES = ("work_spindle", "tool_spindle")
 LINEAR_AXES = ("P3", "X")  # recorded in mm, metres in the model
-AXIS_GROUPS = {"spindles": ("B1", "B2", "TV"), "slides": LINEAR_AXES}  # one entity per unit (rad, mm)
+SPINDLES = ("B1", "B2", "TV")  # recorded as speeds [rpm]
+#: the machine's elements as the seeds name them (seed 000, fig. 1-4; docs/machines.md)
+ELEMENTS = {
+    "B1": "tool spindle",
+    "B2": "work spindle",
+    "TV": "lead screw",
+    "P3": "carriage along the work axis",
+    "X": "radial slide (centre distance)",
+}
+#: each structure's actuators (``MotionRecord.actuators``), as its figure names them
+MOTORS = {
+    ("M1", "M2", "M3"): ("M1 tool-spindle motor", "M2 work-spindle motor", "M3 lead-screw motor"),
+    ("M1", "M2"): ("M1 main motor (tool spindle, change gears)", "M2 setting-traverse motor"),
+    ("M1", "GShD1", "GShD2", "GShD3"): (
+        "M1 main motor (tool spindle)",
+        "GShD1 hydraulic stepping motor, work spindle",
+        "GShD2 hydraulic stepping motor, additional turn",
+        "GShD3 hydraulic stepping motor, lead screw",
+    ),
+}
+#: distinct line colours within a view (Okabe-Ito: told apart also with a colour-vision deficiency)
+LINE_COLOURS = ((0, 114, 178), (213, 94, 0), (0, 158, 115), (204, 121, 167), (230, 159, 0), (86, 180, 233))
 M_TO_MM = 1e3
 GREY = (128, 128, 128, 255)
 PASS_COLOURS = ((230, 120, 20), (40, 120, 220), (40, 170, 80), (200, 40, 160), (120, 120, 120))
@@ -386,31 +409,66 @@ def segment_events(motion: MotionRecord) -> tuple[np.ndarray, list[str]]:
     return motion.t[start], texts
 
 
+def motor_names(actuators: Sequence[str]) -> list[str]:
+    """The actuators' names as the structure's figure has them (the bare name where the structure is not known)."""
+    return list(MOTORS.get(tuple(actuators), tuple(actuators)))
+
+
+def series_entity(label: str) -> str:
+    """The entity of an extra series: its label without the unit ("cutting force [N]" -> cutting_force)."""
+    return _part(re.sub(r"\s*\[[^]]*\]\s*$", "", label).replace(" ", "_"))
+
+
+def signals_legend(actuators: Sequence[str]) -> str:
+    """What the signals' element names mean (a document beside the time series)."""
+    lines = ["# Signals", "", "| name | element |", "|---|---|"]
+    lines += [f"| {k} | {v} |" for k, v in ELEMENTS.items()]
+    lines += [f"| {name.split()[0]} | {' '.join(name.split()[1:])} |" for name in motor_names(actuators)]
+    lines += [
+        "",
+        "Spindle speeds in rpm (B1, B2, TV), slide positions in mm (P3 from the face's middle, X the centre distance), "
+        "motor torques in N m; sync error: the work spindle's lag behind the tool spindle as arc on the work "
+        "reference circle [um]. Every series is drawn min-max: its peaks show at any zoom.",
+        "",
+        "Program segments: " + ", ".join(f"{k} {s}" for k, s in enumerate(SEGMENTS)),
+    ]
+    return "\n".join(lines)
+
+
 def log_signals(
     rec: rr.RecordingStream, motion: MotionRecord, series: Mapping[str, tuple[np.ndarray, np.ndarray]]
 ) -> None:
-    """Part 4: axes, synchronisation error, motor torques, the program's segment and the extra series, all at
-    the record's full rate."""
+    """Part 4: spindle speeds, slide positions, synchronisation error, motor torques, the program's segment and the
+    extra series (labels with their units: "cutting force [N]"), all at the record's full rate, each element
+    named as the seeds name it, with a legend document."""
     t = motion.t
-    for group, axes in AXIS_GROUPS.items():
-        unit = "mm" if group == "slides" else "rad"
-        columns = [AXES.index(a) for a in axes]
-        send_series(rec, f"{SIGNALS}/axes/{group}", t, motion.q[:, columns], [f"{a} [{unit}]" for a in axes])
-    send_series(rec, f"{SIGNALS}/sync_error", t, motion.sync_um, ["sync error [um]"])
-    send_series(rec, f"{SIGNALS}/torque", t, motion.torque, [f"{a} [N m]" for a in motion.actuators])
-    legend = ", ".join(f"{k} {s}" for k, s in enumerate(SEGMENTS))
-    send_series(rec, f"{SIGNALS}/program/segment", t, motion.segment, [f"segment ({legend})"])
-    send_series(rec, f"{SIGNALS}/program/cutting", t, motion.cutting.astype(float), ["cutter can touch the blank"])
+    columns = [AXES.index(a) for a in SPINDLES]
+    rpm = np.gradient(motion.q[:, columns], t, axis=0) * 60 / (2 * math.pi) if len(t) > 1 else motion.q[:, columns] * 0
+    send_series(rec, f"{SIGNALS}/axes/spindles", t, rpm, [f"{a} {ELEMENTS[a]} [rpm]" for a in SPINDLES], LINE_COLOURS)
+    for axis, entity in zip(LINEAR_AXES, ("carriage", "radial_slide"), strict=True):
+        label = [f"{axis} {ELEMENTS[axis]} [mm]"]
+        send_series(rec, f"{SIGNALS}/axes/{entity}", t, motion.q[:, AXES.index(axis)], label, LINE_COLOURS)
+    send_series(rec, f"{SIGNALS}/sync_error", t, motion.sync_um, ["sync error [um]"], LINE_COLOURS)
+    names = [f"{m} [N m]" for m in motor_names(motion.actuators)]
+    send_series(rec, f"{SIGNALS}/torque", t, motion.torque, names, LINE_COLOURS)
+    send_series(rec, f"{SIGNALS}/program/segment", t, motion.segment, ["program segment (legend)"], LINE_COLOURS)
+    cutting = motion.cutting.astype(float)
+    send_series(rec, f"{SIGNALS}/program/cutting", t, cutting, ["cutter can touch the blank"], LINE_COLOURS[1:])
     times, texts = segment_events(motion)
     rec.send_columns(
         f"{SIGNALS}/program/events",
         indexes=[rr.TimeColumn(TIMELINE, duration=times)],
         columns=rr.TextLog.columns(text=texts, level=["INFO"] * len(texts)),
     )
-    for name, (ts, values) in series.items():
+    rec.log(
+        f"{SIGNALS}/legend",
+        rr.TextDocument(signals_legend(motion.actuators), media_type=rr.MediaType.MARKDOWN),
+        static=True,
+    )
+    for label, (ts, values) in series.items():
         width = 1 if np.ndim(values) == 1 else np.shape(values)[1]
-        names = [name] if width == 1 else [f"{name}[{k}]" for k in range(width)]
-        send_series(rec, f"{SIGNALS}/extra/{_part(name)}", ts, values, names)
+        names = [label] if width == 1 else [f"{label} ({k})" for k in range(width)]
+        send_series(rec, f"{SIGNALS}/extra/{series_entity(label)}", ts, values, names, LINE_COLOURS)
 
 
 # ---- 5. measurement --------------------------------------------------------------------------------------
@@ -544,16 +602,18 @@ def recording_blueprint(series: Mapping[str, Any], chart_stems: Sequence[str]) -
     signals = [
         rrb.TimeSeriesView(origin=f"{SIGNALS}/sync_error", name="Sync error [um]"),
         rrb.TimeSeriesView(origin=f"{SIGNALS}/torque", name="Motor torques [N m]"),
-        rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/spindles", name="Spindles B1, B2, TV [rad]"),
-        rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/slides", name="Slides P3, X [mm]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/spindles", name="Spindle speeds B1, B2, TV [rpm]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/carriage", name="Carriage P3 [mm]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/radial_slide", name="Radial slide X [mm]"),
         rrb.TimeSeriesView(origin=f"{SIGNALS}/program", name="Program segment"),
     ]
-    signals += [rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{_part(n)}", name=n) for n in series]
+    signals += [rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{series_entity(n)}", name=n) for n in series]
     results = [rrb.Spatial2DView(origin=f"{MEASUREMENT}/{_part(s)}", name=s) for s in chart_stems]
     results += [
         rrb.TextDocumentView(origin=f"{MEASUREMENT}/summary", name="ISO 1328 classes"),
         rrb.TextDocumentView(origin=f"{MEASUREMENT}/flank_deviation", name="Flank deviation"),
         rrb.TextLogView(origin=f"{SIGNALS}/program/events", name="Program events"),
+        rrb.TextDocumentView(origin=f"{SIGNALS}/legend", name="Signals: names and units"),
     ]
     return rrb.Blueprint(
         rrb.Horizontal(

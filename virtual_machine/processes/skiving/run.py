@@ -259,10 +259,10 @@ def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, cha
     rows = sim.load_rows
     series = {}
     if rows is not None and len(rows):
-        series["cutting_force_N"] = (rows[:, 0], np.linalg.norm(rows[:, 1:4], axis=1))
-        series["cutting_torque_work_axis_Nm"] = (rows[:, 0], rows[:, 4])
+        series["cutting force [N]"] = (rows[:, 0], np.linalg.norm(rows[:, 1:4], axis=1))
+        series["cutting torque about the work axis [N m]"] = (rows[:, 0], rows[:, 4])
     if sim.loads:
-        series["chip_volume_mm3"] = (
+        series["chip volume [mm^3]"] = (
             np.array([a.load.t[len(a.load.t) // 2] for a in sim.loads]),
             np.array([a.load.volume for a in sim.loads]),
         )
