@@ -102,7 +102,8 @@ def write_recording(
     measurement: the dict of :func:`metrology.measure.measure_gear` (or its JSON form)
     charts: PNG files (e.g. from :func:`metrology.charts.write_charts`)
     series: extra time series, name -> (t [s], values (n,) or (n, k))
-    rate_hz: rate of the body poses [Hz] (the record is decimated to it)
+    rate_hz: the least rate of the body poses [Hz] (the record is decimated to it), raised where a spindle would turn
+        more than MAX_STEP_DEG between two frames (:func:`smooth_rate`)
     recording_id: the recording's id and name (a run's: :func:`virtual_machine.output.recorder.run_recording_id`;
         None: Rerun's random id)
     documents: texts to read the run with (name -> text, under ``/run/<name>``: the job, the setting sheet)
@@ -114,6 +115,7 @@ def write_recording(
     model = compile_model(model_xml)
     series = dict(series or {})
     _check_inputs(model, motion, snapshots, gear_mesh, series, charts, rate_hz)
+    rate_hz = max(rate_hz, smooth_rate(motion))
     path = Path(path)
     blueprint = recording_blueprint(series, [Path(c).stem for c in charts])
     with Recorder(path, APP_ID, recording_id=recording_id, blueprint=blueprint, documents=documents) as recorder:
@@ -280,10 +282,27 @@ def machine_frames(model: mujoco.MjModel, motion: MotionRecord, rate_hz: float) 
     return index, pos, quat
 
 
+#: the largest turn of a spindle between two recorded frames [deg]: at 200 Hz the default job's work spindle jumped
+#: ~76 deg from frame to frame and the viewer showed it stepping
+MAX_STEP_DEG = 10.0
+
+
+def smooth_rate(motion: MotionRecord, max_step_deg: float = MAX_STEP_DEG) -> float:
+    """The frame rate [Hz] at which no rotary axis (B1, B2, TV) turns more than ``max_step_deg`` between frames (at
+    most the record's own rate)."""
+    if len(motion.t) < 2:
+        return 0.0
+    columns = [AXES.index(a) for a in SPINDLES]
+    fastest = float(np.abs(np.diff(motion.q[:, columns], axis=0)).max() / np.median(np.diff(motion.t)))
+    own = 1.0 / float(np.median(np.diff(motion.t)))
+    return min(math.degrees(fastest) / max_step_deg, own)
+
+
 def decimation(t: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Indices of every ``round(1 / (rate_hz dt))``-th sample (dt: the median step of ``t``), from the first."""
+    """Indices of every ``floor(1 / (rate_hz dt))``-th sample (dt: the median step of ``t``), from the first: at
+    least ``rate_hz``."""
     dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0 / rate_hz
-    step = max(1, round(1.0 / (rate_hz * dt)))
+    step = max(1, math.floor(1.0 / (rate_hz * dt) + 1e-9))
     return np.arange(0, len(t), step)
 
 
@@ -302,7 +321,8 @@ def _log_blank_model(rec: rr.RecordingStream, entity: str, archetype: Any, hide_
 def log_machine(
     rec: rr.RecordingStream, model: mujoco.MjModel, motion: MotionRecord, rate_hz: float, hide_blank_at: float | None
 ) -> None:
-    """Part 1: the bodies' visual geoms (static, body frame) and their poses over time (Transform3D at rate_hz).
+    """Part 1: the bodies' visual geoms (static, body frame) and their poses over time (Transform3D at rate_hz; a body
+    that never moves once, static).
 
     With snapshots of the cut blank the model's blank cylinder is shown from t = 0 until the first snapshot."""
     rec.log(MACHINE, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
@@ -318,6 +338,11 @@ def log_machine(
     index, pos, quat = machine_frames(model, motion, rate_hz)
     times = [rr.TimeColumn(TIMELINE, duration=motion.t[index])]
     for body in range(1, model.nbody):
+        if np.ptp(pos[:, body], axis=0).max() == 0 and np.ptp(quat[:, body], axis=0).max() == 0:  # never moves
+            rec.log(
+                body_path(model, body), rr.Transform3D(translation=pos[0, body], quaternion=quat[0, body]), static=True
+            )
+            continue
         rec.send_columns(
             body_path(model, body),
             indexes=times,
