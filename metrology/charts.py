@@ -362,6 +362,27 @@ def finite(obj: Any) -> Any:
     return obj
 
 
+#: the one colour map of flank deviations, in the topography chart and on the recording's 3D gear: excess material
+#: (> 0, ISO 1328-1's sign) red, missing material blue, zero white-grey; symmetric about zero
+DEVIATION_CMAP = "RdBu_r"
+
+
+def deviation_limit(topo: dict[str, Any], key: str = "deviation_um") -> float:
+    """The colour scale's limit [um] of a topography: its largest |deviation| over both flanks (1 without data)."""
+    grids = [np.asarray(topo[s][key], dtype=float) for s in SIDES]
+    return max(float(np.nanmax(np.abs(g))) if np.isfinite(g).any() else 0.0 for g in grids) or 1.0
+
+
+def deviation_rgba(deviation_um: np.ndarray, limit_um: float) -> np.ndarray:
+    """RGBA (uint8, n x 4) of deviations [um] on :data:`DEVIATION_CMAP` over +-``limit_um`` (clipped), as the
+    topography chart draws them; NaN: grey (off the flanks)."""
+    d = np.asarray(deviation_um, dtype=float)
+    f = (np.clip(np.nan_to_num(d) / limit_um, -1.0, 1.0) + 1.0) / 2.0
+    out = np.round(mpl.colormaps[DEVIATION_CMAP](f) * 255).astype(np.uint8)
+    out[np.isnan(d)] = (128, 128, 128, 255)
+    return out
+
+
 @paused_gc()
 def topography_chart(path: Path, topo: dict[str, Any]) -> Path:
     """The flank topography as a colour map per flank (deviation over roll length x face, mean of the scanned
@@ -376,10 +397,10 @@ def topography_chart(path: Path, topo: dict[str, Any]) -> Path:
     fig, axes = agg_figure((width, height), (len(rows), 2), margins, (beside + 1.18, 0.8), dpi=90)
     for i, (key, what) in enumerate(rows):
         grids = [np.asarray(topo[s][key], dtype=float) for s in SIDES]
-        lim = max(float(np.nanmax(np.abs(g))) if np.isfinite(g).any() else 0.0 for g in grids) or 1.0
+        lim = deviation_limit(topo, key)
         for j, (side, grid) in enumerate(zip(SIDES, grids, strict=True)):
             ax = axes[i][j]
-            mesh = ax.pcolormesh(z, L, grid, cmap="RdBu", vmin=-lim, vmax=lim, shading="nearest")
+            mesh = ax.pcolormesh(z, L, grid, cmap=DEVIATION_CMAP, vmin=-lim, vmax=lim, shading="nearest")
             ax.set_title(f"{side} flank, {what}", y=1.0)
             ax.set_xlabel("z [mm]")
             ax.set_ylabel("roll length [mm]")

@@ -58,7 +58,7 @@ def run(tmp_path_factory):
         series={"cutting_force": (motion.t, force)},
         rate_hz=RATE,
     )
-    return {"job": job, "motion": motion, "path": path, "cut": cut, "perfect": perfect}
+    return {"job": job, "motion": motion, "path": path, "cut": cut, "perfect": perfect, "measurement": measurement}
 
 
 def chunks(path: Path, entity: str, static: bool | None = None):
@@ -195,11 +195,21 @@ def test_finished_gear_colours(run):
     moved = np.linalg.norm(cut.vertices - perfect.vertices, axis=1) > 1e-6
     red = moved & ~grey
     assert red.sum() >= 100
-    expected = deviation_colors(np.array([EXCESS_MM * 1e3]))[0]  # (255, 102, 102): 3/5 of the way to red
-    assert np.all(np.abs(rgba[red] - expected) <= 1)
+    # the report's topography chart's colour map and scale (metrology.charts: DEVIATION_CMAP over +-the largest
+    # measured deviation): excess material red, the colour the chart gives +3 um
+    import matplotlib as mpl
+
+    from metrology.charts import DEVIATION_CMAP, deviation_limit
+
+    limit = deviation_limit(run["measurement"]["topography"])
+    chart = np.round(np.array(mpl.colormaps[DEVIATION_CMAP]((min(EXCESS_MM * 1e3 / limit, 1.0) + 1) / 2)) * 255)
+    assert np.all(np.abs(rgba[red] - chart) <= 1)
+    assert np.all(np.abs(rgba[red] - deviation_colors(np.array([EXCESS_MM * 1e3]), limit)[0]) <= 1)
+    assert chart[0] > 150 and chart[2] < chart[0]  # red: excess material
     flank = ~moved & ~grey
     assert flank.sum() > 5000
-    assert np.all(rgba[flank, :3] >= 252)  # zero deviation: white
+    white = np.round(np.array(mpl.colormaps[DEVIATION_CMAP](0.5)) * 255)  # zero deviation: the map's middle
+    assert np.all(np.abs(rgba[flank] - white) <= 1)
     r = np.hypot(cut.vertices[:, 0], cut.vertices[:, 1])
     gear = run["job"].skiving.gear
     assert np.all(grey[np.abs(r - gear.tip_radius) < 1e-6])  # tip

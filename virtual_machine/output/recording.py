@@ -7,7 +7,8 @@ Entities (lengths in mm everywhere, timeline ``sim_time`` = simulated seconds):
   recorded axes (``Transform3D``, decimated to ``rate_hz``); ``/machine/<body>/<geom>``: its visual geoms (static,
   in the body frame); ``/machine/<blank body>/blank_frame/blank``: the blank snapshots (``Mesh3D`` at their times);
 - ``/gear/cutter_path/pass_<i>``: the cutter centre in the blank frame per feed stroke; ``/gear/finished``: the
-  finished gear coloured by deviation (blue -limit, white 0, red +limit, grey off the flanks);
+  finished gear coloured by deviation on the topography chart's map and scale (metrology.charts.DEVIATION_CMAP: missing
+  material blue, white 0, excess red; grey off the flanks);
 - ``/signals/axes/spindles`` (B1, B2, TV speeds [rpm]), ``/signals/axes/carriage`` (P3 [mm]),
   ``/signals/axes/radial_slide`` (X [mm]), ``/signals/sync_error``, ``/signals/torque`` (the structure's motors),
   ``/signals/program/{segment,cutting,events}``, ``/signals/extra/<name>`` (the label's unit in its line name, not
@@ -34,6 +35,7 @@ import rerun.blueprint as rrb
 
 from cutting.flank import SIDES, base_tangent_deviation
 from cutting.gear import Gear
+from metrology.charts import DEVIATION_CMAP, deviation_limit, deviation_rgba
 from virtual_machine.output.recorder import APP_ID, TIMELINE, Recorder, send_series
 from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory
 from virtual_machine.runtime.physics import AXES
@@ -68,7 +70,6 @@ MOTORS = {
 #: distinct line colours within a view (Okabe-Ito: told apart also with a colour-vision deficiency)
 LINE_COLOURS = ((0, 114, 178), (213, 94, 0), (0, 158, 115), (204, 121, 167), (230, 159, 0), (86, 180, 233))
 M_TO_MM = 1e3
-GREY = (128, 128, 128, 255)
 PASS_COLOURS = ((230, 120, 20), (40, 120, 220), (40, 170, 80), (200, 40, 160), (120, 120, 120))
 
 Mesh = tuple[np.ndarray, np.ndarray]
@@ -127,7 +128,8 @@ def write_recording(
         log_signals(rec, motion, series)
         log_measurement(rec, measurement, charts)
         if gear_mesh is not None and setup is not None:
-            log_finished_gear(rec, setup.gear, gear_mesh)
+            topo = (measurement or {}).get("topography")
+            log_finished_gear(rec, setup.gear, gear_mesh, deviation_limit(topo) if topo else 5.0)
     return path
 
 
@@ -573,16 +575,9 @@ def flank_deviation(gear: Gear, vertices: np.ndarray, margin: float = 0.01) -> t
 
 
 def deviation_colors(deviation_um: np.ndarray, limit_um: float = 5.0) -> np.ndarray:
-    """RGBA (uint8): blue at -limit, white at 0, red at +limit (clipped); grey where NaN."""
-    d = np.asarray(deviation_um, dtype=float)
-    f = np.clip(np.nan_to_num(d) / limit_um, -1.0, 1.0)
-    rgb = np.full((len(d), 3), 255.0)
-    rgb[:, 1] *= 1 - np.abs(f)
-    rgb[:, 0] *= np.where(f < 0, 1 + f, 1.0)
-    rgb[:, 2] *= np.where(f > 0, 1 - f, 1.0)
-    out = np.concatenate([np.round(rgb), np.full((len(d), 1), 255.0)], 1).astype(np.uint8)
-    out[np.isnan(d)] = GREY
-    return out
+    """RGBA (uint8) of the deviations on the report's colour map (:func:`metrology.charts.deviation_rgba`: excess
+    material red, missing blue) over +-``limit_um``; grey where NaN."""
+    return deviation_rgba(deviation_um, limit_um)
 
 
 def deviation_markdown(deviation_um: np.ndarray, side: np.ndarray, limit_um: float) -> str:
@@ -600,8 +595,9 @@ def deviation_markdown(deviation_um: np.ndarray, side: np.ndarray, limit_um: flo
             "# Finished gear: deviation from the nominal flank",
             "",
             "Along the base tangent, + = excess material (ISO 1328-1 sign).",
-            f"Colours: blue {-limit_um:+g} um, white 0, red {limit_um:+g} um (clipped); grey: off the flanks "
-            f"(tip, root, end faces), {off} vertices.",
+            f"Colours: the topography chart's map ({DEVIATION_CMAP}): blue {-limit_um:+.2f} um (missing material), "
+            f"white 0, red {limit_um:+.2f} um (excess material), clipped beyond; the chart's scale (the measured "
+            f"topography's largest deviation); grey: off the flanks (tip, root, end faces), {off} vertices.",
             "",
             *rows,
         ]
@@ -609,7 +605,8 @@ def deviation_markdown(deviation_um: np.ndarray, side: np.ndarray, limit_um: flo
 
 
 def log_finished_gear(rec: rr.RecordingStream, gear: Gear, gear_mesh: Mesh, limit_um: float = 5.0) -> None:
-    """Part 6: the finished gear coloured by flank deviation at ``/gear/finished`` and its range as text."""
+    """Part 6: the finished gear coloured by flank deviation at ``/gear/finished`` (the topography chart's colours
+    and scale, ``limit_um``) and its range as text."""
     vertices, triangles = gear_mesh
     dev, side = flank_deviation(gear, vertices)
     rec.log(
