@@ -8,6 +8,7 @@ import dataclasses
 import math
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 import trimesh
@@ -114,9 +115,20 @@ def test_entities_and_timeline(run):
     reader = RrdReader(run["path"])
     (blueprint,) = reader.blueprints()
     views = {c.entity_path for c in reader.stream(store=blueprint).to_chunks() if c.entity_path.count("/") == 2}
-    # 3D machine and gear; sync, torques, spindle speeds, carriage, radial slide, program, 1 extra; 4 charts
-    # (profile, helix, pitch, topography), 2 documents, events, the signals' legend
-    assert sum(v.startswith("/view/") for v in views) == 2 + 7 + 8
+    # 3D cutting zone, machine and gear; sync, torques, spindle speeds, carriage, radial slide, program, 1 extra;
+    # 4 charts (profile, helix, pitch, topography), 2 documents, events, the signals' legend
+    assert sum(v.startswith("/view/") for v in views) == 3 + 7 + 8
+    layout = reader.stream(store=blueprint).to_chunks()
+    queries = [q for c in layout if c.entity_path.endswith("/ViewContents") for q in column([c], "ViewContents:query")]
+    assert ["+ $origin/**", "- $origin/cutter_path/**"] in queries  # the cutter paths hidden by default
+    (target,) = [
+        v for c in layout if c.entity_path.endswith("/EyeControls3D") for v in column([c], "EyeControls3D:look_target")
+    ]
+    model = mujoco.MjModel.from_xml_string(run["motion"].model_xml)
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.key_qpos[0] if model.nkey else model.qpos0
+    mujoco.mj_kinematics(model, data)
+    assert np.allclose(target[0], data.site("blank_frame").xpos * 1e3, atol=1e-3)  # the cutting zone on the blank
 
 
 def test_row_counts(run):
@@ -189,7 +201,9 @@ def _rgba(packed: list[int]) -> np.ndarray:
 
 def test_finished_gear_colours(run):
     cut, perfect = run["cut"], run["perfect"]
-    rgba = _rgba(instances(chunks(run["path"], "/gear/finished", static=True), "Mesh3D:vertex_colors"))
+    finished = chunks(run["path"], "/gear/finished", static=False)  # shown when the run has cut it
+    assert [t.total_seconds() for t in column(finished, "sim_time")] == [pytest.approx(run["motion"].t[-1])]
+    rgba = _rgba(instances(finished, "Mesh3D:vertex_colors"))
     assert rgba.shape == (len(cut.vertices), 4)
     grey = np.all(rgba[:, :3] == 128, axis=1)
     moved = np.linalg.norm(cut.vertices - perfect.vertices, axis=1) > 1e-6

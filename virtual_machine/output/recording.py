@@ -118,7 +118,7 @@ def write_recording(
     _check_inputs(model, motion, snapshots, gear_mesh, series, charts, rate_hz)
     rate_hz = max(rate_hz, smooth_rate(motion))
     path = Path(path)
-    blueprint = recording_blueprint(series, [Path(c).stem for c in charts])
+    blueprint = recording_blueprint(series, [Path(c).stem for c in charts], cutting_zone(model, setup))
     with Recorder(path, APP_ID, recording_id=recording_id, blueprint=blueprint, documents=documents) as recorder:
         rec = recorder.stream
         first_snapshot = min((float(s[0]) for s in snapshots), default=None)
@@ -129,7 +129,8 @@ def write_recording(
         log_measurement(rec, measurement, charts)
         if gear_mesh is not None and setup is not None:
             topo = (measurement or {}).get("topography")
-            log_finished_gear(rec, setup.gear, gear_mesh, deviation_limit(topo) if topo else 5.0)
+            finished = float(motion.t[-1])  # the gear appears when the run has cut it
+            log_finished_gear(rec, setup.gear, gear_mesh, deviation_limit(topo) if topo else 5.0, finished)
     return path
 
 
@@ -604,23 +605,46 @@ def deviation_markdown(deviation_um: np.ndarray, side: np.ndarray, limit_um: flo
     )
 
 
-def log_finished_gear(rec: rr.RecordingStream, gear: Gear, gear_mesh: Mesh, limit_um: float = 5.0) -> None:
+def log_finished_gear(
+    rec: rr.RecordingStream, gear: Gear, gear_mesh: Mesh, limit_um: float = 5.0, at: float | None = None
+) -> None:
     """Part 6: the finished gear coloured by flank deviation at ``/gear/finished`` (the topography chart's colours
-    and scale, ``limit_um``) and its range as text."""
+    and scale, ``limit_um``) from machine time ``at`` [s] on (None: static), and its range as text."""
     vertices, triangles = gear_mesh
     dev, side = flank_deviation(gear, vertices)
-    rec.log(
-        f"{GEAR}/finished",
-        _mesh3d(vertices, triangles, vertex_colors=deviation_colors(dev, limit_um)),
-        static=True,
-    )
+    mesh = _mesh3d(vertices, triangles, vertex_colors=deviation_colors(dev, limit_um))
+    if at is None:
+        rec.log(f"{GEAR}/finished", mesh, static=True)
+    else:
+        rec.set_time(TIMELINE, duration=at)
+        rec.log(f"{GEAR}/finished", mesh)
+        rec.reset_time()
     text = deviation_markdown(dev, side, limit_um)
     rec.log(f"{MEASUREMENT}/flank_deviation", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
 
 
 # ---- 7. the blueprint ------------------------------------------------------------------------------------
-def recording_blueprint(series: Mapping[str, Any], chart_stems: Sequence[str]) -> rrb.Blueprint:
-    """Machine and gear in 3D on the left; signals (tabs) above measurement (tabs) on the right."""
+def cutting_zone(model: mujoco.MjModel, setup: SkivingSetup | None) -> rrb.EyeControls3D | None:
+    """The eye of the cutting-zone view: on the blank (the ``blank_frame`` site at the model's home pose, mm), from
+    about two blank diameters off, above and beside it (the cutter meets the blank there); None without a blank site."""
+    if BLANK_SITE not in [model.site(i).name for i in range(model.nsite)]:
+        return None
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.key_qpos[0] if model.nkey else model.qpos0
+    mujoco.mj_kinematics(model, data)
+    centre = data.site(BLANK_SITE).xpos * M_TO_MM
+    size = 2.2 * (2 * setup.gear.tip_radius if setup is not None else 50.0)
+    return rrb.EyeControls3D(
+        position=centre + size * np.array([0.55, -0.75, 0.45]), look_target=centre, eye_up=[0.0, 0.0, 1.0]
+    )
+
+
+def recording_blueprint(
+    series: Mapping[str, Any], chart_stems: Sequence[str], zone: rrb.EyeControls3D | None = None
+) -> rrb.Blueprint:
+    """The cutting zone (blank and cutter filling the view) and the whole machine and the gear beside it in 3D on
+    the left; signals (tabs) above measurement (tabs) on the right. The cutter paths are in the file but hidden (an
+    opaque cage of ~45 turns per pass around the gear)."""
     signals = [
         rrb.TimeSeriesView(origin=f"{SIGNALS}/sync_error", name="Sync error [um]"),
         rrb.TimeSeriesView(origin=f"{SIGNALS}/torque", name="Motor torques [N m]"),
@@ -637,12 +661,18 @@ def recording_blueprint(series: Mapping[str, Any], chart_stems: Sequence[str]) -
         rrb.TextLogView(origin=f"{SIGNALS}/program/events", name="Program events"),
         rrb.TextDocumentView(origin=f"{SIGNALS}/legend", name="Signals: names and units"),
     ]
+    spatial = [
+        rrb.Spatial3DView(origin=MACHINE, name="Cutting zone [mm]", eye_controls=zone),
+        rrb.Horizontal(
+            rrb.Spatial3DView(origin=MACHINE, name="Machine [mm]"),
+            rrb.Spatial3DView(
+                origin=GEAR, contents=["+ $origin/**", "- $origin/cutter_path/**"], name="Gear in the blank frame [mm]"
+            ),
+        ),
+    ]
     return rrb.Blueprint(
         rrb.Horizontal(
-            rrb.Vertical(
-                rrb.Spatial3DView(origin=MACHINE, name="Machine [mm]"),
-                rrb.Spatial3DView(origin=GEAR, name="Gear in the blank frame [mm]"),
-            ),
+            rrb.Vertical(*spatial, row_shares=[3, 2]),
             rrb.Vertical(rrb.Tabs(*signals, name="Signals"), rrb.Tabs(*results, name="Measurement")),
             column_shares=[3, 2],
         ),
