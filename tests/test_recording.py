@@ -89,7 +89,7 @@ def test_entities_and_timeline(run):
         "/machine/carriage",
         "/machine/radial_slide",
         "/machine/work_spindle/blank_frame",
-        "/machine/work_spindle/blank_frame/blank",
+        "/machine/work_spindle/blank_frame/blank/pass_1",
         "/signals/sync_error",
         "/signals/torque",
         "/signals/axes/spindles",
@@ -179,9 +179,20 @@ def test_body_poses_follow_the_axes(run):
     assert np.allclose(radial[:, 0], q[:, 3], atol=1e-4)
 
 
+def test_each_snapshot_goes_to_its_pass():
+    """The pass a snapshot belongs to is the last one begun at or before it: the stock at a pass's end and during
+    the return after it is that pass's (entity pass_<n>, n from 1)."""
+    from types import SimpleNamespace
+
+    from virtual_machine.output.recording import snapshot_passes
+
+    motion = SimpleNamespace(t=np.arange(10.0), pass_index=np.array([-1, -1, 0, 0, -1, -1, 1, 1, -1, -1]))
+    assert snapshot_passes(motion, np.array([0.5, 2.0, 3.9, 5.0, 6.0, 9.5])).tolist() == [0, 0, 0, 0, 1, 1]
+
+
 def test_snapshots_and_cutter_path(run):
     path, motion = run["path"], run["motion"]
-    snaps = chunks(path, "/machine/work_spindle/blank_frame/blank", static=False)
+    snaps = chunks(path, "/machine/work_spindle/blank_frame/blank/pass_1", static=False)  # one entity per pass
     assert sum(c.num_rows for c in snaps) == 2
     times = column(snaps, "sim_time")
     assert [t.total_seconds() for t in times] == [0.2, 0.6]

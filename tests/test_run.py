@@ -144,11 +144,13 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
         "/signals/extra/cutting_force",
         "/signals/extra/chip_volume",
         "/signals/extra/cutting_torque_about_the_work_axis",
-        "/machine/work_spindle/blank_frame/blank",
+        "/machine/work_spindle/blank_frame/blank/pass_1",
         "/measurement/profile",
     } <= entities
-    blank = [c for c in chunks if c.entity_path == "/machine/work_spindle/blank_frame/blank" and not c.is_static]
-    # the stock as it is cut: the dexel removal's solid once per pass (the small job has one)
+    blank = [
+        c for c in chunks if c.entity_path.startswith("/machine/work_spindle/blank_frame/blank/") and not c.is_static
+    ]
+    # the stock as it is cut, one entity per pass: the dexel removal's solid once per pass (the small job has one)
     assert sum(c.num_rows for c in blank) == len(load_job(tmp / "small.toml").skiving.passes)
     # one recording of this run (not merged with another run's in a viewer), with the job and its setting sheet
     (entry,) = RrdReader(tmp / "run.rrd").recordings()

@@ -5,7 +5,8 @@ Entities (lengths in mm everywhere, timeline ``sim_time`` = simulated seconds):
 
 - ``/machine/<body>``: every body of the MJCF, its pose over time from MuJoCo's forward kinematics of the
   recorded axes (``Transform3D``, decimated to ``rate_hz``); ``/machine/<body>/<geom>``: its visual geoms (static,
-  in the body frame); ``/machine/<blank body>/blank_frame/blank``: the blank snapshots (``Mesh3D`` at their times);
+  in the body frame); ``/machine/<blank body>/blank_frame/blank/pass_<n>``: the blank snapshots (``Mesh3D`` at their
+  times, one entity per pass);
 - ``/gear/cutter_path/pass_<i>``: the cutter centre in the blank frame per feed stroke; ``/gear/finished``: the
   finished gear coloured by deviation on the topography chart's map and scale (metrology.charts.DEVIATION_CMAP: missing
   material blue, white 0, excess red; grey off the flanks);
@@ -123,7 +124,7 @@ def write_recording(
         rec = recorder.stream
         first_snapshot = min((float(s[0]) for s in snapshots), default=None)
         log_machine(rec, model, motion, rate_hz, first_snapshot)
-        log_snapshots(rec, model, snapshots)
+        log_snapshots(rec, model, snapshots, motion)
         log_cutter_paths(rec, motion.passes)
         log_signals(rec, motion, series)
         log_measurement(rec, measurement, charts)
@@ -378,8 +379,19 @@ def blank_frame_path(model: mujoco.MjModel) -> str:
     return f"{body_path(model, model.site_bodyid[model.site(BLANK_SITE).id])}/{BLANK_SITE}"
 
 
-def log_snapshots(rec: rr.RecordingStream, model: mujoco.MjModel, snapshots: Sequence[Snapshot]) -> None:
-    """Part 2: the blank frame (static, relative to its body) and the blank meshes at their times."""
+def snapshot_passes(motion: MotionRecord, times: np.ndarray) -> np.ndarray:
+    """The pass (0-based) each snapshot time belongs to: the last pass begun at or before it (0 before any)."""
+    begun = np.maximum.accumulate(np.asarray(motion.pass_index))
+    at = np.clip(np.searchsorted(motion.t, times, side="right") - 1, 0, len(motion.t) - 1)
+    return np.maximum(begun[at], 0)
+
+
+def log_snapshots(
+    rec: rr.RecordingStream, model: mujoco.MjModel, snapshots: Sequence[Snapshot], motion: MotionRecord | None = None
+) -> None:
+    """Part 2: the blank frame (static, relative to its body) and the blank meshes at their times, one entity per
+    pass (``.../blank/pass_<n>``, n from 1 as the report counts passes; the previous pass's stock cleared when the
+    next one shows), so that passes can be told apart and compared."""
     site = model.site(BLANK_SITE).id
     frame = blank_frame_path(model)
     rec.log(
@@ -387,12 +399,17 @@ def log_snapshots(rec: rr.RecordingStream, model: mujoco.MjModel, snapshots: Seq
         rr.Transform3D(translation=model.site_pos[site] * M_TO_MM, quaternion=_xyzw(model.site_quat[site])),
         static=True,
     )
-    for time, vertices, triangles in sorted(snapshots, key=lambda s: float(s[0])):
+    ordered = sorted(snapshots, key=lambda s: float(s[0]))
+    times = np.array([float(s[0]) for s in ordered])
+    passes = snapshot_passes(motion, times) if motion is not None and len(times) else np.zeros(len(times), int)
+    shown = None
+    for (time, vertices, triangles), k in zip(ordered, passes, strict=True):
         rec.set_time(TIMELINE, duration=float(time))
-        rec.log(
-            f"{frame}/blank",
-            _mesh3d(vertices, triangles, albedo_factor=(190, 190, 200, 255)),
-        )
+        entity = f"{frame}/blank/pass_{int(k) + 1}"
+        if shown is not None and shown != entity:
+            rec.log(shown, rr.Clear(recursive=False))
+        rec.log(entity, _mesh3d(vertices, triangles, albedo_factor=(190, 190, 200, 255)))
+        shown = entity
     rec.reset_time()
 
 
