@@ -107,7 +107,7 @@ def test_entities_and_timeline(run):
         "/measurement/flank_deviation",
     }
     assert run["motion"].passes, "the 0.8 s run reaches the first feed stroke"
-    expected.add("/gear/cutter_path/pass_0")
+    expected.add("/gear/cutter_path/pass_1")
     assert expected <= entities
     assert any(e.startswith("/machine/tool_spindle/") for e in entities)  # the cutter's geoms
     timelines = {t for c in all_chunks for t in c.timeline_names}
@@ -160,7 +160,8 @@ def test_row_counts(run):
     sync = instances(chunks(path, "/signals/sync_error", static=False), "Scalars:scalars")
     assert np.allclose(np.ravel(sync), motion.sync_um)
     events = instances(chunks(path, "/signals/program/events", static=False), "TextLog:text")
-    assert events[0] == "runup" and "feed, pass 0" in events
+    assert events[0] == "runup" and "feed, pass 1" in events  # passes counted from 1, as the report counts them
+    assert events[-1].startswith("end of the record (feed, pass 1 done")  # the program's events complete
 
 
 def test_body_poses_follow_the_axes(run):
@@ -198,7 +199,7 @@ def test_snapshots_and_cutter_path(run):
     assert [t.total_seconds() for t in times] == [0.2, 0.6]
     cleared = column(chunks(path, "/machine/work_spindle/blank_model", static=False), "sim_time")
     assert sorted(t.total_seconds() for t in cleared) == [0.0, 0.2]  # model blank shown until the first snapshot
-    strip = np.array(instances(chunks(path, "/gear/cutter_path/pass_0", static=True), "LineStrips3D:strips")[0])
+    strip = np.array(instances(chunks(path, "/gear/cutter_path/pass_1", static=True), "LineStrips3D:strips")[0])
     first = motion.passes[0]
     assert 10 < len(strip) < len(first.trans)  # decimated
     assert np.allclose(np.hypot(strip[:, 0], strip[:, 1]), np.hypot(first.trans[0, 0], first.trans[0, 1]), atol=1e-3)

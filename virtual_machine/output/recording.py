@@ -7,9 +7,9 @@ Entities (lengths in mm everywhere, timeline ``sim_time`` = simulated seconds):
   recorded axes (``Transform3D``, decimated to ``rate_hz``); ``/machine/<body>/<geom>``: its visual geoms (static,
   in the body frame); ``/machine/<blank body>/blank_frame/blank/pass_<n>``: the blank snapshots (``Mesh3D`` at their
   times, one entity per pass);
-- ``/gear/cutter_path/pass_<i>``: the cutter centre in the blank frame per feed stroke; ``/gear/finished``: the
-  finished gear coloured by deviation on the topography chart's map and scale (metrology.charts.DEVIATION_CMAP: missing
-  material blue, white 0, excess red; grey off the flanks);
+- ``/gear/cutter_path/pass_<n>``: the cutter centre in the blank frame per feed stroke (n from 1);
+  ``/gear/finished``: the finished gear coloured by deviation on the topography chart's map and scale
+  (metrology.charts.DEVIATION_CMAP: missing material blue, white 0, excess red; grey off the flanks);
 - ``/signals/axes/spindles`` (B1, B2, TV speeds [rpm]), ``/signals/axes/carriage`` (P3 [mm]),
   ``/signals/axes/radial_slide`` (X [mm]), ``/signals/sync_error``, ``/signals/torque`` (the structure's motors),
   ``/signals/program/{segment,cutting,events}``, ``/signals/extra/<name>`` (the label's unit in its line name, not
@@ -427,15 +427,16 @@ def path_points(trans: np.ndarray, points_per_rev: int = 72) -> np.ndarray:
 
 
 def log_cutter_paths(rec: rr.RecordingStream, passes: Sequence[PassTrajectory]) -> None:
-    """Part 3: per feed stroke the cutter centre in the blank frame, static, ``/gear/cutter_path/pass_<i>``."""
+    """Part 3: per feed stroke the cutter centre in the blank frame, static, ``/gear/cutter_path/pass_<n>`` (n from
+    1, as the report and the setting sheet count passes)."""
     rec.log(GEAR, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     for p in passes:
         rec.log(
-            f"{GEAR}/cutter_path/pass_{p.index}",
+            f"{GEAR}/cutter_path/pass_{p.index + 1}",
             rr.LineStrips3D(
                 [path_points(p.trans)],
                 colors=[PASS_COLOURS[p.index % len(PASS_COLOURS)]],
-                labels=[f"pass {p.index}"],
+                labels=[f"pass {p.index + 1}"],
                 radii=[0.05],
             ),
             static=True,
@@ -444,14 +445,20 @@ def log_cutter_paths(rec: rr.RecordingStream, passes: Sequence[PassTrajectory]) 
 
 # ---- 4. time series --------------------------------------------------------------------------------------
 def segment_events(motion: MotionRecord) -> tuple[np.ndarray, list[str]]:
-    """Times [s] and texts of the program's segment changes (``feed, pass 0``...), the first tick included."""
+    """Times [s] and texts of the program's segment changes (``feed, pass 1``...: passes counted from 1 as the report
+    counts them), the first tick included, and the end of the record (the run stops after its last feed stroke)."""
     key = np.stack([motion.segment, motion.pass_index], -1)
     start = np.flatnonzero(np.r_[True, np.any(key[1:] != key[:-1], axis=1)])
     texts = [
-        SEGMENTS[motion.segment[i]] + (f", pass {motion.pass_index[i]}" if motion.pass_index[i] >= 0 else "")
+        SEGMENTS[motion.segment[i]] + (f", pass {motion.pass_index[i] + 1}" if motion.pass_index[i] >= 0 else "")
         for i in start
     ]
-    return motion.t[start], texts
+    times = motion.t[start]
+    if len(motion.t) and start[-1] != len(motion.t) - 1:
+        last = int(np.max(motion.pass_index)) + 1
+        times = np.r_[times, motion.t[-1]]
+        texts.append(f"end of the record ({SEGMENTS[motion.segment[-1]]}" + (f", pass {last} done)" if last else ")"))
+    return times, texts
 
 
 def motor_names(actuators: Sequence[str]) -> list[str]:
