@@ -95,7 +95,10 @@ def build_spec(
     work.add_joint(name="B2", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.work_friction)
     visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.15, 0.03), GREY, pos=(0, 0, -b / 2 - 0.09))  # table
     visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_blank, b / 2), STEELC)  # blank
-    visual(work, mujoco.mjtGeom.mjGEOM_BOX, (r_blank * 0.9, 0.003, b / 2 + 0.001), ORANGE)  # angle mark
+    # the angle mark: a thin bar on the blank's top face from the axis to within the root circle (through the blank
+    # it stood across the cut teeth in the recording)
+    mark = (0.3 * r_blank, 0.0015, 0.0002)
+    visual(work, mujoco.mjtGeom.mjGEOM_BOX, mark, ORANGE, pos=(0.3 * r_blank, 0, b / 2 + 0.0002))
     work.add_site(name="blank_frame", quat=quat_z(lay.work_phase))
 
     # ---- carriage P3, radial slide X, swivel head, tool spindle B1 --------------------------------------
