@@ -118,14 +118,14 @@ def test_frames_compose_and_invert():
     assert math.atan2(mount[1, 3], mount[0, 3]) == pytest.approx(0.4, abs=1e-12)
 
 
-def regrind_prediction(worn: SkivingSetup) -> tuple[dict, dict, float]:
+def regrind_prediction(worn: SkivingSetup) -> dict[str, float]:
     """The first-order profile slope a regrind makes (docs/cutter.md, "Regrind"): the reground edge departs from the
     reground cutter's own conjugate edge (designed afresh) by m(L0) along the base tangent; the gear's flank moves by
     -k m where the envelope says each edge radius generates it (k the transfer of
     :func:`cutting.skiving.cutter_profile.generating_map`, cos(beta_b0) on the end plane). Where either edge keeps its
     involute section (the corner below the generating zone) the first order does not hold: the envelope of the
     neighbouring radii generates the gear there; those gear rolls (the last few percent near the gear's tip) are
-    left out of the fitted line. Returns (predicted f_Halpha per flank [um], the fitted rolls per flank, lo-hi)."""
+    left out of the fitted line. Returns the predicted f_Halpha per flank [um]."""
     from cutting.skiving.cutter_profile import generating_map
 
     new, fresh = worn.new_tool(), replace(worn, rake=replace(worn.rake, regrind=0.0))
@@ -137,7 +137,7 @@ def regrind_prediction(worn: SkivingSetup) -> tuple[dict, dict, float]:
         return np.sqrt(np.maximum(radii**2 - rb**2, 0.0))
 
     lo, hi = measured_setup(worn)["evaluation"]["profile_roll_mm"]
-    predicted, fitted = {}, {}
+    predicted = {}
     for side, sign in (("left", 1.0), ("right", -1.0)):
         more_tool = sign * (edge.theta[side] - ideal.theta[side]) * rb
         kept = np.concatenate(
@@ -152,8 +152,7 @@ def regrind_prediction(worn: SkivingSetup) -> tuple[dict, dict, float]:
         ok = at > kept.max() + 0.05 if len(kept) else np.ones(len(at), bool)
         gear = -np.interp(at, roll(edge.radii), more_tool) * np.interp(gear_roll, l2, k) * UM
         predicted[side] = np.polyfit(gear_roll[ok], gear[ok], 1)[0] * (hi - lo)
-        fitted[side] = gear_roll[ok]
-    return predicted, fitted, (lo, hi)
+    return predicted
 
 
 @functools.cache
@@ -185,7 +184,7 @@ def test_a_reground_tool_cuts_the_profile_slope_its_relief_predicts(new: Skiving
     depth = regrind / math.cos(new.rake.rake_angle)
     assert worn.cutter.x == pytest.approx(new.cutter.x - depth * math.tan(6 * DEG) / FINE.cutter.mn)
     assert worn.generated_root_diameter == pytest.approx(new.generated_root_diameter, abs=1e-9)
-    predicted, _, _ = regrind_prediction(worn)
+    predicted = regrind_prediction(worn)
     before, after, ideal = measured_setup(new), measured_setup(worn), measured_setup(fresh)
     for side in ("left", "right"):
         change = after["profile"][side]["f_Halpha_mean"] - ideal["profile"][side]["f_Halpha_mean"]
