@@ -206,11 +206,16 @@ def test_graded_points_refine_at_the_ends_and_keep_the_step_between():
 
 
 def two_pass_job():
-    """A small external spur gear (z 18, mn 1, b 4: ISO-gradable), roughed and finished; conjugate edge."""
+    """A small external spur gear (z 18, mn 1, b 4: ISO-gradable), roughed and finished; conjugate edge. The
+    cutter's teeth carry profile deviations of their own (up to 6 um, different on every tooth): each removal cuts
+    each passage with the outline of its own tooth, and the removals are compared on that."""
     from virtual_machine.job import parse_job
 
     text = small_job(edge=None, sweep_error=0.005, face_width=4.0).replace("passes = [2.25]", "passes = [1.75, 0.5]")
-    return parse_job(tomllib.loads(text + "roughing_sweep_error = 0.005\n"))
+    slope = [round(0.006 * math.sin(2 * math.pi * 3 * k / 17), 4) for k in range(17)]
+    form = [round(0.004 * math.cos(2 * math.pi * 5 * k / 17), 4) for k in range(17)]
+    errors = f"[cutter.errors]\nprofile_slope_left = {slope}\nprofile_form_right = {form}\n"
+    return parse_job(tomllib.loads(text + "roughing_sweep_error = 0.005\n" + errors))
 
 
 @functools.cache

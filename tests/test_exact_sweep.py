@@ -385,12 +385,43 @@ def test_the_bucketed_outline_lookup_is_numpys_interp():
 
     job = load_job(default_job_path())
     outline = Outline(make_edge(job.skiving, "conjugate").outline)
-    lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us = packed = compiled_outline(outline)
+    packed = compiled_outline(outline)
+    lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us, _ = (a[0] if np.ndim(a) else a for a in packed)
     rng = np.random.default_rng(7)
     x = np.concatenate([rng.uniform(x0 - 0.1, x1 + 0.1, 20000), lx, ux, [x0, x1, np.nextafter(x1, 0.0)]])
     for xp, fp, start, lo, scale in ((lx, ly, lb, l0, ls), (ux, uy, ub, u0, us)):
         got = np.array([_interp_from(v, xp, fp, start, lo, scale) for v in x])
         assert np.array_equal(got, np.interp(x, xp, fp))
     y = rng.uniform(-3.0, 3.0, len(x))
-    got = np.array([outline_margin(packed, a, b) for a, b in zip(x, y, strict=True)])
+    got = np.array([outline_margin(packed, 0, a, b) for a, b in zip(x, y, strict=True)])
     assert np.array_equal(got, outline.margin(x, y))
+
+
+def test_each_passage_reads_its_own_tooths_outline():
+    """A cutter whose teeth carry their own profile deviations: the compiled margin of passage g is the polygon of
+    the tooth at its mesh (tooth (-m) mod z0) bit for bit, its chains padded to the longest tooth's; the teeth's
+    outlines lie within ``spread`` of the edge's (the certificates' widening)."""
+    from cutting.skiving.exact_solve import outline_margin
+    from cutting.skiving.exact_sweep import Outline, ToothOutlines
+    from cutting.skiving.tooling import CutterErrors
+    from virtual_machine.job import default_job_path, load_job
+
+    st = load_job(default_job_path()).skiving
+    z0 = st.cutter.teeth
+    slope = tuple(0.004 * math.sin(2 * math.pi * k / z0) for k in range(z0))
+    errors = CutterErrors(profile_slope=(slope, 0.0), profile_form=(0.0, 0.003))
+    edge = make_edge(dataclasses.replace(st, cutter_errors=errors), "conjugate")
+    outlines = ToothOutlines(edge)
+    teeth = edge.tooth_outlines()
+    assert len(teeth) == z0 and 0.002 < outlines.spread < 0.006
+    assert outlines.spread == pytest.approx(max(np.linalg.norm(p - edge.outline, axis=1).max() for p in teeth))
+    m = np.array([0, 1, 5, -3, 2 * z0 + 4])
+    packed = outlines.compiled(m)
+    rng = np.random.default_rng(3)
+    for g, mg in enumerate(m):
+        own = Outline(teeth[(-mg) % z0])
+        x = np.concatenate([rng.uniform(own.x0 - 0.05, own.x1 + 0.05, 3000), own.lower[:, 0], own.upper[:, 0]])
+        y = rng.uniform(-2.0, 2.0, len(x))
+        got = np.array([outline_margin(packed, g, a, b) for a, b in zip(x, y, strict=True)])
+        assert np.array_equal(got, own.margin(x, y))
+        assert np.array_equal(outlines.margin(np.full(len(x), mg), x, y), own.margin(x, y))

@@ -62,3 +62,18 @@ def test_a_ring_gears_long_cutter_meets_its_teeth_deep_behind_the_face():
     text = str(info.value)
     assert "40.00 mm behind the right edge" in text and "fewer cutter teeth" in text, text
     assert body_interference(st, edge)["body_intrusion_max_mm"] == pytest.approx(0.43, abs=0.02)
+
+
+def test_a_cutter_profile_deviation_moves_the_body_with_the_edge():
+    """A profile deviation of more tool material (5 um of slope on both flanks, a list per tooth or one value) is
+    ground on the relieved flanks too: the body clears the gear that the deviated edge cuts as the design's clears
+    the nominal one (held against the nominal teeth it would read as an intrusion of its own size, and refuse a
+    cutter shops use)."""
+    from cutting.skiving.tooling import CutterErrors
+
+    st, edge = setup_of("default")
+    design = body_interference(st, edge)
+    z0 = st.cutter.teeth
+    for slope in (0.005, tuple(0.005 * (k % 2) for k in range(z0))):
+        worn = replace(st, cutter_errors=CutterErrors(profile_slope=(slope, slope)))
+        assert check_body_interference(worn, make_edge(worn, "conjugate")) == design

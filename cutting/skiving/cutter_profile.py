@@ -7,7 +7,8 @@ tip, +1/2 where it generates the gear's form circle: towards the cutter's tip), 
 
     e(u) = f_H u + f_f (4 u^2 - 1/3)      [mm, + more tool material]
 
-a slope f_H across the active flank and a parabola of range f_f about its mean line. The edge's polar angle moves by
+a slope f_H across the active flank and a parabola of range f_f about its mean line; beyond the active flank (the
+radii that never generate the gear's flank) e keeps its value at the nearer end. The edge's polar angle moves by
 e / r_b0 (a transverse base-tangent deviation on an involute is a turn of the flank by e / r_b0).
 """
 
@@ -81,18 +82,26 @@ def active_flank(setup: SkivingSetup, edge: CuttingEdge, side: str) -> tuple[flo
 
 def deviated_edge(setup: SkivingSetup, edge: CuttingEdge) -> CuttingEdge:
     """``edge`` with the setup's cutter profile deviations (:attr:`CutterErrors.profile_slope`, ``profile_form``,
-    each (left, right) [mm])."""
+    each (left, right) [mm], the same on every tooth or one per tooth): the teeth's mean on the edge itself and,
+    where the teeth differ, each tooth's own flanks in :attr:`CuttingEdge.teeth`."""
     err = setup.cutter_errors
     c = setup.cutter
-    theta = dict(edge.theta)
-    for k, side in enumerate(("left", "right")):
-        f_h, f_f = err.profile_slope[k], err.profile_form[k]
-        if not (f_h or f_f):
-            continue
-        at_tip, at_form = active_flank(setup, edge, side)
-        l0 = np.sqrt(np.maximum(edge.radii**2 - c.base_radius**2, 0.0))
-        u = (l0 - (at_tip + at_form) / 2) / (at_form - at_tip)
-        e = f_h * u + f_f * (4 * u**2 - 1 / 3)
-        # more tool material: the left flank (on +theta of the tooth) turns to +theta, the right one to -theta
-        theta[side] = theta[side] + (1.0 if side == "left" else -1.0) * e / c.base_radius
-    return assemble_edge(edge.kind, edge.radii, theta, edge.r_low)
+    l0 = np.sqrt(np.maximum(edge.radii**2 - c.base_radius**2, 0.0))
+    u = {}
+    for side in ("left", "right"):
+        at_tip, at_form = active_flank(setup, edge, side)  # the envelope: once per flank, not per tooth
+        # beyond the active flank the profile is not measured: the deviation holds its end value there (the parabola
+        # carried on would grow without bound towards the cutter's root and tip: 47 um at u = -2 for f_f = 3 um)
+        u[side] = np.clip((l0 - (at_tip + at_form) / 2) / (at_form - at_tip), -0.5, 0.5)
+
+    def flanks(tooth: int | None) -> dict[str, np.ndarray]:
+        slope, form = err.tooth_profile(tooth)
+        theta = dict(edge.theta)
+        for k, side in enumerate(("left", "right")):
+            e = slope[k] * u[side] + form[k] * (4 * u[side] ** 2 - 1 / 3)
+            # more tool material: the left flank (on +theta of the tooth) turns to +theta, the right one to -theta
+            theta[side] = theta[side] + (1.0 if side == "left" else -1.0) * e / c.base_radius
+        return theta
+
+    teeth = tuple(flanks(k) for k in range(c.teeth)) if err.profile_per_tooth else ()
+    return assemble_edge(edge.kind, edge.radii, flanks(None), edge.r_low, teeth)

@@ -30,7 +30,7 @@ from cutting.skiving.dexel_lines import DexelLines, DexelSpacing, LineSet
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_kernels import pack_table
 from cutting.skiving.exact_solve import ItemSolver
-from cutting.skiving.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, PassTable, outline_of
+from cutting.skiving.exact_sweep import CROSSING_TOLERANCE, SUBWINDOWS, PassTable, tooth_outlines_of
 
 #: the rasters of the outline's signed distance for the march [mm]: a fine one (cell, band of exact distances) near
 #: the edge, a coarse one (cell, pad: exact over all of it) beyond, so that steps far from the edge are long. An
@@ -82,7 +82,9 @@ class DexelWorkpiece:
         self.mat_lo[:, 0], self.mat_hi[:, 0] = entry, length
         self.mat_n = (length > entry).astype(np.int64)
         self.flags = np.zeros(n, np.int64)
-        self.outline = outline_of(edge.outline)
+        #: the outlines the passages cut with; the rasters are the edge's (their deltas widen by the teeth's spread)
+        self.outlines = tooth_outlines_of(edge)
+        self.outline = self.outlines.edge
         fine, f_lo = self.outline.exact_raster(FINE_CELL, FINE_BAND, FINE_BAND)
         coarse, c_lo = self.outline.exact_raster(COARSE_CELL, COARSE_PAD, 2 * COARSE_PAD, COARSE_EXACT)
         w = [*f_lo, FINE_CELL, FINE_BAND, 0.71 * FINE_CELL + 0.00025]
@@ -135,7 +137,7 @@ class DexelWorkpiece:
         tables = [tb for tb in tables if len(tb.m)]
         if not tables:
             return []
-        solver = ItemSolver.build(tables, np.zeros((0,)), self.outline)
+        solver = ItemSolver.build(tables, np.zeros((0,)), self.outlines)
         if solver is None:
             raise ValueError("the dexel workpiece needs compiled poses: an ideal PassMotion or a SampledMotion")
         packed = np.ascontiguousarray(
@@ -168,7 +170,7 @@ class DexelWorkpiece:
         cell_ptr = np.append(np.flatnonzero(first), len(cell)).astype(np.int64)
         out = np.zeros((len(cell), STATS))
         work = np.zeros((len(cells), 5), np.int64)
-        tab = (packed, *self._rasters)
+        tab = (packed, *self._rasters, self.outlines.passage_spread(np.concatenate([tb.m for tb in tables])))
         ln = self.lines
         run_shared(
             cut_cells,

@@ -61,19 +61,10 @@ def _distance(fine, coarse, w, x, y):
     """(e, delta): the outline's signed distance at (x, y) and how far it may be off. Two rasters: a fine one
     (exact node distances within its band of the outline) where the point is that near, else a coarse one over a
     wide box (exact node distances over all of it), and beyond that box a bound (the box holds the outline grown by
-    its pad: the outline is at least pad plus the distance to the box away)."""
-    f0, f1, f_cell, f_band, f_delta, c0, c1, c_cell, c_pad, c_delta = (
-        w[0],
-        w[1],
-        w[2],
-        w[3],
-        w[4],
-        w[5],
-        w[6],
-        w[7],
-        w[8],
-        w[9],
-    )
+    its pad: the outline is at least pad plus the distance to the box away). The rasters are the edge's outline's;
+    a passage's tooth may cut with its own: :func:`_estimate` adds how far that lies from it."""
+    f0, f1, f_cell, f_band, f_delta = w[0], w[1], w[2], w[3], w[4]
+    c0, c1, c_cell, c_pad, c_delta = w[5], w[6], w[7], w[8], w[9]
     fx, fy = (x - f0) / f_cell, (y - f1) / f_cell
     if 0 <= fx < fine.shape[0] - 1 and 0 <= fy < fine.shape[1] - 1:
         e = _bilinear(fine, fx, fy)
@@ -92,13 +83,14 @@ def _distance(fine, coarse, w, x, y):
 def _estimate(tab, g, lo, hi, p, u, i, d):
     """(crossed, e, delta, x, y) at p_i + d u_i for passage g (table samples [lo, hi]): the rasters' signed distance e
     (within delta) at the table's in-plane point (x, y); e very negative where the rake plane does not cross the
-    point there. ``tab`` = (packed table, fine raster, coarse raster, their corners, cells, bands and deltas)."""
+    point there. ``tab`` = (packed table, fine raster, coarse raster, their corners, cells, bands and deltas, per
+    passage how far its tooth's outline lies from the rasters')."""
     q0, q1, q2 = p[i, 0] + d * u[i, 0], p[i, 1] + d * u[i, 1], p[i, 2] + d * u[i, 2]
     ok, x, y = in_plane(tab[0], g, lo, hi, q0, q1, q2)
     if not ok:
         return False, -1e9, 0.0, 0.0, 0.0
     e, delta = _distance(tab[1], tab[2], tab[3], x, y)
-    return True, e, delta, x, y
+    return True, e, delta + tab[4][g], x, y
 
 
 @njit(cache=True, error_model="numpy")
@@ -106,7 +98,7 @@ def _table_margin(tab, outline, g, lo, hi, p, u, i, d):
     """The outline polygon's margin at the table's in-plane point (-1 where the plane does not cross)."""
     q0, q1, q2 = p[i, 0] + d * u[i, 0], p[i, 1] + d * u[i, 1], p[i, 2] + d * u[i, 2]
     ok, x, y = in_plane(tab[0], g, lo, hi, q0, q1, q2)
-    return outline_margin(outline, x, y) if ok else -1.0
+    return outline_margin(outline, g, x, y) if ok else -1.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -470,10 +462,10 @@ def cut_cells(
     fans, every line of a cell is tried); ``mat_lo``, ``mat_hi``,
     ``mat_n``: the material intervals (n, MAX_PIECES), updated; ``boxes`` = (ball centre
     (G, S, 3), ball radius (G, S), box centre (G, S, 3), axes (G, S, 3, 3), half (G, S, 3), samples per subwindow);
-    ``tab`` = (packed table, the rasters of :func:`_distance`); ``motion``, ``tables``, ``outline``: the exact
-    solve's (:class:`cutting.skiving.exact_solve.ItemSolver`). ``out[pair]`` (STATS) per (cell, passage) pair;
-    ``flags[line]`` |= OVERFLOW when a line would hold more than MAX_PIECES intervals; ``work[k]`` = estimates,
-    table margins, exact margins, crossings, (line, passage) pairs of cell k."""
+    ``tab`` = (packed table, the rasters of :func:`_distance`, per passage its outline's spread); ``motion``,
+    ``tables``, ``outline``: the exact solve's (:class:`cutting.skiving.exact_solve.ItemSolver`). ``out[pair]``
+    (STATS) per (cell, passage) pair; ``flags[line]`` |= OVERFLOW when a line would hold more than MAX_PIECES
+    intervals; ``work[k]`` = estimates, table margins, exact margins, crossings, (line, passage) pairs of cell k."""
     # the kernel's arrays without reference counts (cutting.borrowed): the caller holds them for the whole call
     p, u, weight, ray_cos, ray_arc, slice_dz = borrowed((p, u, weight, ray_cos, ray_arc, slice_dz))
     plane_n, plane_d, ray_alpha, mat_lo, mat_hi, mat_n = borrowed((plane_n, plane_d, ray_alpha, mat_lo, mat_hi, mat_n))

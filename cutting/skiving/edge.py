@@ -50,6 +50,8 @@ class CuttingEdge:
         at ``r_low`` inside the cutter body
     radii: the flank radii sampled [mm] (increasing)
     theta: {"left": (m,), "right": (m,)} polar angle of each flank at ``radii`` [rad]
+    teeth: each cutter tooth's own ``theta`` when the teeth's profiles differ (tooth k at k pitches along +phi from
+        tooth 0; ``outline`` and ``theta`` are then their mean); () when every tooth cuts with ``outline``
     """
 
     kind: str
@@ -58,6 +60,11 @@ class CuttingEdge:
     theta: dict[str, np.ndarray]
     r_low: float
     r_tip: float
+    teeth: tuple[dict[str, np.ndarray], ...] = ()
+
+    def tooth_outlines(self) -> tuple[np.ndarray, ...]:
+        """Each tooth's outline (as ``outline``, vertex for vertex), or () when every tooth cuts with ``outline``."""
+        return tuple(edge_polygon(self.radii, theta) for theta in self.teeth)
 
 
 def edge_radii(setup: SkivingSetup, points: int) -> tuple[np.ndarray, float]:
@@ -110,14 +117,24 @@ def _section(setup: SkivingSetup, radii: np.ndarray, start: np.ndarray, side: Si
     return th
 
 
-def assemble_edge(kind: str, radii: np.ndarray, theta: dict[str, np.ndarray], r_low: float) -> CuttingEdge:
+def edge_polygon(radii: np.ndarray, theta: dict[str, np.ndarray]) -> np.ndarray:
+    """The outline of flanks ``theta`` at ``radii``: right flank up, a tip arc of 7 points, left flank down."""
     # the cutter is external: its left flank is on the +theta side of tooth 0
     right = np.stack([radii * np.cos(theta["right"]), radii * np.sin(theta["right"])], -1)
     left = np.stack([radii * np.cos(theta["left"]), radii * np.sin(theta["left"])], -1)[::-1]
     tip_a = np.linspace(theta["right"][-1], theta["left"][-1], 9)[1:-1]
     tip = radii[-1] * np.stack([np.cos(tip_a), np.sin(tip_a)], -1)
-    outline = np.concatenate([right, tip, left])
-    return CuttingEdge(kind, outline, radii, theta, r_low, float(radii[-1]))
+    return np.concatenate([right, tip, left])
+
+
+def assemble_edge(
+    kind: str,
+    radii: np.ndarray,
+    theta: dict[str, np.ndarray],
+    r_low: float,
+    teeth: tuple[dict[str, np.ndarray], ...] = (),
+) -> CuttingEdge:
+    return CuttingEdge(kind, edge_polygon(radii, theta), radii, theta, r_low, float(radii[-1]), teeth)
 
 
 def mate_flank(setup: SkivingSetup, side: Side) -> Side:
@@ -435,8 +452,12 @@ def reground_edge(setup: SkivingSetup, new_edge: CuttingEdge, points: int = 120)
     def roll(radii: np.ndarray) -> np.ndarray:
         return np.sqrt(np.maximum(radii**2 - rb**2, 0.0))
 
-    theta = {}
-    for side in SIDES:
-        departure = (new_edge.theta[side] - inv_new.theta[side]) * rb  # base-tangent, signed as the angle
-        theta[side] = inv.theta[side] + np.interp(roll(inv.radii), roll(new_edge.radii), departure) / rb
-    return assemble_edge(new_edge.kind, inv.radii, theta, inv.r_low)
+    def reground(ground: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        theta = {}
+        for side in SIDES:
+            departure = (ground[side] - inv_new.theta[side]) * rb  # base-tangent, signed as the angle
+            theta[side] = inv.theta[side] + np.interp(roll(inv.radii), roll(new_edge.radii), departure) / rb
+        return theta
+
+    teeth = tuple(reground(t) for t in new_edge.teeth)  # each tooth keeps its own ground departure
+    return assemble_edge(new_edge.kind, inv.radii, reground(new_edge.theta), inv.r_low, teeth)

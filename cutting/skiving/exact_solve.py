@@ -135,7 +135,8 @@ class ItemSolver:
     def build(cls, tables: Sequence, packed: np.ndarray, outline) -> ItemSolver | None:
         """From the pass tables (``motion``, ``t`` (m, P), ``tooth`` (m, 3, 4), ``blank`` (3, 4)), their packed pose
         table and the
-        :class:`cutting.skiving.exact_sweep.Outline`; None unless every table's motion has a compiled pose."""
+        :class:`cutting.skiving.exact_sweep.ToothOutlines` the passages cut with; None unless every table's motion
+        has a compiled pose."""
         poses = [compiled_pose(tb.motion) for tb in tables]
         if not poses or any(q is None for q in poses):
             return None
@@ -145,10 +146,11 @@ class ItemSolver:
         owner = np.concatenate([np.full(len(tb.m), k, np.int64) for k, tb in enumerate(tables)])
         times = np.ascontiguousarray(np.concatenate([tb.t for tb in tables]), dtype=float)
         frames = np.concatenate([passage_frames(tb.tooth, tb.blank) for tb in tables])
+        m = np.concatenate([tb.m for tb in tables])
         return cls(
             (owner, kind, ptr, params),
             (np.ascontiguousarray(packed), times, frames),
-            outline.compiled,
+            outline.compiled(m),
         )
 
     def margins(self, p, u, ds, line, g, sample, lo_j, hi_j) -> np.ndarray:
@@ -343,21 +345,46 @@ def _plane(table, g, j, q0, q1, q2):
 OUTLINE_BUCKETS = 512
 
 
-def compiled_outline(outline) -> tuple:
-    """What :func:`outline_margin` reads of a :class:`cutting.skiving.exact_sweep.Outline`: its lower and upper
-    chains (x, y),
-    x0, x1, and per chain the index of its last point at or before each of OUTLINE_BUCKETS even steps over its x
-    range (so that a lookup starts next to its point instead of bisecting the chain)."""
-    out = []
-    starts = []
-    for chain in (outline.lower, outline.upper):
-        xs, ys = (np.ascontiguousarray(chain[:, k], dtype=float) for k in (0, 1))
-        lo, hi = float(xs[0]), float(xs[-1])
-        scale = OUTLINE_BUCKETS / (hi - lo) if hi > lo else 0.0
-        edges = lo + np.arange(OUTLINE_BUCKETS + 1) / scale if scale > 0 else np.full(OUTLINE_BUCKETS + 1, lo)
-        out += [xs, ys]
-        starts += [np.maximum(np.searchsorted(xs, edges, side="right") - 1, 0).astype(np.int64), lo, scale]
-    return (*out, float(outline.x0), float(outline.x1), *starts)
+def compiled_outline(outlines, rows: np.ndarray | None = None) -> tuple:
+    """What :func:`outline_margin` reads of :class:`cutting.skiving.exact_sweep.Outline` ``outlines`` (one, or a
+    sequence: the outlines passages cut with) and ``rows`` (per passage g, the index of its outline; default all 0):
+    :func:`stacked_outlines` and the rows."""
+    outlines = [outlines] if hasattr(outlines, "lower") else list(outlines)
+    return with_rows(stacked_outlines(outlines), rows)
+
+
+def with_rows(stacked: tuple, rows: np.ndarray | None) -> tuple:
+    """:func:`stacked_outlines` with each passage's row (None: every passage reads row 0)."""
+    rows = np.zeros(1, np.int64) if rows is None else np.ascontiguousarray(rows, dtype=np.int64)
+    return (*stacked, rows)
+
+
+def stacked_outlines(outlines: Sequence) -> tuple:
+    """Per outline its lower and upper chains (x, y) as rows of a stacked array (a shorter chain padded with its
+    last point: the lookup clamps there anyway), x0, x1, and per chain the index of its last point at or before each
+    of OUTLINE_BUCKETS even steps over its x range (so that a lookup starts next to its point instead of bisecting
+    the chain)."""
+    parts: list[list] = [[] for _ in range(10)]
+    for o in outlines:
+        for c, chain in enumerate((o.lower, o.upper)):
+            xs, ys = (np.ascontiguousarray(chain[:, k], dtype=float) for k in (0, 1))
+            lo, hi = float(xs[0]), float(xs[-1])
+            scale = OUTLINE_BUCKETS / (hi - lo) if hi > lo else 0.0
+            edges = lo + np.arange(OUTLINE_BUCKETS + 1) / scale if scale > 0 else np.full(OUTLINE_BUCKETS + 1, lo)
+            start = np.maximum(np.searchsorted(xs, edges, side="right") - 1, 0).astype(np.int64)
+            for k, v in enumerate((xs, ys, start, lo, scale)):
+                parts[5 * c + k].append(v)
+
+    def stacked(arrays: list) -> np.ndarray:
+        n = max(len(a) for a in arrays)
+        return np.ascontiguousarray([np.concatenate([a, np.full(n - len(a), a[-1])]) for a in arrays])
+
+    lx, ly, lb, l0, ls, ux, uy, ub, u0, us = (
+        stacked(p) if isinstance(p[0], np.ndarray) else np.array(p, dtype=float) for p in parts
+    )
+    x0 = np.array([o.x0 for o in outlines], dtype=float)
+    x1 = np.array([o.x1 for o in outlines], dtype=float)
+    return (lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -389,12 +416,13 @@ def _interp_from(x, xp, fp, start, lo, scale):
 
 
 @njit(cache=True, error_model="numpy")
-def outline_margin(outline, x, y):
-    """Outline.margin: min(above the lower chain, below the upper, x - x0, x1 - x)."""
-    lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us = outline
-    below = y - _interp_from(x, lx, ly, lb, l0, ls)
-    above = _interp_from(x, ux, uy, ub, u0, us) - y
-    return min(min(below, above), min(x - x0, x1 - x))
+def outline_margin(outline, g, x, y):
+    """Outline.margin of passage g's outline: min(above the lower chain, below the upper, x - x0, x1 - x)."""
+    lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us, rows = outline
+    r = rows[g] if g < rows.shape[0] else 0
+    below = y - _interp_from(x, lx[r], ly[r], lb[r], l0[r], ls[r])
+    above = _interp_from(x, ux[r], uy[r], ub[r], u0[r], us[r]) - y
+    return min(min(below, above), min(x - x0[r], x1[r] - x))
 
 
 @njit(cache=True, error_model="numpy")
@@ -434,7 +462,7 @@ def margin_at(motion, tables, outline, g, lo, hi, q0, q1, q2):
     w0, w1, w2 = q0 - org[0], q1 - org[1], q2 - org[2]
     x = rot[0] * w0 + rot[3] * w1 + rot[6] * w2
     y = rot[1] * w0 + rot[4] * w1 + rot[7] * w2
-    m = outline_margin(outline, x, y)
+    m = outline_margin(outline, g, x, y)
     return -1.0 if m < -1.0 else m
 
 

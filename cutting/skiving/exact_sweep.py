@@ -30,7 +30,7 @@ from cutting.gear import Gear
 from cutting.parallel import run_chunks
 from cutting.skiving.edge import CuttingEdge
 from cutting.skiving.exact_kernels import PACKED, pack_table, segment_distances, settle_lines, sweep_bounds
-from cutting.skiving.exact_solve import ItemSolver, compiled_outline, pose_table
+from cutting.skiving.exact_solve import ItemSolver, pose_table, stacked_outlines, with_rows
 from cutting.skiving.passages import passage_range
 from cutting.skiving.sweep import outline_points, simplify_outline
 from cutting.skiving.tooling import IDENTITY, in_blank_frame
@@ -98,12 +98,6 @@ class Outline:
         self.lower, self.upper = lower, upper
         self.x0, self.x1 = float(p[i0, 0]), float(p[i1, 0])
         self._points, self._cell, self._pad = p, cell, pad
-
-    @cached_property
-    def compiled(self) -> tuple:
-        """What the compiled margin reads (:func:`cutting.skiving.exact_solve.compiled_outline`), made once: the dexel
-        removal builds a solver per passage."""
-        return compiled_outline(self)
 
     @cached_property
     def _raster(self) -> tuple[np.ndarray, np.ndarray]:
@@ -174,6 +168,76 @@ class Outline:
         return out
 
 
+def tooth_spread(edge: CuttingEdge) -> float:
+    """How far [mm] any tooth's own outline lies from the edge's (0 when every tooth cuts with it)."""
+    return tooth_outlines_of(edge).spread if edge.teeth else 0.0
+
+
+class ToothOutlines:
+    """The outlines a cut's passages cut with: the edge's own and, when the cutter's teeth carry profile deviations
+    of their own (:attr:`cutting.skiving.edge.CuttingEdge.teeth`), one per tooth: the passage of cutter pitch m is
+    cut by tooth (-m) mod z0 (:meth:`cutting.skiving.kinematics.SkivingSetup.passage_frames`).
+
+    The estimates' rasters are the edge's outline's; a tooth's polygon lies within :attr:`spread` [mm] of it (its
+    vertices correspond one to one, and no point of a side lies farther from the other polygon than the farther of
+    its ends), so every signed distance the rasters give is within that of the tooth's: the certificates widen by
+    it.
+    """
+
+    def __init__(self, edge: CuttingEdge):
+        self.edge = outline_of(edge.outline)
+        teeth = edge.tooth_outlines()
+        self.teeth = [outline_of(p) for p in teeth]
+        #: per outline of :meth:`compiled` how far it lies from the edge's [mm], and the largest
+        self.spreads = np.array([0.0, *(float(np.linalg.norm(p - edge.outline, axis=1).max()) for p in teeth)])
+        self.spread = float(self.spreads.max())
+        self._stacked = [self.edge, *self.teeth]
+
+    def rows(self, m: np.ndarray) -> np.ndarray:
+        """Per passage of cutter pitch ``m``, the index of its outline in :meth:`compiled`: 0 the edge's, 1 + k
+        tooth k's."""
+        m = np.asarray(m, dtype=np.int64)
+        return 1 + (-m) % len(self.teeth) if self.teeth else np.zeros(len(m), np.int64)
+
+    @cached_property
+    def _compiled(self) -> tuple:
+        return stacked_outlines(self._stacked)  # made once: the co-simulation builds a solver per passage
+
+    def passage_spread(self, m: np.ndarray) -> np.ndarray:
+        """Per passage of cutter pitch ``m``, how far its tooth's outline lies from the edge's [mm]."""
+        return np.ascontiguousarray(self.spreads[self.rows(m)])
+
+    def compiled(self, m: np.ndarray) -> tuple:
+        """What the compiled margin reads for passages of cutter pitches ``m`` (in the solver's order)."""
+        return with_rows(self._compiled, self.rows(m) if self.teeth else None)
+
+    def margin(self, m: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Outline.margin of each point's passage's outline (passage of cutter pitch ``m``, broadcast with x, y)."""
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        if not self.teeth:
+            return self.edge.margin(x, y)
+        rows, x, y = np.broadcast_arrays(self.rows(np.atleast_1d(m)).reshape(np.shape(m)), x, y)
+        out = np.empty(x.shape)
+        for r in np.unique(rows):
+            at = rows == r
+            out[at] = self._stacked[r].margin(x[at], y[at])
+        return out
+
+
+#: the ToothOutlines of the last few edges (working angles make swept volumes of the same edge over and over)
+_TOOTH_OUTLINES: dict[bytes, ToothOutlines] = {}
+
+
+def tooth_outlines_of(edge: CuttingEdge) -> ToothOutlines:
+    """The :class:`ToothOutlines` of ``edge``, one per edge's polygons (kept)."""
+    key = b"".join([edge.outline.tobytes(), *(t[s].tobytes() for t in edge.teeth for s in ("left", "right"))])
+    if key not in _TOOTH_OUTLINES:
+        if len(_TOOTH_OUTLINES) >= 8:
+            _TOOTH_OUTLINES.pop(next(iter(_TOOTH_OUTLINES)))
+        _TOOTH_OUTLINES[key] = ToothOutlines(edge)
+    return _TOOTH_OUTLINES[key]
+
+
 def tooth_frames_of(angle_or_frames: np.ndarray) -> np.ndarray:
     """Tooth frames (n, 3, 4) from themselves or from tooth angles about the cutter axis (n,) [rad]."""
     a = np.asarray(angle_or_frames, dtype=float)
@@ -220,7 +284,8 @@ class PassTable:
         pitch = 2 * math.pi / z0
         t0 = np.asarray(motion.time_at_angle(m * pitch - half), dtype=float)
         t1 = np.asarray(motion.time_at_angle(m * pitch + half), dtype=float)
-        return cls.from_windows(motion, t0, t1, st.passage_frames(m), edge.outline, m, st.blank_frame)
+        frames = st.passage_frames(m)
+        return cls.from_windows(motion, t0, t1, frames, edge.outline, m, st.blank_frame, tooth_spread(edge))
 
     @classmethod
     def from_windows(
@@ -232,10 +297,12 @@ class PassTable:
         outline: np.ndarray,
         m: np.ndarray | None = None,
         blank: np.ndarray | None = None,
+        spread: float = 0.0,
     ) -> PassTable:
         """Passages of any motion with ``pose(t)``: windows [t0, t1] [s], each passage's tooth frame in the motion's
         frame ((n, 3, 4), or the tooth's angle about the cutter axis (n,) [rad]) and the motion's frame in the
-        blank's ((3, 4), default the same frame)."""
+        blank's ((3, 4), default the same frame). ``spread``: how far the teeth's own outlines lie from ``outline``
+        [mm] (:func:`tooth_spread`: the bounds grow by it)."""
         t0, t1 = np.atleast_1d(t0).astype(float), np.atleast_1d(t1).astype(float)
         tooth = tooth_frames_of(tooth)
         blank = IDENTITY if blank is None else np.asarray(blank, dtype=float)
@@ -246,7 +313,7 @@ class PassTable:
         rot, origin = in_blank_frame(rot, origin, tooth[:, None], blank)
         # balls and boxes from the outline simplified to 20 um; the margin covers that and the bulge between samples
         coarse = coarse_outline(np.ascontiguousarray(outline, dtype=float).tobytes(), len(outline))
-        bounds = sweep_bounds(rot, origin, np.ascontiguousarray(coarse, dtype=float), SUBWINDOWS, 0.1)
+        bounds = sweep_bounds(rot, origin, np.ascontiguousarray(coarse, dtype=float), SUBWINDOWS, 0.1 + spread)
         m = np.arange(n) if m is None else m
         return cls(motion, m, t, rot, origin, tooth, blank, *bounds)
 
@@ -307,7 +374,10 @@ class SweptVolumes:
         """``motions``: the passes as cut (ideal or sampled); or ``tables`` of passages of any motion (tests)."""
         self.gear, self.edge = gear, edge
         self.name = "exact swept surface"
-        self.outline = outline_of(edge.outline)
+        #: the outlines the passages cut with; the estimates' rasters are the edge's (certificates widen by spread)
+        self.outlines = tooth_outlines_of(edge)
+        self.outline = self.outlines.edge
+        self._settle_margin = SETTLE_MARGIN + self.outlines.spread
         self.tables = list(tables) if tables is not None else [PassTable.build(m, edge) for m in motions]
         self.rim_radius = gear.root_radius + (3 * gear.mn if rim is None else rim)
         centres = np.concatenate([tb.ball_centre.reshape(-1, 3) for tb in self.tables])
@@ -319,7 +389,7 @@ class SweptVolumes:
         self._tree = cKDTree(centres)
         self._compiled = _CompiledTables(self.tables, centres, self._radius, self.outline)
         #: the compiled item solve when every motion has a compiled pose (else None: the numpy path)
-        self._solver = ItemSolver.build(self.tables, self._compiled.table, self.outline)
+        self._solver = ItemSolver.build(self.tables, self._compiled.table, self.outlines)
         #: what the probes took so far: lines, (line, passage) pairs, near pairs, fine estimates, exact items,
         #: lines that took the table-wide path
         self.work = np.zeros(6, np.int64)
@@ -459,7 +529,7 @@ class SweptVolumes:
         out = np.full(len(q), -1.0)
         if row.size:
             _, x, y = self._solve_time(tb, passage[row], q[row], j, ga, gb)
-            np.maximum.at(out, row, self.outline.margin(x, y))
+            np.maximum.at(out, row, self.outlines.margin(tb.m[passage[row]], x, y))
         return out
 
     def _estimate(self, tb: PassTable, passage, lo_j, hi_j, p, u, ds):
@@ -559,7 +629,8 @@ class SweptVolumes:
         step = np.linalg.norm(np.diff(xy, axis=1), axis=2)
         longest = np.where(np.isfinite(step), step, 4 * (ds[1] - ds[0])).max(axis=1)
         inside = est > 0
-        settled = (np.abs(est) > SETTLE_MARGIN + longest[:, None]).all(axis=1) & (inside == inside[:, :1]).all(axis=1)
+        settled = (np.abs(est) > self._settle_margin + longest[:, None]).all(axis=1)
+        settled &= (inside == inside[:, :1]).all(axis=1)
         full = np.nonzero(settled & inside[:, 0])[0]
         lines, starts, ends = [li[full]], [np.full(len(full), ds[0])], [np.full(len(full), ds[-1])]
         todo = np.nonzero(~settled)[0]
@@ -679,9 +750,8 @@ class SweptVolumes:
         clusters = _clusters(p)
         out = (items, counts, covered, flag, work)
         n_clusters = len(clusters[0]) - 1
-        run_chunks(
-            settle_lines, n_clusters, p, u, ds, stride, clusters, grid, balls, tab, ESTIMATE_ERROR, air_cov, solid, *out
-        )
+        delta = ESTIMATE_ERROR + self.outlines.spread
+        run_chunks(settle_lines, n_clusters, p, u, ds, stride, clusters, grid, balls, tab, delta, air_cov, solid, *out)
         self.work += [n, *work.sum(axis=0), counts.sum(), (flag == 1).sum()]
         return items, counts, covered, flag
 
@@ -752,8 +822,8 @@ class SweptVolumes:
                 l_, pa_, lo_, hi_ = li[s][keep], pa[s][keep], lo_j[s][keep], hi_j[s][keep]
                 est, _ = self._estimate(tb, pa_, lo_, hi_, p[l_], np.repeat(zero, len(l_), axis=0), at)
                 est = est[:, 0]
-                out[l_[est > SETTLE_MARGIN]] = True
-                near = np.abs(est) <= SETTLE_MARGIN
+                out[l_[est > self._settle_margin]] = True
+                near = np.abs(est) <= self._settle_margin
                 if near.any():
                     q, solver = p[l_[near]], self._solver
                     if solver is not None:  # compiled: the same margins to rounding

@@ -27,7 +27,7 @@ import numpy as np
 
 from cutting.errors import InputError, Problem
 from cutting.flank import flank_polar_angle, tooth_centre_angle
-from cutting.skiving.edge import CuttingEdge, tooth_intrusion
+from cutting.skiving.edge import CuttingEdge, make_edge, tooth_intrusion
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.tooling import inverse
 from cutting.skiving.working_angles import Relief, edge_frames, pass_setup
@@ -97,7 +97,16 @@ def body_interference(setup: SkivingSetup, edge: CuttingEdge) -> dict:
     """The relieved tooth's deepest intrusion [mm] into the finished gear's teeth (the last pass's: the stock earlier
     passes leave is the next pass's to cut; the ring gear's teeth meet the cutter's deepest at the final centre
     distance) over the whole mesh, negative for its least clearance, and where: {"body_intrusion_max_mm",
-    "depth_mm", "edge", "edge_position_mm"}."""
+    "depth_mm", "edge", "edge_position_mm"}.
+
+    A cutter's profile deviations are ground on its relieved flanks at every depth (docs/cutter.md, "Regrind"): they
+    move the edge, the body behind it and the flank they generate alike, so the clearance is the design's, held
+    with the edge as designed (held against the nominal teeth, a deviation of more tool material would read as an
+    intrusion of its own size)."""
+    if setup.cutter_errors.profile:
+        errors = replace(setup.cutter_errors, profile_slope=(0.0, 0.0), profile_form=(0.0, 0.0))
+        setup = replace(setup, cutter_errors=errors)
+        edge = make_edge(setup, edge.kind)
     body = relieved_points(setup, edge, body_depths(setup))
     grid = np.linspace(-0.5 * math.pi, 0.5 * math.pi, ANGLES)
     depth = tooth_intrusion(pass_setup(setup, len(setup.passes) - 1), body.points, grid)

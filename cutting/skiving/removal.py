@@ -30,10 +30,12 @@ from cutting.skiving.passages import (
 from cutting.skiving.solids import blank
 from cutting.skiving.sweep import (
     ZippedSweep,
+    kept_deviation,
     outline_points,
     sample_blocks,
-    simplify_outline,
-    split_sides,
+    side_parts,
+    simplify_keep,
+    split_into,
 )
 from cutting.skiving.trajectory import PassMotion
 
@@ -249,12 +251,20 @@ class PassCutter:
         self.pitch = 2 * math.pi / self.z0  # one tooth pitch of the cutter [rad]
         self.half = engagement_half_angle(plan, edge)
         _, m_first, m_last = passage_range(plan, edge)
-        # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist)
-        outline, self.outline_err = simplify_outline(edge.outline, tol / 2)
+        # the tolerance is shared: half for the outline's polygon, the rest for the facets (chords and twist); a
+        # cutter whose teeth differ keeps the vertices any tooth's simplification keeps, so that each tooth's
+        # outline is the same polygon, vertex for vertex, on its own points
+        teeth = edge.tooth_outlines()
+        keep = np.logical_or.reduce([simplify_keep(p, tol / 2)[0] for p in (edge.outline, *teeth)])
+        errs = [kept_deviation(p, keep) for p in (edge.outline, *teeth)]
+        self.outline_err = max(errs)
         self.sweep_tol = tol - self.outline_err
         m_mid = (m_first + m_last) // 2
-        self.outline = _balanced_outline(plan, outline, self.sweep_tol, self.near_blank, m_mid, self.half)
+        parts = _balanced_parts(plan, edge.outline[keep], self.sweep_tol, self.near_blank, m_mid, self.half)
+        self.outline = split_into(edge.outline[keep], parts)
         self.points = outline_points(self.outline)
+        #: per cutter tooth its outline as swept (the same split of its own vertices) and its simplification's error
+        self._teeth = [(split_into(p[keep], parts), e) for p, e in zip(teeth, errs[1:], strict=True)]
         # every passage's sampling starts from the middle passage's, shifted to its own mesh time: most intervals
         # pass at once (the same start in every worker, so the cut does not depend on how the spaces are shared)
         tm = plan.time_at_angle(m_mid * self.pitch)
@@ -287,6 +297,7 @@ class PassCutter:
             return None
         t0, t1, w_probe = found
         chip = Chip(self.index, j, float(tm), 0.0, 0, float(t0), float(t1))
+        outline, outline_err = self._teeth[j] if self._teeth else (self.outline, self.outline_err)
         # a worker owning a share of the spaces samples only the passages that can reach its cells; every point
         # moves by at most ``pad`` between probes (1.5 x the longest chord, for the arc)
         pad = 1.5 * float(np.linalg.norm(np.diff(w_probe, axis=0), axis=2).max()) if len(w_probe) > 1 else 0.0
@@ -295,14 +306,14 @@ class PassCutter:
             return chip
         start = [t + tm for t in self.start_times]
         sampling = sample_blocks(pose, pts, t0, t1, self.sweep_tol, self.near_blank, start)
-        sweep = ZippedSweep(self.outline, sampling.path_times(), pose)
+        sweep = ZippedSweep(outline, sampling.path_times(), pose)
         verts, tris, sample, _, _ = sweep.mesh()
         vol = 0.0
         for key, (i0, i1) in stock.reached_facets(verts, tris, sample, self.near_blank(verts)).items():
             vol += stock.subtract(sweep.solid(i0, i1), key)
             result.subtractions += 1
         result.sweeps += sampling.steps
-        bound = sampling.error + self.outline_err
+        bound = sampling.error + outline_err
         result.sweep_error = max(result.sweep_error, bound)
         result.pass_sweep_error[self.index] = max(result.pass_sweep_error.get(self.index, 0.0), bound)
         chip.volume, chip.sweeps = vol, sampling.steps
@@ -330,8 +341,9 @@ def cut(
         progress(total, total)
 
 
-def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near, m: int, half: float):
-    """The outline with its long sides split where that makes the tube cheapest.
+def _balanced_parts(motion: PassMotion, outline: np.ndarray, tol: float, near, m: int, half: float) -> np.ndarray:
+    """Into how many parts to split each side of the outline (:func:`cutting.skiving.sweep.split_into`): its long
+    sides where that makes the tube cheapest.
 
     A facet's twist grows with its side's length times the time step, the chord error with the time step
     squared: long sides force short steps. Tried on the middle passage of the pass, the split that gives the
@@ -340,13 +352,13 @@ def _balanced_outline(motion: PassMotion, outline: np.ndarray, tol: float, near,
     pose = tooth_pose(motion, m)
     pitch = 2 * math.pi / motion.setup.cutter.teeth
     lo, hi = motion.time_at_angle(m * pitch - half), motion.time_at_angle(m * pitch + half)
-    best, best_cost = outline, math.inf
+    best, best_cost = np.ones(len(outline), int), math.inf
     for longest in (math.inf, 2.0, 1.0, 0.5, 0.3, 0.2, 0.1):
-        candidate = outline if longest == math.inf else split_sides(outline, longest)
+        parts = np.ones(len(outline), int) if longest == math.inf else side_parts(outline, longest)
         try:
-            cost = sample_blocks(pose, outline_points(candidate), lo, hi, tol, near).quads
+            cost = sample_blocks(pose, outline_points(split_into(outline, parts)), lo, hi, tol, near).quads
         except RuntimeError:
             continue
         if cost < best_cost:
-            best, best_cost = candidate, cost
+            best, best_cost = parts, cost
     return best

@@ -121,6 +121,12 @@ def simplify_outline(outline: np.ndarray, tol: float) -> tuple[np.ndarray, float
     Douglas-Peucker on each half (split at the vertex farthest from the first one), so the sweep costs
     triangles only where the edge bends. Returns the simplified outline and the largest deviation left.
     """
+    keep, worst = simplify_keep(outline, tol)
+    return outline[keep], worst
+
+
+def simplify_keep(outline: np.ndarray, tol: float) -> tuple[np.ndarray, float]:
+    """:func:`simplify_outline`'s kept vertices (a mask) and the largest deviation left."""
     n = len(outline)
     far = int(np.argmax(np.linalg.norm(outline - outline[0], axis=1)))
     keep = np.zeros(n, dtype=bool)
@@ -142,13 +148,37 @@ def simplify_outline(outline: np.ndarray, tol: float) -> tuple[np.ndarray, float
             stack += [(i, i + 1 + k), (i + 1 + k, j)]
         else:
             worst = max(worst, float(cross[k]))
-    return outline[keep], worst
+    return keep, worst
+
+
+def kept_deviation(outline: np.ndarray, keep: np.ndarray) -> float:
+    """The largest distance [mm] of a vertex of the closed polygon ``outline`` that ``keep`` drops from the line
+    through the kept vertices either side of it (as :func:`simplify_keep` measures it): the same simplification
+    of another outline, vertex for vertex (a cutter tooth's own), and what it leaves."""
+    kept = np.flatnonzero(keep)
+    n = len(outline)
+    before = kept[np.searchsorted(kept, np.arange(n), side="right") - 1]  # the kept vertex at or before each
+    after = np.append(kept, kept[0] + n)[np.searchsorted(kept, np.arange(n), side="right")] % n
+    a, b = outline[before], outline[after]
+    seg, p = b - a, outline - a
+    cross = np.abs(seg[:, 0] * p[:, 1] - seg[:, 1] * p[:, 0]) / np.maximum(np.linalg.norm(seg, axis=1), 1e-300)
+    return float(cross[~keep].max()) if (~keep).any() else 0.0
 
 
 def split_sides(outline: np.ndarray, longest: float) -> np.ndarray:
     """The closed polygon with every side longer than ``longest`` [mm] cut into equal parts (same shape)."""
+    return split_into(outline, side_parts(outline, longest))
+
+
+def side_parts(outline: np.ndarray, longest: float) -> np.ndarray:
+    """Into how many equal parts :func:`split_sides` cuts each side (side i joins vertex i and i + 1)."""
     nxt = np.roll(outline, -1, axis=0)
-    parts = np.maximum(1, np.ceil(np.linalg.norm(nxt - outline, axis=1) / longest)).astype(int)
+    return np.maximum(1, np.ceil(np.linalg.norm(nxt - outline, axis=1) / longest)).astype(int)
+
+
+def split_into(outline: np.ndarray, parts: np.ndarray) -> np.ndarray:
+    """The closed polygon with side i cut into ``parts[i]`` equal parts."""
+    nxt = np.roll(outline, -1, axis=0)
     return np.vstack([a + (b - a) * (np.arange(k)[:, None] / k) for a, b, k in zip(outline, nxt, parts, strict=True)])
 
 

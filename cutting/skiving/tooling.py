@@ -51,6 +51,10 @@ class RakeFace:
         return self.regrind / lean
 
 
+#: a profile deviation: the same on every tooth, or one value per tooth [mm]
+Deviation = float | tuple[float, ...]
+
+
 @dataclass(frozen=True)
 class CutterErrors:
     """The cutter's deviations from its design (shaper-cutter tolerance classes AA, A, B).
@@ -62,8 +66,9 @@ class CutterErrors:
     pitch: single pitch deviations f_pt [mm], one per cutter pitch (pitch k lies between teeth k - 1 and k, counted
         along +phi of the cutter), summing to zero; () for a cutter without pitch deviations. The reference circle's
         arc: tooth k stands (f_pt,1 + ... + f_pt,k) / r0 ahead of its nominal angle.
-    profile_slope, profile_form: each flank's (left, right) profile slope f_H and form f_f deviation [mm], the same
-        on every tooth (:mod:`cutting.skiving.cutter_profile`)
+    profile_slope, profile_form: each flank's (left, right) profile slope f_H and form f_f deviation [mm]
+        (:mod:`cutting.skiving.cutter_profile`): a number, the same on every tooth, or a tuple of z0 numbers, one
+        per tooth (tooth k at k pitches along +phi from tooth 0)
     """
 
     radial_runout: float = 0.0
@@ -71,13 +76,28 @@ class CutterErrors:
     axial_runout: float = 0.0
     axial_runout_phase: float = 0.0
     pitch: tuple[float, ...] = ()
-    profile_slope: tuple[float, float] = (0.0, 0.0)
-    profile_form: tuple[float, float] = (0.0, 0.0)
+    profile_slope: tuple[Deviation, Deviation] = (0.0, 0.0)
+    profile_form: tuple[Deviation, Deviation] = (0.0, 0.0)
 
     @property
     def profile(self) -> bool:
         """Whether the edge carries profile deviations."""
-        return any(self.profile_slope) or any(self.profile_form)
+        return any(np.any(np.asarray(v) != 0) for v in (*self.profile_slope, *self.profile_form))
+
+    @property
+    def profile_per_tooth(self) -> bool:
+        """Whether the teeth's profile deviations differ (each tooth then cuts with its own edge)."""
+        return any(np.ptp(np.atleast_1d(v)) > 0 for v in (*self.profile_slope, *self.profile_form))
+
+    def tooth_profile(self, tooth: int | None = None) -> tuple[tuple[float, float], tuple[float, float]]:
+        """((slope left, right), (form left, right)) [mm] of cutter tooth ``tooth``; None: the teeth's mean."""
+
+        def of(v: Deviation) -> float:
+            a = np.atleast_1d(np.asarray(v, dtype=float))
+            return float(a.mean() if tooth is None or len(a) == 1 else a[tooth])
+
+        slope, form = self.profile_slope, self.profile_form
+        return (of(slope[0]), of(slope[1])), (of(form[0]), of(form[1]))
 
 
 @dataclass(frozen=True)
@@ -252,8 +272,8 @@ def tooling_summary(rake: RakeFace, errors: CutterErrors, clamping: Clamping) ->
             "axial_runout_mm": errors.axial_runout,
             "axial_runout_phase_deg": deg(errors.axial_runout_phase),
             "pitch_mm": list(errors.pitch),
-            "profile_slope_mm": {"left": errors.profile_slope[0], "right": errors.profile_slope[1]},
-            "profile_form_mm": {"left": errors.profile_form[0], "right": errors.profile_form[1]},
+            "profile_slope_mm": _per_flank(errors.profile_slope),
+            "profile_form_mm": _per_flank(errors.profile_form),
         },
         "clamping": {
             "eccentricity_mm": clamping.eccentricity,
@@ -262,3 +282,8 @@ def tooling_summary(rake: RakeFace, errors: CutterErrors, clamping: Clamping) ->
             "tilt_phase_deg": deg(clamping.tilt_phase),
         },
     }
+
+
+def _per_flank(values: tuple[Deviation, Deviation]) -> dict[str, float | list[float]]:
+    """A deviation per flank for JSON: a number, or a list of one per tooth."""
+    return {side: list(v) if isinstance(v, tuple) else v for side, v in zip(("left", "right"), values, strict=True)}

@@ -17,7 +17,7 @@ from cutting.errors import InputError, Problem
 from cutting.flank import flank_normals, flank_points
 from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge, contact_radius, envelope_bound, mate_flank
-from cutting.skiving.exact_sweep import PassTable, SweptVolumes
+from cutting.skiving.exact_sweep import PassTable, SweptVolumes, tooth_spread
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.passages import in_blank_envelope, passage_range, tooth_pose
 from cutting.skiving.trajectory import PassMotion, ideal_passes
@@ -288,7 +288,9 @@ def nearby_passages(
         return None
     t0 = np.asarray(motion.time_at_angle(ms * pitch - half), dtype=float)
     t1 = np.asarray(motion.time_at_angle(ms * pitch + half), dtype=float)
-    tb = PassTable.from_windows(motion, t0, t1, setup.passage_frames(ms), edge.outline, ms, setup.blank_frame)
+    tb = PassTable.from_windows(
+        motion, t0, t1, setup.passage_frames(ms), edge.outline, ms, setup.blank_frame, tooth_spread(edge)
+    )
     gap = np.linalg.norm(tb.ball_centre - np.asarray(centre), axis=-1) - tb.ball_radius
     near = (gap <= radius).any(axis=1)
     return tb.take(np.flatnonzero(near)) if near.any() else None
@@ -320,7 +322,9 @@ def own_sweep(setup: SkivingSetup, edge: CuttingEdge, motion: PassMotion, m: int
     half, _, _ = passage_range(motion, edge)
     t0, t1 = (np.array([motion.time_at_angle(m * pitch + k * half)], dtype=float) for k in (-1, 1))
     ms = np.array([m])
-    tb = PassTable.from_windows(motion, t0, t1, setup.passage_frames(ms), edge.outline, ms, setup.blank_frame)
+    tb = PassTable.from_windows(
+        motion, t0, t1, setup.passage_frames(ms), edge.outline, ms, setup.blank_frame, tooth_spread(edge)
+    )
     return SweptVolumes(setup.gear, edge, [], tables=[tb])
 
 

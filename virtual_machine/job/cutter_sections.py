@@ -10,8 +10,10 @@ import dataclasses
 import math
 from typing import Any
 
+import numpy as np
+
 from cutting.errors import Problem
-from cutting.skiving.tooling import RAKE_FACES, Clamping, CutterErrors, RakeFace, random_pitch
+from cutting.skiving.tooling import RAKE_FACES, Clamping, CutterErrors, Deviation, RakeFace, random_pitch
 from virtual_machine.job.keys import Key, at_least, one_of, parse_section
 
 
@@ -60,7 +62,12 @@ CUTTER_ERROR_KEYS: dict[str, Key] = {
     "pitch_tolerance": Key(float, None, "mm", "a random cutter: single pitch deviations within +-this", at_least(0)),
     "seed": Key(int, 0, "", "the random cutter's seed (with pitch_tolerance)"),
     **{
-        f"profile_{kind}_{side}": Key(float, 0.0, "mm", f"the {side} flanks' profile {kind} deviation ({doc})")
+        f"profile_{kind}_{side}": Key(
+            (float, list),
+            0.0,
+            "mm",
+            f"the {side} flanks' profile {kind} deviation ({doc}): one for every tooth, or a list of one per tooth",
+        )
         for kind, doc in (("slope", "f_H over the active flank, + more tool material towards its tip"), ("form", "f_f"))
         for side in ("left", "right")
     },
@@ -100,10 +107,11 @@ def parse_cutter_errors(table: Any, teeth: int, mn: float, problems: list[Proble
     v = parse_section("cutter.errors", table if table is not None else {}, CUTTER_ERROR_KEYS, problems)
     if len(problems) > before or not v:  # a key in error has no value: the problems say what to change
         return CutterErrors()
+    profile = {k: _profile_values(k, v[k], teeth, problems) for k in v if k.startswith("profile_")}
     sizes = ("radial_runout", "axial_runout", "pitch_tolerance", *(k for k in v if k.startswith("profile_")))
-    problems += _size_problems(
-        "cutter.errors", {k: abs(x) if isinstance(x, float) else x for k, x in v.items()}, sizes, mn
-    )
+    size_of = {k: abs(x) if isinstance(x, float) else x for k, x in v.items()}
+    size_of.update({k: max(map(abs, np.atleast_1d(x))) for k, x in profile.items()})
+    problems += _size_problems("cutter.errors", size_of, sizes, mn)
     pitch: tuple[float, ...] = ()
     if v.get("pitch") is not None and v.get("pitch_tolerance") is not None:
         problems.append(Problem("cutter.errors.pitch", v["pitch"], "given with pitch_tolerance", "give one of the two"))
@@ -117,9 +125,22 @@ def parse_cutter_errors(table: Any, teeth: int, mn: float, problems: list[Proble
         v["axial_runout"],
         math.radians(v["axial_runout_phase"]),
         pitch,
-        (v["profile_slope_left"], v["profile_slope_right"]),
-        (v["profile_form_left"], v["profile_form_right"]),
+        (profile["profile_slope_left"], profile["profile_slope_right"]),
+        (profile["profile_form_left"], profile["profile_form_right"]),
     )
+
+
+def _profile_values(key: str, raw: float | list, teeth: int, problems: list[Problem]) -> Deviation:
+    """A profile deviation: a number for every tooth, or a list of one per tooth (a tuple; all alike: the number)."""
+    if not isinstance(raw, list):
+        return raw
+    if len(raw) != teeth or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in raw):
+        hint = f"in mm, tooth 0 first; or one number for every tooth (a list of {len(raw)} given)"
+        why = f"must be a list of {teeth} numbers (one per tooth)"
+        problems.append(Problem(f"cutter.errors.{key}", raw, why, hint))
+        return 0.0
+    values = tuple(float(x) for x in raw)
+    return values[0] if len(set(values)) == 1 else values
 
 
 def _pitch_list(raw: list, teeth: int, mn: float, problems: list[Problem]) -> tuple[float, ...]:

@@ -91,6 +91,8 @@ def _type_name(kind: type | tuple[type, ...]) -> str:
         list: "a list",
         dict: "a table",
     }
+    if isinstance(kind, tuple):
+        return " or ".join(_type_name(k) for k in kind)
     return names.get(kind, str(kind))
 
 
@@ -106,6 +108,8 @@ def _coerce(raw: Any, key: Key) -> tuple[Any, str | None]:
         if isinstance(raw, bool) or not isinstance(raw, int):
             return None, "expected an integer"
         return raw, None
+    if isinstance(key.kind, tuple) and float in key.kind and isinstance(raw, int | float) and not isinstance(raw, bool):
+        return _coerce(raw, Key(float, key.default, key.unit, key.doc))  # a number where a number or a list will do
     if not isinstance(raw, key.kind):
         return None, f"expected {_type_name(key.kind)}"
     return raw, None

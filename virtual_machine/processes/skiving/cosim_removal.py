@@ -26,7 +26,7 @@ from cutting.skiving.dexel_cut import chip_of
 from cutting.skiving.dexel_lines import DexelSpacing, gear_phase
 from cutting.skiving.dexel_solid import dexel_solid
 from cutting.skiving.edge import CuttingEdge
-from cutting.skiving.exact_sweep import PassTable
+from cutting.skiving.exact_sweep import PassTable, tooth_spread
 from cutting.skiving.passages import Chip, CutResult, blank_window_of, engagement_half_angle
 from cutting.skiving.removal import PassCutter, Stock, from_arrays, to_arrays
 from cutting.skiving.sampled_motion import SampledMotion
@@ -67,6 +67,7 @@ class DexelRemoval:
         self._plans, self._edge, self._gear = plans, edge, gear
         self._halves = {plan.index: engagement_half_angle(plan, edge) for plan in plans}
         self._points = outline_points(simplify_outline(edge.outline, 0.02)[0])  # for the blank window
+        self._spread = tooth_spread(edge)  # the teeth's own outlines off the edge's (the tables' bounds grow by it)
         self._pending: list[tuple[int, int, Samples]] = []
         #: (pass, passage) -> the motion its chip was cut along, until the co-simulation takes it for the force
         self.motions: dict[tuple[int, int], SampledMotion] = {}
@@ -101,7 +102,7 @@ class DexelRemoval:
             ms, t0, t1 = ms[live], t0[live], t1[live]
             st = motion.setup
             frames = st.passage_frames(ms)
-            table = PassTable.from_windows(motion, t0, t1, frames, self._edge.outline, ms, st.blank_frame)
+            table = PassTable.from_windows(motion, t0, t1, frames, self._edge.outline, ms, st.blank_frame, self._spread)
             tables.append(table)
             for k, (m, a, b) in enumerate(zip(ms, t0, t1, strict=True)):
                 # the part of the window the tooth spends in the blank's envelope: where the force acts (every
