@@ -94,7 +94,8 @@ def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
 
 def test_the_dexel_cosimulation_equals_a_cut_afterwards_from_its_recorded_motion(runs) -> None:
     """The removal that kept up with the machine (passage by passage, each on the samples around its window) and
-    the dexel cut of the motion the machine recorded, made afterwards pass by pass: the same chips, the same gear."""
+    the dexel cut of the motion the machine recorded, made afterwards pass by pass: the same chips, the same gear;
+    and its stock as a picture (cutting.skiving.dexel_solid.stock_mesh) the same solid."""
     from cutting.skiving.dexel_cut import cut_dexel
     from cutting.skiving.sampled_motion import sampled_passes
     from virtual_machine.job import dexel_spacing
@@ -108,6 +109,16 @@ def test_the_dexel_cosimulation_equals_a_cut_afterwards_from_its_recorded_motion
     assert {k for k, v in during.items() if v > 0} == set(later)
     assert [during[k] for k in later] == pytest.approx(list(later.values()), rel=1e-6, abs=1e-12)
     assert after.result.gear.volume() == pytest.approx(loaded.cut.gear.volume(), rel=1e-9)
+    # the stock as the recording's snapshots show it (no boolean): closed, the solid's volume within 0.01 % at every
+    # ray and slice, 0.1 % thinned by 2 (measured 0.001 % and 0.03 % on the default job)
+    import trimesh
+
+    from cutting.skiving.dexel_solid import stock_mesh
+
+    for stride, tol in ((1, 1e-4), (2, 1e-3)):
+        mesh = trimesh.Trimesh(*stock_mesh(after.workpiece, stride, stride), process=False)
+        assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+        assert mesh.volume == pytest.approx(after.result.gear.volume(), rel=tol)
 
 
 def loaded_job():

@@ -275,3 +275,25 @@ def test_both_solids_measure_within_their_bounds_of_the_exact_surface():
         block = doc["mesh"]
         assert block["within_bound"], (removal, block["trace_difference_um"], block["trace_bound_um"])
         assert abs(block["difference_um"]["f_p"]) < 1.0 and abs(block["difference_um"]["F_alpha"]) < 2.0, removal
+
+
+@pytest.mark.parametrize("internal", [False, True])
+def test_the_stock_mesh_of_an_uncut_blank_is_the_blank(internal: bool):
+    """Known answer for the recording's stock (cutting.skiving.dexel_solid.stock_mesh): before any cut, the fans'
+    ends lie on the tip circle (a ring gear's bore), so the closed mesh is the blank: a cylinder pi r_a^2 b, or a
+    ring pi (r_rim^2 - r_a^2) b, within the polygon's chord (a few fans' points per pitch on the circle)."""
+    import trimesh
+
+    from cutting.skiving.dexel_solid import stock_mesh
+
+    gear = Gear(30 if internal else 18, 1.0, math.radians(20), math.radians(15), 6.0, internal=internal)
+    rect = np.array([[0.0, -1.0], [2.0, -1.0], [2.0, 1.0], [0.0, 1.0]])  # an edge is needed, never used: no cut
+    wp = DexelWorkpiece(DexelLines(gear, DexelSpacing.for_gear(gear, 0.2)), _edge(rect))
+    mesh = trimesh.Trimesh(*stock_mesh(wp), process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    r_a, b = gear.tip_radius, gear.face_width
+    expected = math.pi * (wp.lines.rim_radius**2 - r_a**2) * b if internal else math.pi * r_a**2 * b
+    assert mesh.volume == pytest.approx(expected, rel=2e-3)
+    radii = np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1])
+    on_bore = radii < wp.lines.rim_radius - 1e-9 if internal else radii > 1e-9
+    assert np.allclose(radii[on_bore], r_a, atol=1e-9)  # the uncut lands drawn back lie on the tip circle

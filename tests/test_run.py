@@ -129,6 +129,26 @@ def test_run_writes_every_file(runs) -> None:
         assert text_part in page
 
 
+def _meshes(entity_chunks) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The meshes of a Mesh3D entity in time order: each row's vertices with the last triangles logged."""
+    rows = []
+    for c in entity_chunks:
+        batch = c.to_record_batch()
+        times = batch.column("sim_time").to_pylist()
+        verts = batch.column("Mesh3D:vertex_positions").to_pylist()
+        names = batch.schema.names
+        tris = batch.column("Mesh3D:triangle_indices").to_pylist() if "Mesh3D:triangle_indices" in names else None
+        rows += [
+            (t, v, tris[k] if tris is not None else None) for k, (t, v) in enumerate(zip(times, verts, strict=True))
+        ]
+    out, triangles = [], None
+    for _, v, t in sorted(rows, key=lambda r: r[0]):
+        triangles = np.array(t) if t else triangles
+        if v:  # not a clear (the next pass's stock shows)
+            out.append((np.array(v, dtype=float), triangles))
+    return out
+
+
 def _numbers(section: dict) -> list[float]:
     """The scalar figures of a measurement section (its per-tooth lists left aside)."""
     return [v for v in section.values() if isinstance(v, int | float) and not isinstance(v, bool)]
@@ -150,8 +170,23 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
     blank = [
         c for c in chunks if c.entity_path.startswith("/machine/work_spindle/blank_frame/blank/") and not c.is_static
     ]
-    # the stock as it is cut, one entity per pass: the dexel removal's solid once per pass (the small job has one)
-    assert sum(c.num_rows for c in blank) == len(load_job(tmp / "small.toml").skiving.passes)
+    # the stock as it is cut, one entity per pass, at least 5 snapshots each: closed meshes (the triangles logged
+    # with a pass's first, its later ones moving only the vertices), less stock each time, the last one gear.stl
+    passes = len(load_job(tmp / "small.toml").skiving.passes)
+    assert {c.entity_path for c in blank} == {
+        f"/machine/work_spindle/blank_frame/blank/pass_{k + 1}" for k in range(passes)
+    }
+    volumes = []
+    for entity in sorted({c.entity_path for c in blank}):
+        meshes = _meshes([c for c in blank if c.entity_path == entity])
+        assert len(meshes) >= 5, entity
+        for vertices, triangles in meshes:
+            mesh = trimesh.Trimesh(vertices, triangles, process=False)
+            assert mesh.is_watertight and mesh.is_winding_consistent
+            volumes.append(mesh.volume)
+    assert np.all(np.diff(volumes) < 0)
+    gear = trimesh.load_mesh(tmp / "out0" / "gear.stl")
+    assert volumes[-1] == pytest.approx(gear.volume, rel=0.005)
     # one recording of this run (not merged with another run's in a viewer), with the job and its setting sheet
     (entry,) = RrdReader(tmp / "run.rrd").recordings()
     assert entry.application_id == "skive" and entry.recording_id != "skive" and "-" in entry.recording_id

@@ -9,6 +9,12 @@ the helix, so that the tube cuts the faces cleanly). Rays whose material was not
 back into the air, so the tube does not graze the blank's cylinder. The gear is the blank minus every space's
 tube: between its end points the mesh is linear, so it lies within the chord of the ray and slice spacing of the
 exact surface (plus the feed marks between slices); the measurement probes the exact surface itself.
+
+For pictures of the stock while it is cut (the recording's snapshots) :func:`stock_mesh` closes the same ray ends
+into one surface without a boolean: per slice the fans' end points make one loop round the gear (neighbouring fans
+meet on the tooth centre planes), lofted from slice to slice and capped at the faces (to the axis; a ring gear's
+loop to its rim). Milliseconds where the solid takes a second; its volume is the solid's within 0.002 % on the
+default job.
 """
 
 from __future__ import annotations
@@ -119,3 +125,58 @@ def dexel_solid(workpiece, rim: float | None = None) -> tuple[mf.Manifold, int]:
     solid = mf.Manifold.batch_boolean([blank(lines.gear, rim), *removed_region(lines, ends)], mf.OpType.Subtract)
     solid.status()
     return solid, touched
+
+
+def stock_mesh(workpiece, ray_stride: int = 1, slice_stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """The stock of a dexel workpiece (on a gear's fans) as one closed mesh (vertices (n, 3) [mm], triangles (m, 3),
+    outward), from the same ray ends as :func:`dexel_solid` (:func:`tube_ends`) and no boolean: per slice one loop
+    of every fan's ray ends in turn, clamped to the blank (an uncut land drawn back into the air lies on the tip
+    circle), lofted between slices; the end faces fanned to the axis (a ring gear: joined to its rim). Every
+    ``ray_stride``-th ray and ``slice_stride``-th slice (a lighter picture; the first and last of each, the tip
+    corners' rays and the end faces kept). The topology depends only on the lines and the strides: every mesh of a
+    workpiece has the same triangles."""
+    ln = workpiece.lines
+    g = ln.gear
+    rho = tube_ends(ln, workpiece.mat_lo, workpiece.mat_n)[0].reshape(ln.spaces, ln.slices, ln.rays)
+    rays = np.zeros(ln.rays, bool)
+    rays[::ray_stride] = True
+    rays[[0, -1]] = True
+    rays |= np.r_[False, np.diff(ln.land.astype(int)) != 0] | np.r_[np.diff(ln.land.astype(int)) != 0, False]
+    slices = np.zeros(ln.slices, bool)
+    slices[::slice_stride] = True
+    slices[[0, -1]] = True
+    rho, z = rho[:, slices][:, :, rays], ln.z[slices]
+    u = ln.ray_u[rays]
+    lx, ly = ln.centre_radius + rho * u[:, 0], rho * u[:, 1]
+    ang = ln.frame_angle(np.arange(ln.spaces)[:, None, None], z[None, :, None])
+    x = (np.cos(ang) * lx - np.sin(ang) * ly).transpose(1, 0, 2).reshape(len(z), -1)  # (slices, loop)
+    y = (np.sin(ang) * lx + np.cos(ang) * ly).transpose(1, 0, 2).reshape(len(z), -1)
+    r = np.hypot(x, y)
+    outside = r < g.tip_radius if g.internal else r > g.tip_radius
+    scale = np.where(outside, g.tip_radius / np.maximum(r, 1e-12), 1.0)
+    x, y = x * scale, y * scale
+    n_s, n = x.shape
+    verts = np.stack([x, y, np.broadcast_to(z[:, None], x.shape)], -1).reshape(-1, 3)
+    j, i = (a.ravel() for a in np.meshgrid(np.arange(n_s - 1), np.arange(n), indexing="ij"))
+    a, b = j * n + i, j * n + (i + 1) % n
+    tris = [np.stack([a, b, b + n], 1), np.stack([a, b + n, a + n], 1)]
+    ring = np.arange(n)
+    bottom, top = ring, (n_s - 1) * n + ring
+    if g.internal:  # the rim: the same loop's angles at the rim radius, its wall and the two annular faces
+        o = len(verts)
+        theta = np.arctan2(y, x)
+        rim = np.stack([ln.rim_radius * np.cos(theta), ln.rim_radius * np.sin(theta), verts[:, 2].reshape(x.shape)])
+        verts = np.concatenate([verts, rim.transpose(1, 2, 0).reshape(-1, 3)])
+        tris += [np.stack([o + a, o + b + n, o + b], 1), np.stack([o + a, o + a + n, o + b + n], 1)]
+        b_next, t_next = (ring + 1) % n, (n_s - 1) * n + (ring + 1) % n  # each loop's next point
+        tris += [np.stack([bottom, o + bottom, b_next], 1), np.stack([b_next, o + bottom, o + b_next], 1)]
+        tris += [np.stack([top, t_next, o + top], 1), np.stack([t_next, o + t_next, o + top], 1)]
+    else:  # fans from the axis at each end face
+        c = len(verts)
+        verts = np.concatenate([verts, [[0.0, 0.0, z[0]], [0.0, 0.0, z[-1]]]])
+        tris += [np.stack([np.full(n, c), (bottom + 1) % n, bottom], 1)]
+        tris += [np.stack([np.full(n, c + 1), top, (n_s - 1) * n + (ring + 1) % n], 1)]
+    tris = np.concatenate(tris).astype(np.int64)
+    if _signed_volume(verts, tris) < 0:
+        tris = tris[:, ::-1]
+    return verts, tris

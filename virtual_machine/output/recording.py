@@ -402,13 +402,21 @@ def log_snapshots(
     ordered = sorted(snapshots, key=lambda s: float(s[0]))
     times = np.array([float(s[0]) for s in ordered])
     passes = snapshot_passes(motion, times) if motion is not None and len(times) else np.zeros(len(times), int)
-    shown = None
+    shown, topology = None, {}
     for (time, vertices, triangles), k in zip(ordered, passes, strict=True):
         rec.set_time(TIMELINE, duration=float(time))
         entity = f"{frame}/blank/pass_{int(k) + 1}"
         if shown is not None and shown != entity:
             rec.log(shown, rr.Clear(recursive=False))
-        rec.log(entity, _mesh3d(vertices, triangles, albedo_factor=(190, 190, 200, 255)))
+        same = entity in topology and np.array_equal(topology[entity], triangles)
+        if same:  # the same triangles (the dexel stock's are): only the vertices move, the recording stays small
+            normals = vertex_normals(vertices, triangles).astype(np.float32)
+            rec.log(
+                entity, rr.Mesh3D.from_fields(vertex_positions=np.asarray(vertices, np.float32), vertex_normals=normals)
+            )
+        else:
+            rec.log(entity, _mesh3d(vertices, triangles, albedo_factor=(190, 190, 200, 255)))
+            topology[entity] = np.asarray(triangles)
         shown = entity
     rec.reset_time()
 

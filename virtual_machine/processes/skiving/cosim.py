@@ -130,6 +130,7 @@ class _Stroke:
         self.first_m = 0
         self.snapshots = 0  # taken so far
         self.total: int | None = None  # passages the ideal pass has
+        self.idle = 0.0  # the share of them before the engagement zone (and after it): approach and overrun
         self.ended = False
         self.step: float | None = None  # cutter angle per sample (_ready_passages)
         self.step_n = 0  # samples when it was taken
@@ -386,15 +387,21 @@ def max_lag(workers: int, removal: str = "manifold") -> int:
 
 
 def _snapshot(sim: CoSimulation, removal, stroke: _Stroke, t: float, per_pass: int, plans, edge) -> None:
-    """A mesh of the stock whenever the stroke has cut the next k / per_pass of its passages, and at its end."""
+    """A mesh of the stock whenever the stroke has gone the next k / per_pass of the way through the blank (its
+    passages from entering the engagement zone to leaving it: the approach and the overrun cut nothing), and at its
+    end."""
+    plan = plans[stroke.index]
     if stroke.total is None:
-        stroke.total = passage_count(plans[stroke.index], edge)
-    done = stroke.next_m - stroke.first_m if stroke.next_m is not None else 0
-    due = min(per_pass, done * per_pass // max(stroke.total, 1)) if not stroke.ended else per_pass
+        stroke.total = passage_count(plan, edge)
+        st = plan.setup
+        zone = st.gear.face_width + 2 * st.engagement_half_length(plan.centre_distance)
+        stroke.idle = max(0.0, (abs(plan.v_s) * plan.duration - zone) / 2) / (abs(plan.v_s) * plan.duration)
+    done = (stroke.next_m - stroke.first_m) / max(stroke.total, 1) if stroke.next_m is not None else 0.0
+    through = (done - stroke.idle) / max(1.0 - 2 * stroke.idle, 1e-9)
+    due = min(per_pass, max(0, math.floor(through * per_pass))) if not stroke.ended else per_pass
     if due > stroke.snapshots:
         stroke.snapshots = due
-        mesh = removal.solid().to_mesh()
-        sim.snapshots.append((t, np.asarray(mesh.vert_properties)[:, :3].copy(), np.asarray(mesh.tri_verts).copy()))
+        sim.snapshots.append((t, *removal.stock_mesh()))
 
 
 def _ready_passages(stroke: _Stroke, setup, pitch: float):

@@ -45,9 +45,9 @@ from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.version import versions
 
-#: blank snapshots per pass in the recording (manifold removal; the dexel removal makes its solid once per pass: at
-#: 5 per pass its solids took 3.6 s more of the default run, 27 MB instead of 11: issue 44 asks 5 for at most 1.5 s)
-SNAPSHOTS_PER_PASS = 3
+#: blank snapshots per pass in the recording, evenly through its passages (the dexel removal's are closed meshes of
+#: its ray ends, milliseconds each: cutting.skiving.dexel_solid.stock_mesh; the manifold removal's its solid)
+SNAPSHOTS_PER_PASS = 5
 
 
 def run_job(
@@ -77,7 +77,7 @@ def run_job(
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     workers = workers or default_workers()
-    snapshots = (SNAPSHOTS_PER_PASS if removal == "manifold" else 1) if rrd else 0
+    snapshots = SNAPSHOTS_PER_PASS if rrd else 0
     modification_path = None
     if job.modification is None:
         announce("machine and cut")
