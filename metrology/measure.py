@@ -203,6 +203,13 @@ def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name:
             "profile_section_z_mm": zs,
             "helix_z_mm": list(face),
             "pitch_diameter_mm": 2 * r_p,
+            # where the measured gear sits (a gear measuring machine's alignment): its turn from the nominal gear,
+            # its mid face and the nominal index of the tooth reported as tooth 1; the deviation maps are placed by it
+            "datum": {
+                "rotation_deg": math.degrees(datum.rotation),
+                "z_mid_mm": float(datum.z_mid),
+                "tooth_1_index": int(datum.first_tooth),
+            },
         },
         "profile": profile,
         "helix": helix,

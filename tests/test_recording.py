@@ -19,7 +19,7 @@ from metrology.measure import measure_gear
 from metrology.reference_gear import reference_gear_mesh
 from metrology.sections import MeshData
 from virtual_machine.job import load_job
-from virtual_machine.output.recording import decimation, deviation_colors, smooth_rate, write_recording
+from virtual_machine.output.recording import decimation, smooth_rate, write_recording
 from virtual_machine.runtime.machine_run import simulate
 
 JOB = Path(__file__).resolve().parents[1] / "assets/jobs/spur_external.toml"
@@ -116,8 +116,8 @@ def test_entities_and_timeline(run):
     (blueprint,) = reader.blueprints()
     views = {c.entity_path for c in reader.stream(store=blueprint).to_chunks() if c.entity_path.count("/") == 2}
     # 3D cutting zone, machine and gear; sync, torques, spindle speeds, carriage, radial slide, program, 1 extra;
-    # 4 charts (profile, helix, pitch, topography), 2 documents, events, the signals' legend
-    assert sum(v.startswith("/view/") for v in views) == 3 + 7 + 8
+    # 4 charts (profile, helix, pitch, topography), 2 documents, the deviation colours, events, the signals' legend
+    assert sum(v.startswith("/view/") for v in views) == 3 + 7 + 9
     layout = reader.stream(store=blueprint).to_chunks()
     queries = [q for c in layout if c.entity_path.endswith("/ViewContents") for q in column([c], "ViewContents:query")]
     assert ["+ $origin/**", "- $origin/cutter_path/**"] in queries  # the cutter paths hidden by default
@@ -196,7 +196,7 @@ def test_snapshots_and_cutter_path(run):
     snaps = chunks(path, "/machine/work_spindle/blank_frame/blank/pass_1", static=False)  # one entity per pass
     assert sum(c.num_rows for c in snaps) == 2
     times = column(snaps, "sim_time")
-    assert [t.total_seconds() for t in times] == [0.2, 0.6]
+    assert sorted(t.total_seconds() for t in times) == [0.2, 0.6]
     cleared = column(chunks(path, "/machine/work_spindle/blank_model", static=False), "sim_time")
     assert sorted(t.total_seconds() for t in cleared) == [0.0, 0.2]  # model blank shown until the first snapshot
     strip = np.array(instances(chunks(path, "/gear/cutter_path/pass_1", static=True), "LineStrips3D:strips")[0])
@@ -211,37 +211,85 @@ def _rgba(packed: list[int]) -> np.ndarray:
     return np.stack([(p >> 24) & 255, (p >> 16) & 255, (p >> 8) & 255, p & 255], -1).astype(int)
 
 
-def test_finished_gear_colours(run):
-    cut, perfect = run["cut"], run["perfect"]
-    finished = chunks(run["path"], "/gear/finished", static=False)  # shown when the run has cut it
-    assert [t.total_seconds() for t in column(finished, "sim_time")] == [pytest.approx(run["motion"].t[-1])]
-    rgba = _rgba(instances(finished, "Mesh3D:vertex_colors"))
-    assert rgba.shape == (len(cut.vertices), 4)
-    grey = np.all(rgba[:, :3] == 128, axis=1)
-    moved = np.linalg.norm(cut.vertices - perfect.vertices, axis=1) > 1e-6
-    red = moved & ~grey
-    assert red.sum() >= 100
-    # the report's topography chart's colour map and scale (metrology.charts: DEVIATION_CMAP over +-the largest
-    # measured deviation): excess material red, the colour the chart gives +3 um
+def _chart_rgba(values_um: np.ndarray, limit: float) -> np.ndarray:
+    """The topography chart's colour of each value (metrology.charts: pcolormesh of DEVIATION_CMAP over
+    +-limit), as 0-255 RGBA."""
     import matplotlib as mpl
 
-    from metrology.charts import DEVIATION_CMAP, deviation_limit
+    from metrology.charts import DEVIATION_CMAP
 
-    limit = deviation_limit(run["measurement"]["topography"])
-    chart = np.round(np.array(mpl.colormaps[DEVIATION_CMAP]((min(EXCESS_MM * 1e3 / limit, 1.0) + 1) / 2)) * 255)
-    assert np.all(np.abs(rgba[red] - chart) <= 1)
-    assert np.all(np.abs(rgba[red] - deviation_colors(np.array([EXCESS_MM * 1e3]), limit)[0]) <= 1)
-    assert chart[0] > 150 and chart[2] < chart[0]  # red: excess material
-    flank = ~moved & ~grey
-    assert flank.sum() > 5000
-    white = np.round(np.array(mpl.colormaps[DEVIATION_CMAP](0.5)) * 255)  # zero deviation: the map's middle
-    assert np.all(np.abs(rgba[flank] - white) <= 1)
-    r = np.hypot(cut.vertices[:, 0], cut.vertices[:, 1])
-    gear = run["job"].skiving.gear
-    assert np.all(grey[np.abs(r - gear.tip_radius) < 1e-6])  # tip
-    assert np.all(grey[np.abs(cut.vertices[:, 2]) > gear.face_width / 2 - 1e-6])  # end faces
-    text = instances(chunks(run["path"], "/measurement/flank_deviation"), "TextDocument:text")[0]
-    assert "+3.00" in text
+    norm = mpl.colors.Normalize(vmin=-limit, vmax=limit, clip=True)
+    return np.round(mpl.colormaps[DEVIATION_CMAP](norm(values_um)) * 255)
+
+
+def test_the_finished_gear_carries_its_measured_deviation_on_the_measurements_grid(run):
+    """The finished gear (shown when the run has cut it) in one colour, and on each charted tooth and flank a
+    surface on the measurement's topography grid in the chart's colours and scale: the imposed +3 um on tooth 1's
+    left flank red as the chart draws +3 um, the other flanks the map's white; each surface on its nominal flank
+    (lifted 20 um), and a colour bar."""
+    from metrology.charts import deviation_limit
+    from virtual_machine.output.recording import SURFACE_LIFT
+
+    path, measurement, gear = run["path"], run["measurement"], run["job"].skiving.gear
+    finished = chunks(path, "/gear/finished", static=False)
+    assert [t.total_seconds() for t in column(finished, "sim_time")] == [pytest.approx(run["motion"].t[-1])]
+    names = finished[0].to_record_batch().schema.names
+    assert "Mesh3D:vertex_colors" not in names and "Mesh3D:albedo_factor" in names
+    topo = measurement["topography"]
+    limit = deviation_limit(topo)
+    assert measurement["evaluation"]["datum"]["tooth_1_index"] == 0  # tooth 1 is the nominal tooth 0
+    for side in ("left", "right"):
+        for k, number in enumerate(topo["teeth"]):
+            surface = chunks(path, f"/gear/deviation/{side}/tooth_{number}", static=False)
+            rgba = _rgba(instances(surface, "Mesh3D:vertex_colors"))
+            dev = np.asarray(topo[side]["per_tooth_um"][k], dtype=float).ravel()
+            assert rgba.shape == (len(dev), 4) and np.isfinite(dev).mean() > 0.9
+            ok = np.isfinite(dev)
+            assert np.all(np.abs(rgba[ok] - _chart_rgba(dev[ok], limit)) <= 1)
+            v = np.array(instances(surface, "Mesh3D:vertex_positions"))
+            r = np.hypot(v[:, 0], v[:, 1])
+            assert r.min() > gear.base_radius and r.max() < gear.tip_radius + SURFACE_LIFT
+    # tooth 1's left flank stands the imposed 3 um off the others (the reference mesh's 12 points per flank leave
+    # the same chord deviation, about -2.4 um, on every flank)
+    medians = {side: [np.nanmedian(g) for g in topo[side]["per_tooth_um"]] for side in ("left", "right")}
+    assert medians["left"][0] - np.median(medians["left"][1:]) == pytest.approx(EXCESS_MM * 1e3, abs=0.3)
+    assert np.ptp(medians["left"][1:] + medians["right"]) < 0.3
+    red = _chart_rgba(np.array([EXCESS_MM * 1e3]), limit)[0]
+    assert red[0] > 150 and red[2] < red[0]  # excess material: red
+    bar = chunks(path, "/measurement/deviation_colours", static=True)
+    assert bar and "Image:buffer" in bar[0].to_record_batch().schema.names
+    text = instances(chunks(path, "/measurement/flank_deviation"), "TextDocument:text")[0]
+    assert "topography grid" in text and "| left | 1 |" in text
+
+
+def test_deviation_colours_are_the_charts_at_plus_and_minus_4_um(run, tmp_path):
+    """The issue's known answer: a grid point at +4 um and one at -4 um (on a topography whose largest mean
+    deviation is 5 um) take the colours the topography chart's colour map gives +4 and -4 um."""
+    import copy
+
+    import rerun as rr
+
+    from virtual_machine.output.recording import log_finished_gear
+
+    measurement = copy.deepcopy(run["measurement"])
+    topo = measurement["topography"]
+    for key, (i, j), value in (("per_tooth_um", (3, 4), 4.0), ("per_tooth_um", (9, 6), -4.0)):
+        topo["left"][key][0][i][j] = value
+    topo["left"]["deviation_um"][0][0] = 5.0  # the chart's scale: +-5 um
+    rec = rr.RecordingStream("skive-test")
+    rec.save(tmp_path / "dev.rrd")
+    cut = run["cut"]
+    log_finished_gear(rec, run["job"].skiving.gear, (cut.vertices, cut.faces), measurement, None)
+    rec.flush()
+    rec.disconnect()
+    number = topo["teeth"][0]
+    rgba = _rgba(
+        instances(chunks(tmp_path / "dev.rrd", f"/gear/deviation/left/tooth_{number}"), "Mesh3D:vertex_colors")
+    )
+    n_z = len(topo["z_mm"])
+    for (i, j), value in (((3, 4), 4.0), ((9, 6), -4.0)):
+        assert np.all(np.abs(rgba[i * n_z + j] - _chart_rgba(np.array([value]), 5.0)[0]) <= 1)
+    assert rgba[3 * n_z + 4][0] > rgba[3 * n_z + 4][2] and rgba[9 * n_z + 6][2] > rgba[9 * n_z + 6][0]
 
 
 def test_measurement_documents(run):

@@ -129,9 +129,8 @@ def write_recording(
         log_signals(rec, motion, series)
         log_measurement(rec, measurement, charts)
         if gear_mesh is not None and setup is not None:
-            topo = (measurement or {}).get("topography")
             finished = float(motion.t[-1])  # the gear appears when the run has cut it
-            log_finished_gear(rec, setup.gear, gear_mesh, deviation_limit(topo) if topo else 5.0, finished)
+            log_finished_gear(rec, setup.gear, gear_mesh, measurement, finished)
     return path
 
 
@@ -514,6 +513,9 @@ def log_signals(
     send_series(rec, f"{SIGNALS}/program/segment", t, motion.segment, ["program segment (legend)"], LINE_COLOURS)
     cutting = motion.cutting.astype(float)
     send_series(rec, f"{SIGNALS}/program/cutting", t, cutting, ["cutter can touch the blank"], LINE_COLOURS[1:])
+    # the passes marked on the shared time axis: the pass being cut (from 1, as the report counts them), 0 between
+    passes = np.maximum(np.asarray(motion.pass_index, dtype=float) + 1.0, 0.0)
+    send_series(rec, f"{SIGNALS}/program/pass", t, passes, ["pass being cut (0: none)"], LINE_COLOURS[2:])
     times, texts = segment_events(motion)
     rec.send_columns(
         f"{SIGNALS}/program/events",
@@ -638,21 +640,100 @@ def deviation_markdown(deviation_um: np.ndarray, side: np.ndarray, limit_um: flo
 
 
 def log_finished_gear(
-    rec: rr.RecordingStream, gear: Gear, gear_mesh: Mesh, limit_um: float = 5.0, at: float | None = None
+    rec: rr.RecordingStream,
+    gear: Gear,
+    gear_mesh: Mesh,
+    measurement: Mapping[str, Any] | None = None,
+    at: float | None = None,
 ) -> None:
-    """Part 6: the finished gear coloured by flank deviation at ``/gear/finished`` (the topography chart's colours
-    and scale, ``limit_um``) from machine time ``at`` [s] on (None: static), and its range as text."""
+    """Part 6: the finished gear at ``/gear/finished`` from machine time ``at`` [s] on (None: static), and its
+    measured flank deviation as the measurement took it: a surface per charted tooth and flank on the topography's
+    grid (:func:`deviation_surfaces`, ``/gear/deviation/<side>/tooth_<n>``) in the topography chart's colours and
+    scale, with a colour bar and the figures as text. Without a topography the gear is coloured by its vertices'
+    deviation from the nominal flank (:func:`flank_deviation`)."""
     vertices, triangles = gear_mesh
-    dev, side = flank_deviation(gear, vertices)
-    mesh = _mesh3d(vertices, triangles, vertex_colors=deviation_colors(dev, limit_um))
-    if at is None:
-        rec.log(f"{GEAR}/finished", mesh, static=True)
-    else:
+    topo = (measurement or {}).get("topography")
+    surfaces = deviation_surfaces(gear, measurement) if topo and "datum" in measurement["evaluation"] else []
+    if at is not None:
         rec.set_time(TIMELINE, duration=at)
-        rec.log(f"{GEAR}/finished", mesh)
-        rec.reset_time()
-    text = deviation_markdown(dev, side, limit_um)
+    static = at is None
+    if surfaces:
+        limit = deviation_limit(topo)
+        rec.log(f"{GEAR}/finished", _mesh3d(vertices, triangles, albedo_factor=(200, 200, 205, 255)), static=static)
+        for side, number, verts, tris, dev in surfaces:
+            colours = deviation_rgba(dev, limit)
+            rec.log(
+                f"{GEAR}/deviation/{side}/tooth_{number}", _mesh3d(verts, tris, vertex_colors=colours), static=static
+            )
+        text = surface_markdown(topo, limit)
+    else:
+        limit = 5.0
+        dev, side = flank_deviation(gear, vertices)
+        rec.log(
+            f"{GEAR}/finished", _mesh3d(vertices, triangles, vertex_colors=deviation_colors(dev, limit)), static=static
+        )
+        text = deviation_markdown(dev, side, limit)
+    rec.reset_time()
     rec.log(f"{MEASUREMENT}/flank_deviation", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+    bar = deviation_rgba(np.linspace(-limit, limit, 256), limit)[None, :, :3].repeat(24, axis=0)
+    rec.log(f"{MEASUREMENT}/deviation_colours", rr.Image(bar), static=True)
+
+
+#: the deviation surfaces stand this far [mm] off the nominal flank, outwards: above the gear's own faces (a few
+#: micrometres from it), so the viewer draws them on top; nothing a reviewer sees at the gear's scale
+SURFACE_LIFT = 0.02
+
+
+def deviation_surfaces(
+    gear: Gear, measurement: Mapping[str, Any]
+) -> list[tuple[str, int, np.ndarray, np.ndarray, np.ndarray]]:
+    """The measured flank topography as surfaces: per flank and charted tooth (side, tooth number, vertices (n, 3)
+    [mm], triangles (m, 3), deviation [um] per vertex) on the measurement's own grid (roll lengths x face positions),
+    each grid point on the nominal flank as the measurement's datum places it, SURFACE_LIFT outwards."""
+    from types import SimpleNamespace
+
+    from metrology.workpiece import nominal_flank
+
+    topo, place = measurement["topography"], measurement["evaluation"]["datum"]
+    datum = SimpleNamespace(rotation=math.radians(place["rotation_deg"]), z_mid=place["z_mid_mm"])
+    L, z = np.asarray(topo["L_mm"], dtype=float), np.asarray(topo["z_mm"], dtype=float)
+    n_l, n_z = len(L), len(z)
+    i, j = (a.ravel() for a in np.meshgrid(np.arange(n_l - 1), np.arange(n_z - 1), indexing="ij"))
+    a = i * n_z + j
+    tris = np.concatenate([np.stack([a, a + n_z, a + n_z + 1], 1), np.stack([a, a + n_z + 1, a + 1], 1)])
+    out = []
+    for side in SIDES:
+        for k, number in enumerate(topo["teeth"]):
+            tooth = (int(number) - 1 + int(place["tooth_1_index"])) % gear.teeth
+            p, n = nominal_flank(gear, datum, side, (L / gear.base_radius)[:, None], z[None, :], tooth)
+            verts = (p + SURFACE_LIFT * n).reshape(-1, 3)
+            dev = np.asarray(topo[side]["per_tooth_um"][k], dtype=float).ravel()
+            out.append((side, int(number), verts, tris, dev))
+    return out
+
+
+def surface_markdown(topo: Mapping[str, Any], limit_um: float) -> str:
+    """The deviation surfaces' figures per flank and tooth [um] and their colour scale, as markdown."""
+    rows = ["| flank | tooth | min [um] | max [um] | mean [um] |", "|---|---:|---:|---:|---:|"]
+    for side in SIDES:
+        for k, number in enumerate(topo["teeth"]):
+            d = np.asarray(topo[side]["per_tooth_um"][k], dtype=float)
+            if np.isfinite(d).any():
+                rows.append(f"| {side} | {number} | {np.nanmin(d):+.2f} | {np.nanmax(d):+.2f} | {np.nanmean(d):+.2f} |")
+    return "\n".join(
+        [
+            "# Finished gear: measured flank deviation",
+            "",
+            f"On the measurement's topography grid ({len(topo['L_mm'])} roll lengths x {len(topo['z_mm'])} face "
+            f"positions) of the charted teeth {', '.join(str(t) for t in topo['teeth'])}, along the base tangent, "
+            "+ = excess material (ISO 1328-1 sign).",
+            f"Colours: the topography chart's map and scale ({DEVIATION_CMAP}; the bar in 'Deviation colours'): blue "
+            f"{-limit_um:+.2f} um (missing material), white 0, red {limit_um:+.2f} um (excess material), clipped "
+            "beyond; grey where the probe found no flank.",
+            "",
+            *rows,
+        ]
+    )
 
 
 # ---- 7. the blueprint ------------------------------------------------------------------------------------
@@ -675,21 +756,30 @@ def recording_blueprint(
     series: Mapping[str, Any], chart_stems: Sequence[str], zone: rrb.EyeControls3D | None = None
 ) -> rrb.Blueprint:
     """The cutting zone (blank and cutter filling the view) and the whole machine and the gear beside it in 3D on
-    the left; signals (tabs) above measurement (tabs) on the right. The cutter paths are in the file but hidden (an
-    opaque cage of ~45 turns per pass around the gear)."""
-    signals = [
+    the left; on the right the signals a reviewer reads together stacked on one time axis (sync error, cutting
+    force, motor torques, program segment and pass), the other signals and the measurement in tabs below. The
+    cutter paths are in the file but hidden (an opaque cage of ~45 turns per pass around the gear)."""
+    force = [n for n in series if n.startswith("cutting force")]
+    # stacked on one time axis: what a reviewer reads together (the passes marked in the program's view)
+    stacked = [
         rrb.TimeSeriesView(origin=f"{SIGNALS}/sync_error", name="Sync error [um]"),
+        *(rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{series_entity(n)}", name=n) for n in force),
         rrb.TimeSeriesView(origin=f"{SIGNALS}/torque", name="Motor torques [N m]"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/program", name="Program segment and pass"),
+    ]
+    signals = [
         rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/spindles", name="Spindle speeds B1, B2, TV [rpm]"),
         rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/carriage", name="Carriage P3 [mm]"),
         rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/radial_slide", name="Radial slide X [mm]"),
-        rrb.TimeSeriesView(origin=f"{SIGNALS}/program", name="Program segment"),
     ]
-    signals += [rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{series_entity(n)}", name=n) for n in series]
+    signals += [
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{series_entity(n)}", name=n) for n in series if n not in force
+    ]
     results = [rrb.Spatial2DView(origin=f"{MEASUREMENT}/{_part(s)}", name=s) for s in chart_stems]
     results += [
         rrb.TextDocumentView(origin=f"{MEASUREMENT}/summary", name="ISO 1328 classes"),
         rrb.TextDocumentView(origin=f"{MEASUREMENT}/flank_deviation", name="Flank deviation"),
+        rrb.Spatial2DView(origin=f"{MEASUREMENT}/deviation_colours", name="Deviation colours"),
         rrb.TextLogView(origin=f"{SIGNALS}/program/events", name="Program events"),
         rrb.TextDocumentView(origin=f"{SIGNALS}/legend", name="Signals: names and units"),
     ]
@@ -705,7 +795,12 @@ def recording_blueprint(
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(*spatial, row_shares=[3, 2]),
-            rrb.Vertical(rrb.Tabs(*signals, name="Signals"), rrb.Tabs(*results, name="Measurement")),
+            rrb.Vertical(
+                rrb.Vertical(*stacked, name="Signals on one time axis"),
+                rrb.Tabs(*signals, name="More signals"),
+                rrb.Tabs(*results, name="Measurement"),
+                row_shares=[5, 2, 3],
+            ),
             column_shares=[3, 2],
         ),
         collapse_panels=False,
