@@ -52,8 +52,9 @@ def inertial(body, mass: float, axial: float, transverse: float | None = None) -
     body.explicitinertial = True
 
 
-def visual(body, kind, size, rgba, pos=(0, 0, 0), quat=(1, 0, 0, 0)) -> None:
+def visual(body, kind, size, rgba, pos=(0, 0, 0), quat=(1, 0, 0, 0), name: str = "") -> None:
     body.add_geom(
+        name=name,
         type=kind,
         size=list(size),
         rgba=rgba,

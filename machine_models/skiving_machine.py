@@ -16,7 +16,8 @@ perpendicular of the axes on +x. Bodies and joints (seed 000 notation):
 
 Every drive stage is a fixed tendon ``L = driven - ratio * motor`` (see :mod:`machine_models.drives`).
 Frames for the cutting engine: site ``blank_frame`` (the gear's frame: space 0 centred on +x at B2 = 0)
-and site ``cutter_frame`` (the cutter's frame: rake face at z = 0, tooth 0 on the mesh at B1 = 0).
+and site ``cutter_frame`` (the cutter's frame: rake face at z = 0, tooth 0 on the mesh at B1 = 0). The cutter's
+visual geoms are named in CUTTER_GEOMS.
 Lengths are metres here; the cutting engine works in mm.
 """
 
@@ -46,6 +47,9 @@ from machine_models.parts import (
     visual,
 )
 from machine_models.structure_drives import ChainRatios
+
+#: the visual geoms that draw the cutter as a plain disc (tool_spindle body)
+CUTTER_GEOMS = ("cutter", "cutter_mark")
 
 
 @dataclass(frozen=True)
@@ -119,8 +123,10 @@ def build_spec(
     cutter_mass = STEEL * math.pi * r_cut**2 * width  # the cutter as a disc at its tip diameter (HSS/carbide ~ steel)
     inertial(tool, 12.0 + cutter_mass, params.tool_inertia + cutter_mass * r_cut**2 / 2)
     tool.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.tool_friction)
-    visual(tool, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_cut, width / 2), ORANGE, pos=(0, 0, -width / 2))  # cutter
-    visual(tool, mujoco.mjtGeom.mjGEOM_BOX, (r_cut * 0.9, 0.002, width / 2 + 0.001), DARK, pos=(0, 0, -width / 2))
+    # the cutter as a disc and its angle mark (a recording that knows the cutter draws its teeth instead: CUTTER_GEOMS)
+    visual(tool, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_cut, width / 2), ORANGE, pos=(0, 0, -width / 2), name="cutter")
+    mark = (r_cut * 0.9, 0.002, width / 2 + 0.001)
+    visual(tool, mujoco.mjtGeom.mjGEOM_BOX, mark, DARK, pos=(0, 0, -width / 2), name="cutter_mark")
     visual(
         tool,
         mujoco.mjtGeom.mjGEOM_CYLINDER,

@@ -14,6 +14,7 @@ import pytest
 import trimesh
 from rerun.chunk import RrdReader
 
+from cutting.skiving.edge import make_edge
 from metrology.charts import write_charts
 from metrology.measure import measure_gear
 from metrology.reference_gear import reference_gear_mesh
@@ -58,6 +59,7 @@ def run(tmp_path_factory):
         charts=charts,
         series={"cutting_force": (motion.t, force)},
         rate_hz=RATE,
+        edge=make_edge(job.skiving, "conjugate"),
     )
     return {"job": job, "motion": motion, "path": path, "cut": cut, "perfect": perfect, "measurement": measurement}
 
@@ -121,6 +123,10 @@ def test_entities_and_timeline(run):
     layout = reader.stream(store=blueprint).to_chunks()
     queries = [q for c in layout if c.entity_path.endswith("/ViewContents") for q in column([c], "ViewContents:query")]
     assert ["+ $origin/**", "- $origin/cutter_path/**"] in queries  # the cutter paths hidden by default
+    # sync error, torques and program stacked on one time axis: their x axes linked, no legend boxes over them
+    links = [v for c in layout if c.entity_path.endswith("/TimeAxis") for v in column([c], "TimeAxis:link")]
+    hidden = [v for c in layout if c.entity_path.endswith("/PlotLegend") for v in column([c], "PlotLegend:visible")]
+    assert links.count([2]) >= 3 and hidden.count([False]) >= 3  # 2: LinkAxis.LinkToGlobal
     (target,) = [
         v for c in layout if c.entity_path.endswith("/EyeControls3D") for v in column([c], "EyeControls3D:look_target")
     ]
@@ -394,3 +400,32 @@ def test_every_series_is_drawn_min_max(run):
         if "SeriesLines:aggregation_policy" in c.to_record_batch().schema.names
     ]
     assert len(policies) >= 7 and all(p == [5] for p in policies)  # 5: AggregationPolicy.MinMax
+
+
+def test_the_cutter_is_drawn_with_its_teeth_and_edges(run):
+    """The cutter as it is, not a disc: its z0 relieved teeth (closed bodies under the tool spindle's cutter_frame,
+    each tooth's section receding by the clearance towards the back face) and each tooth's cutting edge in its own
+    rake frame; the model's disc and angle mark are left out."""
+    st = run["job"].skiving
+    frame = "/machine/tool_spindle/cutter_frame"
+    (teeth,) = chunks(run["path"], f"{frame}/teeth", static=True)
+    v = np.array(instances([teeth], "Mesh3D:vertex_positions"), dtype=float)
+    f = np.array(instances([teeth], "Mesh3D:triangle_indices"))
+    mesh = trimesh.Trimesh(v, f, process=False)
+    bodies = mesh.split(only_watertight=True)
+    assert len(bodies) == st.cutter.teeth
+    r = np.hypot(v[:, 0], v[:, 1])
+    tip = st.cutter_tip_diameter / 2
+    assert r.max() == pytest.approx(tip, abs=1e-5)  # (float32) the face's section reaches the tip circle
+    back = np.isclose(v[:, 2], v[:, 2].min()) if st.body_side < 0 else np.isclose(v[:, 2], v[:, 2].max())
+    drop = st.cutter.face_width * math.tan(st.rake.clearance_angle)
+    assert r[back].max() == pytest.approx(tip - drop, abs=1e-5)  # the back face's: the relief's drop lower
+    strips = instances(chunks(run["path"], f"{frame}/edges", static=True), "LineStrips3D:strips")
+    assert len(strips) == st.cutter.teeth
+    for strip, tooth in zip(strips, st.tooth_frames, strict=True):
+        local = (np.array(strip) - tooth[:, 3]) @ tooth[:, :3]
+        assert np.abs(local[:, 2]).max() < 1e-5  # in its rake plane (float32)
+        assert np.hypot(local[:, 0], local[:, 1]).min() >= st.cutter.root_radius - 1e-5  # above the root circle
+    assert r.min() == pytest.approx(st.cutter.root_radius, abs=1e-5)  # the teeth stand on the body's disc
+    entities = {c.entity_path for c in RrdReader(run["path"]).stream().to_chunks()}
+    assert not {"/machine/tool_spindle/cutter", "/machine/tool_spindle/cutter_mark"} & entities

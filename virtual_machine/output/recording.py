@@ -23,6 +23,7 @@ The file carries a default blueprint and no wall clock (no ``log_time``, no reco
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -33,9 +34,12 @@ import mujoco
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+import rerun.blueprint.components as rrbc
 
-from cutting.flank import SIDES, base_tangent_deviation
+from cutting.flank import SIDES, base_tangent_deviation, flank_polar_angle
 from cutting.gear import Gear
+from cutting.skiving.edge import CuttingEdge, edge_polygon
+from machine_models.skiving_machine import CUTTER_GEOMS
 from metrology.charts import DEVIATION_CMAP, deviation_limit, deviation_rgba
 from virtual_machine.output.recorder import APP_ID, TIMELINE, Recorder, send_series
 from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, PassTrajectory
@@ -91,6 +95,7 @@ def write_recording(
     rate_hz: float = 200.0,
     recording_id: str | None = None,
     documents: Mapping[str, str] | None = None,
+    edge: CuttingEdge | None = None,
 ) -> Path:
     """Write one .rrd file of the run with its default blueprint; returns the path.
 
@@ -109,6 +114,8 @@ def write_recording(
     recording_id: the recording's id and name (a run's: :func:`virtual_machine.output.recorder.run_recording_id`;
         None: Rerun's random id)
     documents: texts to read the run with (name -> text, under ``/run/<name>``: the job, the setting sheet)
+    edge: the run's cutting edge: with ``setup`` the cutter is drawn with its teeth (:func:`log_cutter_teeth`)
+        instead of the model's disc
 
     Raises
     ------
@@ -119,11 +126,15 @@ def write_recording(
     _check_inputs(model, motion, snapshots, gear_mesh, series, charts, rate_hz)
     rate_hz = max(rate_hz, smooth_rate(motion))
     path = Path(path)
-    blueprint = recording_blueprint(series, [Path(c).stem for c in charts], cutting_zone(model, setup))
+    motors = [m.split()[0] for m in motor_names(motion.actuators)]
+    blueprint = recording_blueprint(series, [Path(c).stem for c in charts], cutting_zone(model, setup), motors)
     with Recorder(path, APP_ID, recording_id=recording_id, blueprint=blueprint, documents=documents) as recorder:
         rec = recorder.stream
         first_snapshot = min((float(s[0]) for s in snapshots), default=None)
-        log_machine(rec, model, motion, rate_hz, first_snapshot)
+        teeth = setup is not None and edge is not None
+        log_machine(rec, model, motion, rate_hz, first_snapshot, skip=CUTTER_GEOMS if teeth else ())
+        if teeth:
+            log_cutter_teeth(rec, model, setup, edge)
         log_snapshots(rec, model, snapshots, motion)
         log_cutter_paths(rec, motion.passes)
         log_signals(rec, motion, series)
@@ -322,16 +333,21 @@ def _log_blank_model(rec: rr.RecordingStream, entity: str, archetype: Any, hide_
 
 
 def log_machine(
-    rec: rr.RecordingStream, model: mujoco.MjModel, motion: MotionRecord, rate_hz: float, hide_blank_at: float | None
+    rec: rr.RecordingStream,
+    model: mujoco.MjModel,
+    motion: MotionRecord,
+    rate_hz: float,
+    hide_blank_at: float | None,
+    skip: Sequence[str] = (),
 ) -> None:
-    """Part 1: the bodies' visual geoms (static, body frame) and their poses over time (Transform3D at rate_hz; a body
-    that never moves once, static).
+    """Part 1: the bodies' visual geoms (static, body frame; those named in ``skip`` left out) and their poses over
+    time (Transform3D at rate_hz; a body that never moves once, static).
 
     With snapshots of the cut blank the model's blank cylinder is shown from t = 0 until the first snapshot."""
     rec.log(MACHINE, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
     for geom in range(model.ngeom):
         archetype = geom_archetype(model, geom)
-        if archetype is None:
+        if archetype is None or model.geom(geom).name in skip:
             continue
         body = body_path(model, model.geom_bodyid[geom])
         if _is_blank(model, geom):
@@ -351,6 +367,78 @@ def log_machine(
             indexes=times,
             columns=rr.Transform3D.columns(translation=pos[:, body], quaternion=quat[:, body]),
         )
+
+
+# ---- 1b. the cutter with its teeth ----------------------------------------------------------------------------
+#: the relieved teeth are drawn through this many sections from the rake face to the cutter's back face
+TOOTH_SECTIONS = 6
+#: the cutting edges' colour (the report's accent) and line radius [mm]
+EDGE_COLOUR, EDGE_RADIUS = (255, 200, 0, 255), 0.08
+
+
+def log_cutter_teeth(rec: rr.RecordingStream, model: mujoco.MjModel, setup: SkivingSetup, edge: CuttingEdge) -> None:
+    """Part 1b: the cutter as it is, under the tool spindle's ``cutter_frame`` site (static; the spindle turns it):
+    every tooth's relieved body (:func:`relieved_teeth`) on the cutter's body (a disc to the root circle), and its
+    cutting edge above the root as a line in its own rake frame (the
+    rake face, the pitch deviations and the runout of ``setup.tooth_frames``; each tooth's own edge where the teeth
+    differ)."""
+    site = model.site("cutter_frame").id
+    frame = f"{body_path(model, model.site_bodyid[site])}/cutter_frame"
+    pose = rr.Transform3D(translation=model.site_pos[site] * M_TO_MM, quaternion=_xyzw(model.site_quat[site]))
+    rec.log(frame, pose, static=True)
+    vertices, triangles = relieved_teeth(setup, edge)
+    rec.log(f"{frame}/teeth", _mesh3d(vertices, triangles, albedo_factor=(225, 140, 40, 255)), static=True)
+    # the body the teeth stand on: a disc to the teeth's lowest radius, over the face width behind the rake face
+    width = max(float(setup.cutter.face_width), 0.1)
+    hub = float(np.hypot(vertices[:, 0], vertices[:, 1]).min())
+    centre = (0.0, 0.0, float(setup.rake_frame[2, 3]) + setup.body_side * width / 2)
+    body = rr.Cylinders3D(lengths=[width], radii=[hub], centers=[centre], colors=[(200, 120, 35, 255)])
+    rec.log(f"{frame}/body", body, static=True)
+    outlines = edge.tooth_outlines() or (edge.outline,) * setup.cutter.teeth
+    strips = []
+    for tooth, outline in zip(setup.tooth_frames, outlines, strict=True):
+        cutting = outline[np.hypot(outline[:, 0], outline[:, 1]) >= setup.cutter.root_radius]  # above the root
+        strips.append(np.column_stack([cutting, np.zeros(len(cutting))]) @ tooth[:, :3].T + tooth[:, 3])
+    rec.log(f"{frame}/edges", rr.LineStrips3D(strips, colors=[EDGE_COLOUR], radii=EDGE_RADIUS), static=True)
+
+
+def relieved_teeth(setup: SkivingSetup, edge: CuttingEdge, points: int = 24) -> tuple[np.ndarray, np.ndarray]:
+    """The cutter's teeth behind the rake face, in the cutter's frame [mm]: each tooth's section of the cutter with its
+    profile shift reduced by d tan(alpha_a) / mn at TOOTH_SECTIONS depths d from the face to the face width (the
+    conical relief), from the cutter's root circle to the relieved tip, lofted and closed at both ends; turned to
+    each tooth's angle (a picture: the rake face's tilt and the runout are the edges', not the bodies')."""
+    c = setup.cutter
+    face = float(setup.rake_frame[2, 3])
+    ra0 = setup.cutter_tip_diameter / 2
+    sections = []
+    for d in np.linspace(0.0, max(float(c.face_width), 0.1), TOOTH_SECTIONS):
+        drop = d * math.tan(setup.rake.clearance_angle)
+        relieved = dataclasses.replace(c, profile_shift=c.x - drop / c.mn)
+        z = face + setup.body_side * d
+        radii = np.linspace(c.root_radius, ra0 - drop, points)
+        r_eff = np.maximum(radii, c.base_radius)
+        theta = {side: np.asarray(flank_polar_angle(relieved, r_eff, z, side)) for side in ("left", "right")}
+        ring = edge_polygon(radii, theta)
+        sections.append(np.column_stack([ring, np.full(len(ring), z)]))
+    one = np.concatenate(sections)
+    n, s = len(sections[0]), len(sections)
+    j, i = (a.ravel() for a in np.meshgrid(np.arange(s - 1), np.arange(n), indexing="ij"))
+    a, b = j * n + i, j * n + (i + 1) % n
+    tris = [np.stack([a, b, b + n], 1), np.stack([a, b + n, a + n], 1)]
+    ends = [(0, len(one)), ((s - 1) * n, len(one) + 1)]  # fans from each end section's centre
+    one = np.concatenate([one, [sections[0].mean(axis=0)], [sections[-1].mean(axis=0)]])
+    ring = np.arange(n)
+    tris += [np.stack([np.full(n, centre), start + (ring + 1) % n, start + ring], 1) for start, centre in ends[:1]]
+    tris += [np.stack([np.full(n, centre), start + ring, start + (ring + 1) % n], 1) for start, centre in ends[1:]]
+    tooth = np.concatenate(tris)
+    angles = np.arctan2(setup.tooth_frames[:, 1, 0], setup.tooth_frames[:, 0, 0])
+    angles = angles - angles[0]  # tooth 0's section is drawn at its nominal place, the others turned from it
+    verts, faces = [], []
+    for k, angle in enumerate(angles):
+        rot = np.array([[math.cos(angle), -math.sin(angle), 0.0], [math.sin(angle), math.cos(angle), 0.0], [0, 0, 1]])
+        verts.append(one @ rot.T)
+        faces.append(tooth + k * len(one))
+    return np.concatenate(verts), np.concatenate(faces)
 
 
 # ---- 2. the blank as it is cut ---------------------------------------------------------------------------
@@ -753,7 +841,10 @@ def cutting_zone(model: mujoco.MjModel, setup: SkivingSetup | None) -> rrb.EyeCo
 
 
 def recording_blueprint(
-    series: Mapping[str, Any], chart_stems: Sequence[str], zone: rrb.EyeControls3D | None = None
+    series: Mapping[str, Any],
+    chart_stems: Sequence[str],
+    zone: rrb.EyeControls3D | None = None,
+    motors: Sequence[str] = (),
 ) -> rrb.Blueprint:
     """The cutting zone (blank and cutter filling the view) and the whole machine and the gear beside it in 3D on
     the left; on the right the signals a reviewer reads together stacked on one time axis (sync error, cutting
@@ -761,11 +852,16 @@ def recording_blueprint(
     cutter paths are in the file but hidden (an opaque cage of ~45 turns per pass around the gear)."""
     force = [n for n in series if n.startswith("cutting force")]
     # stacked on one time axis: what a reviewer reads together (the passes marked in the program's view)
+    # (their time axes linked: zoomed together; no legend boxes over plots this low: the view names say what the
+    # lines are, in the legend's order and colours, and /signals/legend explains the names)
+    shared = {"axis_x": rrb.TimeAxis(link=rrbc.LinkAxis.LinkToGlobal), "plot_legend": rrb.PlotLegend(visible=False)}
     stacked = [
-        rrb.TimeSeriesView(origin=f"{SIGNALS}/sync_error", name="Sync error [um]"),
-        *(rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{series_entity(n)}", name=n) for n in force),
-        rrb.TimeSeriesView(origin=f"{SIGNALS}/torque", name="Motor torques [N m]"),
-        rrb.TimeSeriesView(origin=f"{SIGNALS}/program", name="Program segment and pass"),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/sync_error", name="Sync error [um]", **shared),
+        *(rrb.TimeSeriesView(origin=f"{SIGNALS}/extra/{series_entity(n)}", name=n, **shared) for n in force),
+        rrb.TimeSeriesView(origin=f"{SIGNALS}/torque", name=f"Motor torques {', '.join(motors)} [N m]", **shared),
+        rrb.TimeSeriesView(
+            origin=f"{SIGNALS}/program", name="Program: segment, cutter can touch the blank, pass being cut", **shared
+        ),
     ]
     signals = [
         rrb.TimeSeriesView(origin=f"{SIGNALS}/axes/spindles", name="Spindle speeds B1, B2, TV [rpm]"),

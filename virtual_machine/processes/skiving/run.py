@@ -278,4 +278,5 @@ def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, cha
         charts=charts,
         series=series,
         **run_identity(job, setting_sheet=sheet_product(job, None).text),
+        edge=sim.edge,
     )
