@@ -187,6 +187,12 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
     assert np.all(np.diff(volumes) < 0)
     gear = trimesh.load_mesh(tmp / "out0" / "gear.stl")
     assert volumes[-1] == pytest.approx(gear.volume, rel=0.005)
+    # the chip being cut marked on the blank: a point per engagement, inside the blank's envelope, while it cuts
+    chip = [c for c in chunks if c.entity_path == "/machine/work_spindle/blank_frame/chip"]
+    marks = np.array([p[0] for c in chip for p in c.to_record_batch().column("Points3D:positions").to_pylist()])
+    g = load_job(tmp / "small.toml").skiving.gear
+    assert len(marks) > 100 and np.all(np.abs(marks[:, 2]) <= g.face_width / 2 + 1e-3)
+    assert np.all(np.hypot(marks[:, 0], marks[:, 1]) <= g.tip_radius + 1e-3)
     # one recording of this run (not merged with another run's in a viewer), with the job and its setting sheet
     (entry,) = RrdReader(tmp / "run.rrd").recordings()
     assert entry.application_id == "skive" and entry.recording_id != "skive" and "-" in entry.recording_id

@@ -96,6 +96,7 @@ def write_recording(
     recording_id: str | None = None,
     documents: Mapping[str, str] | None = None,
     edge: CuttingEdge | None = None,
+    engagements: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
 ) -> Path:
     """Write one .rrd file of the run with its default blueprint; returns the path.
 
@@ -116,6 +117,8 @@ def write_recording(
     documents: texts to read the run with (name -> text, under ``/run/<name>``: the job, the setting sheet)
     edge: the run's cutting edge: with ``setup`` the cutter is drawn with its teeth (:func:`log_cutter_teeth`)
         instead of the model's disc
+    engagements: the chip being cut, (t (n,) [s], where the engaged edge's centroid is in the blank frame (n, 3)
+        [mm], chip volume (n,) [mm^3]): marked on the blank (:func:`log_engagements`)
 
     Raises
     ------
@@ -136,6 +139,8 @@ def write_recording(
         if teeth:
             log_cutter_teeth(rec, model, setup, edge)
         log_snapshots(rec, model, snapshots, motion)
+        if engagements is not None and len(engagements[0]):
+            log_engagements(rec, model, *engagements)
         log_cutter_paths(rec, motion.passes)
         log_signals(rec, motion, series)
         log_measurement(rec, measurement, charts)
@@ -506,6 +511,28 @@ def log_snapshots(
             topology[entity] = np.asarray(triangles)
         shown = entity
     rec.reset_time()
+
+
+#: the mark of the chip being cut: its colour and its radius [mm] for the largest chip (smaller chips by the cube root)
+CHIP_COLOUR, CHIP_RADIUS = (255, 200, 0, 255), 0.8
+
+
+def log_engagements(rec: rr.RecordingStream, model: mujoco.MjModel, t: np.ndarray, point: np.ndarray, volume) -> None:
+    """The chip being cut, on the blank (``.../blank_frame/chip``): at each engagement's time a point where the
+    engaged edge's centroid is, in the edges' colour, sized by the chip's volume (the viewer shows the latest: the
+    current chip); cleared at the last engagement's end."""
+    volume = np.asarray(volume, dtype=float)
+    size = CHIP_RADIUS * np.cbrt(volume / max(float(volume.max()), 1e-12))
+    entity = f"{blank_frame_path(model)}/chip"
+    rec.send_columns(
+        entity,
+        indexes=[rr.TimeColumn(TIMELINE, duration=np.asarray(t, dtype=float))],
+        columns=rr.Points3D.columns(
+            positions=np.asarray(point, dtype=np.float32),
+            radii=size.astype(np.float32),
+            colors=np.tile(np.array(CHIP_COLOUR, dtype=np.uint8), (len(t), 1)),
+        ).partition([1] * len(t)),
+    )
 
 
 # ---- 3. the cutter path ----------------------------------------------------------------------------------

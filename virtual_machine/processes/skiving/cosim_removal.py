@@ -45,6 +45,7 @@ def solid_mesh(solid: mf.Manifold) -> tuple[np.ndarray, np.ndarray]:
     mesh = solid.to_mesh()
     return np.asarray(mesh.vert_properties)[:, :3].copy(), np.asarray(mesh.tri_verts).copy()
 
+
 #: the samples of one passage: t [s from the stroke's start], rot, trans [mm], cutter angle, carriage, centre distance
 Samples = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 Finished = tuple[int, int, Chip | None]  # pass index, passage, chip (None: the tooth stayed clear of the blank)

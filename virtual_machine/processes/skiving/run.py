@@ -279,4 +279,15 @@ def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, cha
         series=series,
         **run_identity(job, setting_sheet=sheet_product(job, None).text),
         edge=sim.edge,
+        engagements=_engagements(sim),
     )
+
+
+def _engagements(sim: CoSimulation) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Each cut engagement at its middle: machine time [s], the engaged edge's centroid in the blank frame [mm], the
+    chip's volume [mm^3] (the recording marks the chip being cut)."""
+    if not sim.loads:
+        return None
+    mids = [(a.load.t[len(a.load.t) // 2], a.load.point[len(a.load.t) // 2], a.load.volume) for a in sim.loads]
+    t, point, volume = zip(*mids, strict=True)
+    return np.array(t), np.array(point), np.array(volume)
