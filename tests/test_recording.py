@@ -154,9 +154,11 @@ def test_row_counts(run):
         assert rows(path, f"/signals/{entity}") == n
     torque = column(chunks(path, "/signals/torque", static=False), "Scalars:scalars")  # 3 instances per row
     assert np.allclose(np.array(torque), motion.torque)
-    for entity, k in (("carriage", 2), ("radial_slide", 3)):  # P3, X [mm]
+    from virtual_machine.output.recording import from_pass_start
+
+    for entity, k in (("carriage", 2), ("radial_slide", 3)):  # P3, X [mm], from each pass's start
         slide = instances(chunks(path, f"/signals/axes/{entity}", static=False), "Scalars:scalars")
-        assert np.allclose(np.ravel(slide), motion.q[:, k])
+        assert np.allclose(np.ravel(slide), from_pass_start(motion, motion.q[:, k]))
     # the spindles' speeds [rpm]: B1, B2 and TV turn as the kinematics say
     speeds = np.array(column(chunks(path, "/signals/axes/spindles", static=False), "Scalars:scalars"))
     assert np.allclose(speeds, np.gradient(motion.q[:, [0, 1, 4]], motion.t, axis=0) * 60 / (2 * math.pi))
@@ -429,3 +431,42 @@ def test_the_cutter_is_drawn_with_its_teeth_and_edges(run):
     assert r.min() == pytest.approx(st.cutter.root_radius, abs=1e-5)  # the teeth stand on the body's disc
     entities = {c.entity_path for c in RrdReader(run["path"]).stream().to_chunks()}
     assert not {"/machine/tool_spindle/cutter", "/machine/tool_spindle/cutter_mark"} & entities
+
+
+def test_view_asks_for_a_viewer_before_the_run_and_says_how_to_start_one(tmp_path):
+    """`skive run --view URL` streams to a viewer: with none answering at URL it is refused before the machine
+    starts (nothing written, exit 2), naming the address and `rerun`; a listening address passes the check."""
+    import socket
+
+    from click.testing import CliRunner
+
+    from cutting.errors import InputError
+    from virtual_machine.cli import main
+    from virtual_machine.output.recorder import check_viewer
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        free = s.getsockname()[1]  # closed again: nothing listens there
+    url = f"rerun+http://127.0.0.1:{free}/proxy"
+    res = CliRunner().invoke(main, ["run", str(JOB), "--out", str(tmp_path / "out"), "--view", url])
+    assert res.exit_code == 2, res.output
+    assert "no Rerun viewer answers there" in res.output and "`rerun`" in res.output and url in res.output
+    assert "machine and cut" not in res.output and not (tmp_path / "out").exists()
+    with pytest.raises(InputError, match="not a Rerun viewer's address"):
+        check_viewer("http://nowhere")
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen()
+        check_viewer(f"rerun+http://127.0.0.1:{server.getsockname()[1]}/proxy")  # something answers: on with the run
+
+
+def test_positions_read_from_each_pass_start():
+    """The carriage and the radial slide are drawn from each pass's start (every feed stroke from 0); before the
+    first pass, from the record's start."""
+    from types import SimpleNamespace
+
+    from virtual_machine.output.recording import from_pass_start
+
+    motion = SimpleNamespace(pass_index=np.array([-1, -1, 0, 0, 0, -1, 1, 1, -1]))
+    values = np.array([5.0, 6.0, 10.0, 9.0, 8.0, 12.0, 20.0, 19.0, 25.0])
+    assert from_pass_start(motion, values).tolist() == [0.0, 1.0, 0.0, -1.0, -2.0, 2.0, 0.0, -1.0, 5.0]

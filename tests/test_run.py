@@ -203,6 +203,7 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
 
     assert text("/run/job") == (tmp / "small.toml").read_text()
     assert "kx" in text("/run/setting_sheet") and "passes:" in text("/run/setting_sheet")
+    assert '"work_drive"' in text("/run/machine_parameters")  # the machine as simulated, every figure
     # every signal drawn min-max, and the cutting force's largest sample is the run's peak force
     policies = [
         c.to_record_batch().column("SeriesLines:aggregation_policy").to_pylist()[0]
@@ -214,6 +215,14 @@ def test_recording_has_the_cut_and_the_forces(runs) -> None:
     peak = max(max(v) for c in force for v in c.to_record_batch().column("Scalars:scalars").to_pylist())
     doc = json.loads((tmp / "out0" / "measurement.json").read_text())
     assert peak == pytest.approx(doc["run"]["forces"]["peak_force_N"], rel=0.01)
+    # and the work-axis torque's least and largest: its negative part too
+    torque = [
+        c for c in chunks if c.entity_path == "/signals/extra/cutting_torque_about_the_work_axis" and not c.is_static
+    ]
+    values = [v[0] for c in torque for v in c.to_record_batch().column("Scalars:scalars").to_pylist()]
+    forces = doc["run"]["forces"]
+    assert min(values) == pytest.approx(forces["work_torque_min_Nm"], rel=0.01)
+    assert max(values) == pytest.approx(forces["work_torque_max_Nm"], rel=0.01)
 
 
 @pytest.mark.slow

@@ -21,7 +21,7 @@ from virtual_machine.output.formatting import format_measurement
 from virtual_machine.output.json_file import json_text
 from virtual_machine.output.progress import Progress, Reporter
 from virtual_machine.processes import process_for
-from virtual_machine.processes.options import REMOVALS
+from virtual_machine.processes.options import DEFAULT_VIEWER, REMOVALS
 
 MESH_TOLERANCE_HELP = (
     "Sweep error of the finishing pass's manifold solid [um] (default: the job's process.sweep_error), and the most "
@@ -142,6 +142,13 @@ def cut(
 @click.option("--workers", type=click.IntRange(1, 64), help="Removal processes (default: one per core, at most 8).")
 @click.option("--mesh-tolerance", type=click.FloatRange(min=0.0, min_open=True), metavar="UM", help=MESH_TOLERANCE_HELP)
 @click.option("--removal", type=click.Choice(REMOVALS), help=REMOVAL_HELP)
+@click.option(
+    "--view",
+    metavar="URL",
+    is_flag=False,
+    flag_value=DEFAULT_VIEWER,
+    help=f"Stream the run to a Rerun viewer as it goes, then its recording (alone: {DEFAULT_VIEWER}, `rerun`'s).",
+)
 def run(
     job: Path | None,
     out: Path,
@@ -149,8 +156,9 @@ def run(
     workers: int | None,
     mesh_tolerance: float | None,
     removal: str | None,
+    view: str | None,
 ) -> None:
-    options = {"rrd": rrd, "workers": workers, "mesh_tolerance": mesh_tolerance, "removal": removal}
+    options = {"rrd": rrd, "workers": workers, "mesh_tolerance": mesh_tolerance, "removal": removal, "view": view}
     click.echo(_perform("run", job or default_job_path(), out, **options).text)
 
 

@@ -97,6 +97,7 @@ def write_recording(
     documents: Mapping[str, str] | None = None,
     edge: CuttingEdge | None = None,
     engagements: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    view: str | None = None,
 ) -> Path:
     """Write one .rrd file of the run with its default blueprint; returns the path.
 
@@ -119,6 +120,7 @@ def write_recording(
         instead of the model's disc
     engagements: the chip being cut, (t (n,) [s], where the engaged edge's centroid is in the blank frame (n, 3)
         [mm], chip volume (n,) [mm^3]): marked on the blank (:func:`log_engagements`)
+    view: also stream the recording to the Rerun viewer at this address
 
     Raises
     ------
@@ -131,7 +133,9 @@ def write_recording(
     path = Path(path)
     motors = [m.split()[0] for m in motor_names(motion.actuators)]
     blueprint = recording_blueprint(series, [Path(c).stem for c in charts], cutting_zone(model, setup), motors)
-    with Recorder(path, APP_ID, recording_id=recording_id, blueprint=blueprint, documents=documents) as recorder:
+    with Recorder(
+        path, APP_ID, recording_id=recording_id, blueprint=blueprint, documents=documents, view=view
+    ) as recorder:
         rec = recorder.stream
         first_snapshot = min((float(s[0]) for s in snapshots), default=None)
         teeth = setup is not None and edge is not None
@@ -609,6 +613,15 @@ def signals_legend(actuators: Sequence[str]) -> str:
     return "\n".join(lines)
 
 
+def from_pass_start(motion: MotionRecord, values: np.ndarray) -> np.ndarray:
+    """``values`` less their value where the pass each sample belongs to began (the last pass begun at or before
+    it; before the first, the record's start): every feed stroke reads from 0, so the passes compare."""
+    k = np.asarray(motion.pass_index)
+    begins = (k >= 0) & np.r_[True, k[1:] != k[:-1]]
+    anchor = np.maximum.accumulate(np.where(begins, np.arange(len(k)), 0))
+    return np.asarray(values) - np.asarray(values)[anchor]
+
+
 def log_signals(
     rec: rr.RecordingStream, motion: MotionRecord, series: Mapping[str, tuple[np.ndarray, np.ndarray]]
 ) -> None:
@@ -620,8 +633,9 @@ def log_signals(
     rpm = np.gradient(motion.q[:, columns], t, axis=0) * 60 / (2 * math.pi) if len(t) > 1 else motion.q[:, columns] * 0
     send_series(rec, f"{SIGNALS}/axes/spindles", t, rpm, [f"{a} {ELEMENTS[a]} [rpm]" for a in SPINDLES], LINE_COLOURS)
     for axis, entity in zip(LINEAR_AXES, ("carriage", "radial_slide"), strict=True):
-        label = [f"{axis} {ELEMENTS[axis]} [mm]"]
-        send_series(rec, f"{SIGNALS}/axes/{entity}", t, motion.q[:, AXES.index(axis)], label, LINE_COLOURS)
+        label = [f"{axis} {ELEMENTS[axis]}, from the pass's start [mm]"]
+        values = from_pass_start(motion, motion.q[:, AXES.index(axis)])
+        send_series(rec, f"{SIGNALS}/axes/{entity}", t, values, label, LINE_COLOURS)
     send_series(rec, f"{SIGNALS}/sync_error", t, motion.sync_um, ["sync error [um]"], LINE_COLOURS)
     names = [f"{m} [N m]" for m in motor_names(motion.actuators)]
     send_series(rec, f"{SIGNALS}/torque", t, motion.torque, names, LINE_COLOURS)

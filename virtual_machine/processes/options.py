@@ -79,15 +79,18 @@ class SkivingCutOptions(StageOptions):
 
 @dataclass(frozen=True)
 class SkivingRunOptions(RecordedOptions):
-    """The simulated machine cuts the gear: the manifold removal's ``workers``, the ``removal`` and the mesh's
-    ``mesh_tolerance`` [um]."""
+    """The simulated machine cuts the gear: the manifold removal's ``workers``, the ``removal``, the mesh's
+    ``mesh_tolerance`` [um] and ``view``, a Rerun viewer's address to stream the run to."""
 
     workers: int | None = None
     removal: str = "dexel"
     mesh_tolerance: float | None = None
+    view: str | None = None
 
 
 REMOVALS = ("dexel", "manifold")
+#: where a Rerun viewer started with no arguments (`rerun`) listens for recordings (`skive run --view`)
+DEFAULT_VIEWER = "rerun+http://127.0.0.1:9876/proxy"
 
 
 def option_flag(name: str) -> str:

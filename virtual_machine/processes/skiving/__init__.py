@@ -180,6 +180,10 @@ class Skiving(Process):
 
         o = self._options("run", options)
         rrd, workers, removal = o.rrd, o.workers, o.removal
+        if o.view is not None:  # before anything runs: a run streamed to no viewer is refused, nothing lost
+            from virtual_machine.output.recorder import check_viewer
+
+            check_viewer(o.view)
         job = with_mesh_tolerance(job, None if o.mesh_tolerance is None else o.mesh_tolerance * 1e-3)
         rep = reporter_or_default(reporter)
         plan = SkivingPlan.of(job)
@@ -195,7 +199,7 @@ class Skiving(Process):
                 rep.stage(name)
 
         with rep:
-            doc = run_job(job, out, rrd, progress, announce, workers, None, removal, plan)
+            doc = run_job(job, out, rrd, progress, announce, workers, None, removal, plan, view=o.view)
         lines = [format_measurement(doc, str(out / "gear.stl"))]
         if doc.get("modification_path"):
             lines.append(format_path(doc["modification_path"]))

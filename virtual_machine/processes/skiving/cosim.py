@@ -200,13 +200,24 @@ class CuttingRun:
         self._seen = 0  # machine rows read so far
         self.t_cut = 0.0  # wall seconds in the removal (or waiting for its workers)
 
-    def run(self, progress: Callable[[float, int], None] | None = None) -> CoSimulation:
-        """The whole program: the machine a chunk at a time, each chunk's passages cut and their chips applied."""
+    def run(
+        self,
+        progress: Callable[[float, int], None] | None = None,
+        live: Callable[[np.ndarray, np.ndarray], None] | None = None,
+    ) -> CoSimulation:
+        """The whole program: the machine a chunk at a time, each chunk's passages cut and their chips applied;
+        ``live(machine rows, load rows)`` takes each chunk's new rows (a viewer following the run)."""
         t_start = time.perf_counter()
+        loads_seen = 0
         try:
             while True:
+                seen = self._seen
                 alive = self.machine.advance(self.machine.time + self.chunk)
                 self._cut_chunk(alive, progress)
+                if live is not None:
+                    loads = np.asarray(self.machine.load.rows[loads_seen:]).reshape(-1, 5)
+                    loads_seen = len(self.machine.load.rows)
+                    live(np.asarray(self.machine.rows[seen : self._seen]), loads)
                 if not alive:
                     break
             result = self._close()
@@ -354,6 +365,7 @@ def cosimulate(
     correction: PathCorrection | None = None,
     removal: str = "dexel",
     plan: SkivingPlan | None = None,
+    live: Callable[[np.ndarray, np.ndarray], None] | None = None,
 ) -> CoSimulation:
     """Run the job's machine and cut its gear from the motion it really makes, with the chips' forces acting on
     the machine (``forces=False``: the cut follows the machine, no force acts back). ``progress(machine_time,
@@ -363,11 +375,12 @@ def cosimulate(
     path corrections of a flank modification (virtual_machine/processes/skiving/modification_path.py), made by the
     CNC. ``removal``: "dexel" (the default: the dexel workpiece, cut a few passages at a time in this process;
     ``workers`` is moot) or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes).
-    ``plan``: the job's setup, ideal passes and setting sheets if an earlier stage made them."""
+    ``plan``: the job's setup, ideal passes and setting sheets if an earlier stage made them. ``live(machine rows,
+    load rows)``: each chunk's new rows as the run goes (:class:`virtual_machine.output.recorder.LiveView`)."""
     run = CuttingRun(
         job, params, edge_kind, forces, servo_substeps, snapshots_per_pass, workers, correction, removal, plan
     )
-    return run.run(progress)
+    return run.run(progress, live)
 
 
 #: passages the machine runs ahead of the dexel removal's newest chip: none. The chips and the cut would not depend

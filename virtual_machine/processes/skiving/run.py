@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import json
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -60,13 +61,16 @@ def run_job(
     mesh_tolerance: float | None = None,
     removal: str = "dexel",
     plan: SkivingPlan | None = None,
+    view: str | None = None,
 ) -> dict[str, Any]:
     """Run ``job`` (or the job file at that path); write its files into ``out``; return the measurement document
     with ``run``.
     ``progress(machine_time, passages)`` follows the co-simulation, ``stage(name)`` announces each stage;
     ``workers``: the manifold removal's processes (default one per core); ``mesh_tolerance`` [mm]: the solid's
     tolerance (default the job's process.sweep_error); ``removal``: "dexel" or "manifold" (the reference); ``plan``:
-    the job's setup, ideal passes and setting sheets if the caller made them (every stage of the run takes it)."""
+    the job's setup, ideal passes and setting sheets if the caller made them (every stage of the run takes it);
+    ``view``: a Rerun viewer's address: the run's signals streamed to it as the machine runs, then the recording
+    (written to ``rrd``, or a scratch file when none is given); refused before anything runs when no viewer answers."""
     announce = stage or (lambda name: None)
     durations: dict[str, float] = {}
     given = job if isinstance(job, Job) else load_job(job)
@@ -74,6 +78,14 @@ def run_job(
     # the sweep error and the STL tolerance change neither the passes nor the setting sheets
     plan = plan_of(given, plan) if job is given else dataclasses.replace(plan_of(given, plan), job=job)
     path = Path(job.source)
+    identity = run_identity(job)  # the run's recording id: from its start
+    live = None
+    if view is not None:
+        from virtual_machine.output.recorder import LiveView
+
+        live = LiveView(view, identity["recording_id"])
+    if view is not None and rrd is None:
+        rrd = out / "view.rrd.scratch"  # the recording the viewer gets is written somewhere: here, removed after
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     workers = workers or default_workers()
@@ -81,9 +93,19 @@ def run_job(
     modification_path = None
     if job.modification is None:
         announce("machine and cut")
-        sim = cosimulate(
-            job, progress=progress, snapshots_per_pass=snapshots, workers=workers, removal=removal, plan=plan
-        )
+        try:
+            sim = cosimulate(
+                job,
+                progress=progress,
+                snapshots_per_pass=snapshots,
+                workers=workers,
+                removal=removal,
+                plan=plan,
+                live=live,
+            )
+        finally:
+            if live is not None:
+                live.close()
     else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one
         sim, modification_path = _modification_runs(job, plan, announce, snapshots, workers, removal)
     durations["machine and cut"] = time.perf_counter() - t0
@@ -108,8 +130,10 @@ def run_job(
     if rrd is not None:
         announce("recording")
         t0 = time.perf_counter()
-        _record(rrd, job, sim, mesh, measurement, [*charts, run_png])
+        _record(rrd, job, sim, mesh, measurement, [*charts, run_png], identity, view)
         durations["recording"] = time.perf_counter() - t0
+        if rrd.name.endswith(".scratch"):
+            rrd.unlink(missing_ok=True)
     if modification_path is not None:
         measurement["modification_path"] = modification_path
     doc = finite(measurement)
@@ -231,6 +255,9 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             f"at most {sim.lag + 1} engagements earlier plus the engagements in the cut",
             "peak_force_N": float(force.max()),
             "peak_work_torque_Nm": float(np.abs(rows[:, 4]).max()) if len(rows) else 0.0,
+            # its range (the cut pulls the work spindle back and forth as teeth enter and leave)
+            "work_torque_min_Nm": float(rows[:, 4].min()) if len(rows) else 0.0,
+            "work_torque_max_Nm": float(rows[:, 4].max()) if len(rows) else 0.0,
             "chip_energy_J": float(sum(a.load.energy for a in loads)),
             "load_work_J": sim.load_work,
             "median_chip_thickness_mm": float(np.median([a.load.thickness for a in loads])) if loads else 0.0,
@@ -254,7 +281,16 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
     }
 
 
-def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, charts: list[Path]) -> None:
+def _record(
+    rrd: Path,
+    job: Job,
+    sim: CoSimulation,
+    mesh,
+    measurement: dict,
+    charts: list[Path],
+    identity: dict[str, Any],
+    view: str | None = None,
+) -> None:
     from virtual_machine.output.recording import write_recording
 
     rows = sim.load_rows
@@ -277,10 +313,26 @@ def _record(rrd: Path, job: Job, sim: CoSimulation, mesh, measurement: dict, cha
         measurement=measurement,
         charts=charts,
         series=series,
-        **run_identity(job, setting_sheet=sheet_product(job, None).text),
+        recording_id=identity["recording_id"],
+        documents={
+            **identity["documents"],
+            "setting_sheet": sheet_product(job, None).text,
+            "machine_parameters": machine_parameters_text(job),
+        },
         edge=sim.edge,
+        view=view,
         engagements=_engagements(sim),
     )
+
+
+def machine_parameters_text(job: Job) -> str:
+    """The machine the run simulated: its size's parameters with the job's [machine.model] on top, every figure (SI
+    units as the model takes them), as JSON text for the recording."""
+    from virtual_machine.setting.machine_layout import machine_params, machine_size
+
+    params = dataclasses.asdict(machine_params(job))
+    head = f"machine size {machine_size(job)!r} with the job's [machine.model]; SI units (m, kg, N, s, rad)\n"
+    return head + json.dumps(params, indent=1, default=str)
 
 
 def _engagements(sim: CoSimulation) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
