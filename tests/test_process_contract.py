@@ -39,6 +39,7 @@ VALUES = {
     "trajectory": Path("trajectory.npz"),
     "removal": "manifold",
     "mesh_tolerance": 5.0,
+    "view": "rerun+http://127.0.0.1:9876/proxy",
 }
 CASES = sorted(PROCESSES.items())
 
