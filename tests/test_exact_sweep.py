@@ -379,13 +379,13 @@ def test_the_bucketed_outline_lookup_is_numpys_interp():
     """The compiled outline margin finds a chain's segment from a bucket of x instead of bisecting: on the default
     job's edge, at 20k x across and beyond the chains (ends, vertices, repeated x), it gives np.interp's value bit
     for bit, so the margin is Outline.margin's."""
-    from cutting.skiving.exact_solve import _interp_from, compiled_outline, outline_margin
+    from cutting.skiving.exact_solve import _interp_from, outline_margin, stacked_outlines, with_rows
     from cutting.skiving.exact_sweep import Outline
     from virtual_machine.job import default_job_path, load_job
 
     job = load_job(default_job_path())
     outline = Outline(make_edge(job.skiving, "conjugate").outline)
-    packed = compiled_outline(outline)
+    packed = with_rows(stacked_outlines([outline]), None)
     lx, ly, ux, uy, x0, x1, lb, l0, ls, ub, u0, us, _ = (a[0] if np.ndim(a) else a for a in packed)
     rng = np.random.default_rng(7)
     x = np.concatenate([rng.uniform(x0 - 0.1, x1 + 0.1, 20000), lx, ux, [x0, x1, np.nextafter(x1, 0.0)]])

@@ -345,14 +345,6 @@ def _plane(table, g, j, q0, q1, q2):
 OUTLINE_BUCKETS = 512
 
 
-def compiled_outline(outlines, rows: np.ndarray | None = None) -> tuple:
-    """What :func:`outline_margin` reads of :class:`cutting.skiving.exact_sweep.Outline` ``outlines`` (one, or a
-    sequence: the outlines passages cut with) and ``rows`` (per passage g, the index of its outline; default all 0):
-    :func:`stacked_outlines` and the rows."""
-    outlines = [outlines] if hasattr(outlines, "lower") else list(outlines)
-    return with_rows(stacked_outlines(outlines), rows)
-
-
 def with_rows(stacked: tuple, rows: np.ndarray | None) -> tuple:
     """:func:`stacked_outlines` with each passage's row (None: every passage reads row 0)."""
     rows = np.zeros(1, np.int64) if rows is None else np.ascontiguousarray(rows, dtype=np.int64)

@@ -228,9 +228,15 @@ class ToothOutlines:
 _TOOTH_OUTLINES: dict[bytes, ToothOutlines] = {}
 
 
+def edge_key(edge: CuttingEdge) -> bytes:
+    """What tells an edge's polygons apart: its outline and each tooth's own flanks (a cache's key)."""
+    teeth = (t[side].tobytes() for t in edge.teeth for side in ("left", "right"))
+    return b"".join([np.ascontiguousarray(edge.outline, dtype=float).tobytes(), *teeth])
+
+
 def tooth_outlines_of(edge: CuttingEdge) -> ToothOutlines:
     """The :class:`ToothOutlines` of ``edge``, one per edge's polygons (kept)."""
-    key = b"".join([edge.outline.tobytes(), *(t[s].tobytes() for t in edge.teeth for s in ("left", "right"))])
+    key = edge_key(edge)
     if key not in _TOOTH_OUTLINES:
         if len(_TOOTH_OUTLINES) >= 8:
             _TOOTH_OUTLINES.pop(next(iter(_TOOTH_OUTLINES)))

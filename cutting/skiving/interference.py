@@ -27,6 +27,7 @@ import numpy as np
 
 from cutting.errors import InputError, Problem
 from cutting.flank import flank_polar_angle, tooth_centre_angle
+from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge, make_edge, tooth_intrusion
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.tooling import inverse
@@ -56,10 +57,17 @@ def body_depths(setup: SkivingSetup) -> np.ndarray:
     return np.geomspace(0.01, width, 12)
 
 
+def relieved_cutter(setup: SkivingSetup, depth: float) -> tuple[Gear, float]:
+    """The cutter's section ``depth`` [mm] behind the rake face under the conical relief: the cutter with its profile
+    shift reduced by the tip's drop d tan(alpha_a) / mn, and that drop [mm]."""
+    c = setup.cutter
+    drop = depth * math.tan(setup.rake.clearance_angle)
+    return replace(c, profile_shift=c.x - drop / c.mn), drop
+
+
 def relieved_points(setup: SkivingSetup, edge: CuttingEdge, depths: np.ndarray) -> RelievedPoints:
     """The relieved tooth behind every edge point at ``depths`` (see the module docstring)."""
     c, q = setup.cutter, setup.rake_frame
-    a = setup.rake.clearance_angle
     frames = edge_frames(setup, edge, Relief.of(setup))
     p = frames.points @ q[:, :3].T + q[:, 3]  # the edge in the cutter's frame
     rho, theta = np.hypot(p[:, 0], p[:, 1]), np.arctan2(p[:, 1], p[:, 0])
@@ -67,8 +75,7 @@ def relieved_points(setup: SkivingSetup, edge: CuttingEdge, depths: np.ndarray) 
     ra0 = setup.cutter_tip_diameter / 2
     pts, dep, part, pos = [], [], [], []
     for d in depths:
-        drop = d * math.tan(a)
-        relieved = replace(c, profile_shift=c.x - drop / c.mn)
+        relieved, drop = relieved_cutter(setup, d)
         z = p[:, 2] + setup.body_side * d
         for name in ("left", "right", "tip"):
             sel = frames.part == name

@@ -17,7 +17,7 @@ from cutting.errors import InputError, Problem
 from cutting.flank import flank_normals, flank_points
 from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge, contact_radius, envelope_bound, mate_flank
-from cutting.skiving.exact_sweep import PassTable, SweptVolumes, tooth_spread
+from cutting.skiving.exact_sweep import PassTable, SweptVolumes, edge_key, tooth_spread
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.passages import in_blank_envelope, passage_range, tooth_pose
 from cutting.skiving.trajectory import PassMotion, ideal_passes
@@ -519,7 +519,7 @@ def working_angle_maps(
     """:func:`passage_angles` of every pass (the middle passage of the ideal motion), with the job's relief; the chip
     thickness on every ``stride`` = (instants, edge points) of the map. Kept for the last few setups and edges (a
     setting sheet per machine structure, a cut and its run ask for the same maps; the maps are not changed)."""
-    key = (setup, edge.kind, np.ascontiguousarray(edge.outline, dtype=float).tobytes(), tuple(stride))
+    key = (setup, edge.kind, edge_key(edge), tuple(stride))  # each tooth's own flanks too: they cut the stock
     if key not in _MAPS:
         motions = ideal_passes(setup)
         relief = Relief.of(setup)

@@ -23,7 +23,6 @@ The file carries a default blueprint and no wall clock (no ``log_time``, no reco
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -39,6 +38,7 @@ import rerun.blueprint.components as rrbc
 from cutting.flank import SIDES, base_tangent_deviation, flank_polar_angle
 from cutting.gear import Gear
 from cutting.skiving.edge import CuttingEdge, edge_polygon
+from cutting.skiving.interference import relieved_cutter
 from machine_models.skiving_machine import CUTTER_GEOMS
 from metrology.charts import DEVIATION_CMAP, deviation_limit, deviation_rgba
 from virtual_machine.output.recorder import APP_ID, TIMELINE, Recorder, send_series
@@ -381,16 +381,15 @@ def log_machine(
 # ---- 1b. the cutter with its teeth ----------------------------------------------------------------------------
 #: the relieved teeth are drawn through this many sections from the rake face to the cutter's back face
 TOOTH_SECTIONS = 6
-#: the cutting edges' colour (the report's accent) and line radius [mm]
+#: the cutting edges' colour (yellow: apart from the orange teeth) and line radius [mm]
 EDGE_COLOUR, EDGE_RADIUS = (255, 200, 0, 255), 0.08
 
 
 def log_cutter_teeth(rec: rr.RecordingStream, model: mujoco.MjModel, setup: SkivingSetup, edge: CuttingEdge) -> None:
     """Part 1b: the cutter as it is, under the tool spindle's ``cutter_frame`` site (static; the spindle turns it):
     every tooth's relieved body (:func:`relieved_teeth`) on the cutter's body (a disc to the root circle), and its
-    cutting edge above the root as a line in its own rake frame (the
-    rake face, the pitch deviations and the runout of ``setup.tooth_frames``; each tooth's own edge where the teeth
-    differ)."""
+    cutting edge above the root as a line in its own rake frame (the rake face, the pitch deviations and the runout
+    of ``setup.tooth_frames``; each tooth's own edge where the teeth differ)."""
     site = model.site("cutter_frame").id
     frame = f"{body_path(model, model.site_bodyid[site])}/cutter_frame"
     pose = rr.Transform3D(translation=model.site_pos[site] * M_TO_MM, quaternion=_xyzw(model.site_quat[site]))
@@ -421,8 +420,7 @@ def relieved_teeth(setup: SkivingSetup, edge: CuttingEdge, points: int = 24) -> 
     ra0 = setup.cutter_tip_diameter / 2
     sections = []
     for d in np.linspace(0.0, max(float(c.face_width), 0.1), TOOTH_SECTIONS):
-        drop = d * math.tan(setup.rake.clearance_angle)
-        relieved = dataclasses.replace(c, profile_shift=c.x - drop / c.mn)
+        relieved, drop = relieved_cutter(setup, float(d))
         z = face + setup.body_side * d
         radii = np.linspace(c.root_radius, ra0 - drop, points)
         r_eff = np.maximum(radii, c.base_radius)
@@ -434,11 +432,12 @@ def relieved_teeth(setup: SkivingSetup, edge: CuttingEdge, points: int = 24) -> 
     j, i = (a.ravel() for a in np.meshgrid(np.arange(s - 1), np.arange(n), indexing="ij"))
     a, b = j * n + i, j * n + (i + 1) % n
     tris = [np.stack([a, b, b + n], 1), np.stack([a, b + n, a + n], 1)]
-    ends = [(0, len(one)), ((s - 1) * n, len(one) + 1)]  # fans from each end section's centre
+    # the end sections closed by fans from their centres (added after the sections), wound outwards
+    face_centre, back_centre = len(one), len(one) + 1
     one = np.concatenate([one, [sections[0].mean(axis=0)], [sections[-1].mean(axis=0)]])
-    ring = np.arange(n)
-    tris += [np.stack([np.full(n, centre), start + (ring + 1) % n, start + ring], 1) for start, centre in ends[:1]]
-    tris += [np.stack([np.full(n, centre), start + ring, start + (ring + 1) % n], 1) for start, centre in ends[1:]]
+    ring, nxt, back = np.arange(n), (np.arange(n) + 1) % n, (s - 1) * n
+    tris.append(np.stack([np.full(n, face_centre), nxt, ring], 1))
+    tris.append(np.stack([np.full(n, back_centre), back + ring, back + nxt], 1))
     tooth = np.concatenate(tris)
     angles = np.arctan2(setup.tooth_frames[:, 1, 0], setup.tooth_frames[:, 0, 0])
     angles = angles - angles[0]  # tooth 0's section is drawn at its nominal place, the others turned from it
@@ -524,7 +523,7 @@ CHIP_COLOUR, CHIP_RADIUS = (255, 200, 0, 255), 0.8
 def log_engagements(rec: rr.RecordingStream, model: mujoco.MjModel, t: np.ndarray, point: np.ndarray, volume) -> None:
     """The chip being cut, on the blank (``.../blank_frame/chip``): at each engagement's time a point where the
     engaged edge's centroid is, in the edges' colour, sized by the chip's volume (the viewer shows the latest: the
-    current chip); cleared at the last engagement's end."""
+    current chip; between passes the last one stays until the next pass cuts)."""
     volume = np.asarray(volume, dtype=float)
     size = CHIP_RADIUS * np.cbrt(volume / max(float(volume.max()), 1e-12))
     entity = f"{blank_frame_path(model)}/chip"

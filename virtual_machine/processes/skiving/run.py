@@ -91,9 +91,9 @@ def run_job(
     workers = workers or default_workers()
     snapshots = SNAPSHOTS_PER_PASS if rrd else 0
     modification_path = None
-    if job.modification is None:
-        announce("machine and cut")
-        try:
+    try:
+        if job.modification is None:
+            announce("machine and cut")
             sim = cosimulate(
                 job,
                 progress=progress,
@@ -103,11 +103,11 @@ def run_job(
                 plan=plan,
                 live=live,
             )
-        finally:
-            if live is not None:
-                live.close()
-    else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one
-        sim, modification_path = _modification_runs(job, plan, announce, snapshots, workers, removal)
+        else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one (not streamed)
+            sim, modification_path = _modification_runs(job, plan, announce, snapshots, workers, removal)
+    finally:
+        if live is not None:
+            live.close()
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
@@ -124,8 +124,8 @@ def run_job(
     announce("report")
     t0 = time.perf_counter()
     charts = write_charts(out / "charts", measurement) + write_cutter_charts(out / "charts", measurement)
-    chips = [(a.load.t[len(a.load.t) // 2], a.load.volume) for a in sim.loads]
-    run_png = run_chart(out / "charts" / "run.png", sim.record, sim.load_rows, chips)
+    t_mid, _, volume = engagement_middles(sim)
+    run_png = run_chart(out / "charts" / "run.png", sim.record, sim.load_rows, list(zip(t_mid, volume, strict=True)))
     durations["report"] = time.perf_counter() - t0
     if rrd is not None:
         announce("recording")
@@ -298,11 +298,9 @@ def _record(
     if rows is not None and len(rows):
         series["cutting force [N]"] = (rows[:, 0], np.linalg.norm(rows[:, 1:4], axis=1))
         series["cutting torque about the work axis [N m]"] = (rows[:, 0], rows[:, 4])
+    middles = engagement_middles(sim)
     if sim.loads:
-        series["chip volume [mm^3]"] = (
-            np.array([a.load.t[len(a.load.t) // 2] for a in sim.loads]),
-            np.array([a.load.volume for a in sim.loads]),
-        )
+        series["chip volume [mm^3]"] = (middles[0], middles[2])
     write_recording(
         rrd,
         model_xml=sim.record.model_xml,
@@ -321,7 +319,7 @@ def _record(
         },
         edge=sim.edge,
         view=view,
-        engagements=_engagements(sim),
+        engagements=middles if sim.loads else None,
     )
 
 
@@ -335,11 +333,10 @@ def machine_parameters_text(job: Job) -> str:
     return head + json.dumps(params, indent=1, default=str)
 
 
-def _engagements(sim: CoSimulation) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """Each cut engagement at its middle: machine time [s], the engaged edge's centroid in the blank frame [mm], the
-    chip's volume [mm^3] (the recording marks the chip being cut)."""
-    if not sim.loads:
-        return None
-    mids = [(a.load.t[len(a.load.t) // 2], a.load.point[len(a.load.t) // 2], a.load.volume) for a in sim.loads]
-    t, point, volume = zip(*mids, strict=True)
-    return np.array(t), np.array(point), np.array(volume)
+def engagement_middles(sim: CoSimulation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each cut engagement at its middle sample: machine time [s] (n,), the engaged edge's centroid in the blank
+    frame [mm] (n, 3), the chip's volume [mm^3] (n,): the run chart's and the recording's chips."""
+    mid = [len(a.load.t) // 2 for a in sim.loads]
+    t = np.array([a.load.t[k] for a, k in zip(sim.loads, mid, strict=True)], dtype=float)
+    point = np.array([a.load.point[k] for a, k in zip(sim.loads, mid, strict=True)], dtype=float).reshape(-1, 3)
+    return t, point, np.array([a.load.volume for a in sim.loads], dtype=float)
