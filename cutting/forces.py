@@ -12,8 +12,10 @@ workpiece at each instant is Kienzle's  Fc = kc(h) * b * h  distributed along th
 pushing the material along its own velocity (the tool drags the chip with it); the cutter feels the opposite.
 Its work over the engagement is exactly kc(h) * V: the chip's specific energy times its volume.
 
-Only the main cutting force is modelled (no feed or passive components: their ratios to Fc are not in the
-material table).
+:func:`engagement_load` with a :class:`cutting.oblique.ObliqueForces` model (the run's) gives each engaged edge
+element the three components of oblique cutting (cutting along its velocity, thrust normal to the cut surface,
+passive along the edge) at the element's own working normal rake and inclination (:func:`oblique_sums`), with the
+rounded edge's ploughing; with a :class:`cutting.materials.Material` alone, Kienzle's main force at a fixed rake.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from cutting.materials import Material, rake_factor
+from cutting.oblique import ObliqueForces
 from cutting.skiving.sweep import PoseFunction, place, place_few
 
 
@@ -42,7 +45,9 @@ class EngagementLoad:
     moment: np.ndarray
     volume: float  # chip volume [mm^3]
     thickness: float  # mean uncut chip thickness h [mm]
-    kc: float  # specific cutting force used [N/mm^2]
+    kc: float  # specific cutting force used [N/mm^2] (oblique: the chip's work over its volume)
+    #: (n, 3) [N]: the sums of the elements' cutting, thrust and passive components (oblique model only)
+    components: np.ndarray | None = None
 
     @property
     def energy(self) -> float:
@@ -73,7 +78,9 @@ class EngagementLoad:
 
     def shifted(self, dt: float) -> EngagementLoad:
         """The same load ``dt`` seconds later (the prediction for the next tooth: one cutter pitch on)."""
-        return EngagementLoad(self.t + dt, self.force, self.point, self.moment, self.volume, self.thickness, self.kc)
+        return EngagementLoad(
+            self.t + dt, self.force, self.point, self.moment, self.volume, self.thickness, self.kc, self.components
+        )
 
 
 @njit(cache=True, error_model="numpy")
@@ -171,11 +178,12 @@ def engagement_load(
     t0: float,
     t1: float,
     volume: float,
-    material: Material,
+    material: Material | ObliqueForces,
     inside: Callable[[np.ndarray], np.ndarray],
     rake_deg: float = 0.0,
     samples: int = 41,
     thickness: float | None = None,
+    faces: EdgeFaces | None = None,
 ) -> EngagementLoad:
     """The load of one engagement: ``pose`` of the cutting tooth over [t0, t1], ``edge`` its points (n, 3) in the
     cutter frame (the cutting edge, an open polyline), ``volume`` [mm^3] the chip the removal took, ``inside``
@@ -183,7 +191,14 @@ def engagement_load(
     ``thickness`` [mm]: the chip's mean uncut thickness where the removal measured it (the dexel chip's, normal
     to the cut surface over its footprint); it sets kc(h), while the force along the edge stays scaled so that the
     engagement's work is kc(h) V. Without it, h is the volume over the area the engaged edge sweeps.
+
+    ``material`` an :class:`ObliqueForces` model (with ``faces``, the edge's rake face and body side): the three
+    components per element (:func:`oblique_load`); ``rake_deg`` is then moot (each element has its working rake).
     """
+    if isinstance(material, ObliqueForces):
+        if faces is None:
+            raise ValueError("the oblique model needs the edge's faces (EdgeFaces)")
+        return oblique_load(pose, edge, t0, t1, volume, material, inside, faces, samples, thickness)
     times = np.linspace(t0, t1, samples)
     step = 1e-3 * (times[-1] - times[0]) / max(len(times) - 1, 1)
     # the edge at the times and a central difference's step either side: one pose call (the co-simulation makes
@@ -249,3 +264,166 @@ def engagement_sums(placed, ins, times, step):
     for i in range(n - 1):
         swept += (rate[i + 1] + rate[i]) / 2 * (times[i + 1] - times[i])
     return swept, force, point, moment
+
+
+@dataclass(frozen=True)
+class EdgeFaces:
+    """What the oblique model needs of the edge beside its points (rake frame): the rake face's unit normal towards
+    the chip ``rake`` (3,) and, per element (k - 1, 3), a unit direction into the tooth's body ``body`` (the side of
+    the cut surface the tool is on: the thrust pushes the workpiece away from it)."""
+
+    rake: np.ndarray
+    body: np.ndarray
+
+    @classmethod
+    def of_outline(cls, points: np.ndarray, rake: np.ndarray) -> EdgeFaces:
+        """The faces of a tooth outline ``points`` (k, 3) in its rake plane (z = 0): the body lies towards the
+        outline's centroid (the tooth between its flanks and under its tip), the rake normal as given."""
+        p = np.asarray(points, dtype=float)
+        d = np.diff(p, axis=0)
+        normal = np.column_stack([-d[:, 1], d[:, 0], np.zeros(len(d))])
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        inward = p.mean(axis=0) - (p[:-1] + p[1:]) / 2
+        normal *= np.where(np.sum(normal * inward, axis=1) < 0, -1.0, 1.0)[:, None]
+        r = np.asarray(rake, dtype=float)
+        return cls(r / np.linalg.norm(r), np.ascontiguousarray(normal))
+
+
+def oblique_load(
+    pose: PoseFunction,
+    edge: np.ndarray,
+    t0: float,
+    t1: float,
+    volume: float,
+    model: ObliqueForces,
+    inside: Callable[[np.ndarray], np.ndarray],
+    faces: EdgeFaces,
+    samples: int = 41,
+    thickness: float | None = None,
+) -> EngagementLoad:
+    """:func:`engagement_load` with the oblique model: per engaged element its working normal rake gamma_n and
+    inclination lambda_s from the rake face and its velocity relative to the workpiece, its chip width
+    b = dl cos(lambda_s) and the mean thickness h = V / (the area the engaged edge sweeps normal to the velocity);
+    the element takes ``model.element`` (cutting along its velocity, thrust normal to the cut surface away from the
+    body, passive along the edge's part normal to the velocity). ``thickness`` (the dexel chip's mean normal
+    thickness) sets the coefficients' size effect and the share under the minimum chip; h sets the volume, so that
+    the shear work is K_c V (1 - h_min / h_chip) plus the edge's ploughing."""
+    times = np.linspace(t0, t1, samples)
+    step = 1e-3 * (times[-1] - times[0]) / max(len(times) - 1, 1)
+    rot, trans = pose(np.concatenate([times, times - step, times + step]))
+    placed = place_few(edge, rot, trans)
+    ins = inside(placed[:samples]).astype(float)
+    c = model.model
+    swept, width, mid, dirs, factors = oblique_sums(
+        placed, ins, np.ascontiguousarray(rot[:samples]), times, step, faces.rake, faces.body,
+        c.friction_angle, c.rake_floor,
+    )  # fmt: skip
+    if volume <= 0 or swept <= 0:
+        zero = np.zeros((0, 3))
+        return EngagementLoad(np.zeros(0), zero, zero, zero, max(volume, 0.0), 0.0, 0.0, zero)
+    h = volume / swept
+    h_chip = thickness if thickness is not None and thickness > 0 else h
+    f_el, comp = element_loads(model, width, dirs, factors, h, h_chip)
+    force = f_el.sum(axis=1)
+    weight = np.maximum(np.linalg.norm(f_el, axis=2), 0.0)
+    total = weight.sum(axis=1, keepdims=True)
+    lengths = (width > 0).astype(float)
+    w = np.where(total > 0, weight / np.maximum(total, 1e-300), lengths / np.maximum(lengths.sum(1, keepdims=True), 1))
+    point = np.einsum("nk,nkc->nc", w, mid)
+    moment = np.cross(mid - point[:, None, :], f_el).sum(axis=1) * 1e-3  # N mm -> N m
+    components = comp.sum(axis=1)
+    # the chip's work: the cutting components along the velocities (speed = the width rate over the width)
+    speed = np.linalg.norm((placed[2 * samples :, 1:] + placed[2 * samples :, :-1]) - (placed[samples:2 * samples, 1:]
+                           + placed[samples:2 * samples, :-1]), axis=2) / (4 * step)  # fmt: skip
+    power = (comp[..., 0] * speed).sum(axis=1)
+    work = float(np.sum((power[1:] + power[:-1]) / 2 * np.diff(times))) * 1e-3  # N mm -> J
+    return EngagementLoad(times, force, point, moment, volume, h_chip, work / volume * 1e3, components)
+
+
+def element_loads(
+    model: ObliqueForces, width: np.ndarray, dirs: np.ndarray, factors: np.ndarray, h: float, h_chip: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per (time, element) of :func:`oblique_sums`'s ``width``, ``dirs`` and ``factors``: the force on the workpiece
+    (..., 3) [N] and its [cutting, thrust, passive] components (..., 3) [N] for a chip h [mm] thick (the volume's)
+    whose size effect and share under the minimum chip are those of ``h_chip`` (the measured mean thickness):
+    tau_s(h_chip) f (h - h_min) b plus the edge's ploughing b (K_ce, K_te); cutting along v, thrust away from the
+    tool's body (-n), passive along p."""
+    tau = float(model.shear_stress(h_chip))
+    sheared = h * max(1.0 - model.min_chip / h_chip, 0.0)
+    ce, te = model.edge_coefficients
+    comp = tau * factors * sheared * width[..., None]
+    comp[..., 0] += ce * width
+    comp[..., 1] += te * width
+    f_el = comp[..., 0:1] * dirs[..., 0, :] - comp[..., 1:2] * dirs[..., 1, :] + comp[..., 2:3] * dirs[..., 2, :]
+    return f_el, comp
+
+
+@njit(cache=True, error_model="numpy")
+def oblique_sums(placed, ins, rot, times, step, rake, body, friction, floor):
+    """For :func:`oblique_load`: the area the engaged edge sweeps normal to the velocities [mm^2] and per (time,
+    element): its chip width b = dl cos(lambda_s) x its share in the blank [mm], its midpoint, its directions
+    (cutting v, cut-surface normal n towards the body, passive p) and the oblique factors (K_c, K_t, K_p) / tau_s
+    at its working normal rake and inclination (cutting.oblique.ObliqueForces.factors, with Merchant's shear angle).
+    ``rot`` (n, 3, 3): the rake frame's rotations at ``times``; ``rake`` (3,), ``body`` (k - 1, 3) in the rake
+    frame."""
+    n, k = ins.shape
+    e = k - 1
+    width = np.zeros((n, e))
+    mid = np.zeros((n, e, 3))
+    dirs = np.zeros((n, e, 3, 3))
+    factors = np.zeros((n, e, 3))
+    tan_beta = math.tan(friction)
+    rate = np.zeros(n)
+    for i in range(n):
+        g = rot[i] @ rake
+        for j in range(e):
+            share = (ins[i, j] + ins[i, j + 1]) / 2
+            t = np.empty(3)
+            v = np.empty(3)
+            for c in range(3):
+                t[c] = placed[i, j + 1, c] - placed[i, j, c]
+                mid[i, j, c] = (placed[i, j, c] + placed[i, j + 1, c]) / 2
+                after = placed[2 * n + i, j, c] + placed[2 * n + i, j + 1, c]
+                before = placed[n + i, j, c] + placed[n + i, j + 1, c]
+                v[c] = (after - before) / (4 * step)
+            dl = math.sqrt(t[0] ** 2 + t[1] ** 2 + t[2] ** 2)
+            speed = math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2)
+            if dl <= 0 or speed <= 0:
+                continue
+            t /= dl
+            v /= speed
+            along = t[0] * v[0] + t[1] * v[1] + t[2] * v[2]
+            lam = math.asin(min(max(along, -1.0), 1.0))
+            p = t - along * v
+            pn = math.sqrt(p[0] ** 2 + p[1] ** 2 + p[2] ** 2)
+            if pn <= 1e-12:  # the edge along its velocity: no chip
+                continue
+            p /= pn
+            nrm = np.array([p[1] * v[2] - p[2] * v[1], p[2] * v[0] - p[0] * v[2], p[0] * v[1] - p[1] * v[0]])
+            b = rot[i] @ body[j]
+            if nrm[0] * b[0] + nrm[1] * b[1] + nrm[2] * b[2] < 0:
+                nrm = -nrm
+            # working normal rake in the plane normal to the edge: e1 = v's part normal to t (= v cos lam + ...),
+            # e2 = the cut surface's normal towards the body
+            e1 = v - along * t
+            e1 /= math.sqrt(e1[0] ** 2 + e1[1] ** 2 + e1[2] ** 2)
+            up = g[0] * nrm[0] + g[1] * nrm[1] + g[2] * nrm[2]
+            gamma = max(math.atan2(up, g[0] * e1[0] + g[1] * e1[1] + g[2] * e1[2]), floor)
+            beta_n = math.atan(tan_beta * math.cos(lam))
+            phi = math.pi / 4 - (beta_n - gamma) / 2
+            te = math.tan(lam)
+            s = math.sqrt(math.cos(phi + beta_n - gamma) ** 2 + (te * math.sin(beta_n)) ** 2)
+            base = 1.0 / (math.sin(phi) * s)
+            factors[i, j, 0] = base * (math.cos(beta_n - gamma) + te * te * math.sin(beta_n))
+            factors[i, j, 1] = base * math.sin(beta_n - gamma) / math.cos(lam)
+            factors[i, j, 2] = base * (math.cos(beta_n - gamma) * te - te * math.sin(beta_n))
+            width[i, j] = dl * math.cos(lam) * share
+            rate[i] += width[i, j] * speed
+            for c in range(3):
+                dirs[i, j, 0, c] = v[c]
+                dirs[i, j, 1, c] = nrm[c]
+                dirs[i, j, 2, c] = p[c]
+    swept = 0.0
+    for i in range(n - 1):
+        swept += (rate[i + 1] + rate[i]) / 2 * (times[i + 1] - times[i])
+    return swept, width, mid, dirs, factors

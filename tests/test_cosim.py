@@ -52,15 +52,19 @@ def test_the_motors_pay_for_the_chips(runs) -> None:
     assert -loaded.load_work == pytest.approx(chip_energy, rel=0.08)  # measured -5 %: the first teeth, unpredicted
     # and the actuators deliver exactly the extra work (the run without forces is otherwise the same)
     assert loaded.actuator_work - free.actuator_work == pytest.approx(-loaded.load_work, rel=0.01)
-    # Kienzle on each chip: k_c = 2100 h^-0.26 x 1.09 (16MnCr5, 0 deg rake) at its own thickness h (the dexel chip's
-    # mean thickness normal to the space's surface; below 10 um at 10 um's), E = k_c V; so the chips' specific energy
-    # is a volume-weighted mean of their k_c (about 4 J/mm^3 here: h about 0.11 mm)
+    # the oblique model on each chip (cutting.oblique): its level is Kienzle's kc(h) = 2100 h^-0.26 at the table's
+    # +6 deg tool, moved by each element's working rake and inclination, plus the 10 um edge's ploughing; over the
+    # pass the specific energy lies near Kienzle's at 0 deg rake (x 1.09; measured 0.99 of it at the median chip)
     h = np.array([a.load.thickness for a in loaded.loads])
-    kc = 2100 * np.maximum(h, H_MIN) ** -0.26 * 1.09
-    assert [a.load.kc for a in loaded.loads] == pytest.approx(kc.tolist(), rel=1e-12)
+    kc = np.array([a.load.kc for a in loaded.loads])
+    kienzle = 2100 * np.maximum(h, H_MIN) ** -0.26 * 1.09
+    assert float(np.median(kc / kienzle)) == pytest.approx(1.0, abs=0.15)
     loads_volume = sum(a.load.volume for a in loaded.loads)
     assert chip_energy == pytest.approx(1e-3 * sum(k * a.load.volume for k, a in zip(kc, loaded.loads, strict=True)))
     assert 1e-3 * kc.min() <= chip_energy / loads_volume <= 1e-3 * kc.max()
+    # and every chip pushes the tool off the flank it cuts: a thrust on every engagement, a passive force too
+    comp = np.array([np.abs(a.load.components).mean(axis=0) for a in loaded.loads])
+    assert (comp[:, 1] > 0).all() and 0.3 < comp[:, 1].sum() / comp[:, 0].sum() < 2.0 and comp[:, 2].sum() > 0
 
 
 def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
@@ -84,11 +88,14 @@ def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
     friction = params.tool_friction * abs(params.tool_drive.ratio)
     assert rec0.torque[rec0.cutting, 0].mean() == pytest.approx(friction, rel=0.01)
     assert base == pytest.approx(friction, rel=0.01) and cutting > base
-    # what it gives beyond that while cutting is the tool spindle's work on the chips: the most of the loads' work
-    # (the cutting speed is the tool's rotation: at the pitch point the work's velocity is normal to it), not more
+    # what it gives beyond that while cutting is the tool spindle's share of the work on the chips, the work spindle
+    # the rest. The cutting components alone would leave most of it to the tool (89 % here); the thrust, normal to
+    # the flanks, differs between the flanks (the leading flank cuts at strongly negative working rake) and its net
+    # moment about the axes moves work from the tool spindle to the work spindle, like a gear pair's tooth force
+    # (17 % here with the thrust, docs/forces.md)
     omega = np.gradient(rec.q[:, 0], rec.t) / params.tool_drive.ratio
     extra = float(((rec.torque[:, 0] - friction) * omega * np.gradient(rec.t))[rec.cutting].sum())
-    assert -loaded.load_work / 2 < extra < -loaded.load_work
+    assert 0.05 * -loaded.load_work < extra < -loaded.load_work
     assert loaded.chip_change() < 0.1  # consecutive chips: the prediction's error
 
 

@@ -81,9 +81,8 @@ def edge_frames(setup: SkivingSetup, edge: CuttingEdge, relief: Relief) -> EdgeF
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
     position = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
     q = setup.rake_frame  # rake frame -> cutter frame
-    axis = q[:, :3].T @ np.array([0.0, 0.0, 1.0])  # the cutter axis in the rake frame
-    into_body = setup.body_side * axis
-    rake = np.broadcast_to(np.array([0.0, 0.0, 1.0]) * (1.0 if rake_faces_chip(into_body) else -1.0), pts.shape)
+    into_body = body_direction(setup)
+    rake = np.broadcast_to(rake_normal(setup), pts.shape)
     c = setup.cutter
     cut = pts @ q[:, :3].T + q[:, 3]  # the points in the cutter frame
     r = np.hypot(cut[:, 0], cut[:, 1])
@@ -106,6 +105,16 @@ def edge_frames(setup: SkivingSetup, edge: CuttingEdge, relief: Relief) -> EdgeF
     flank[tip] = radial @ q[:, :3] + k * into_body
     flank /= np.linalg.norm(flank, axis=1, keepdims=True)
     return EdgeFrames(pts, tangent, np.ascontiguousarray(rake), flank, position, part)
+
+
+def body_direction(setup: SkivingSetup) -> np.ndarray:
+    """The direction from the rake face into the cutter's body, in the rake frame (along the cutter axis)."""
+    return setup.body_side * (setup.rake_frame[:, :3].T @ np.array([0.0, 0.0, 1.0]))
+
+
+def rake_normal(setup: SkivingSetup) -> np.ndarray:
+    """The rake face's unit normal towards the chip, in the rake frame (+-z)."""
+    return np.array([0.0, 0.0, 1.0 if rake_faces_chip(body_direction(setup)) else -1.0])
 
 
 def rake_faces_chip(into_body: np.ndarray) -> bool:

@@ -62,6 +62,10 @@ CUTTER_KEYS: dict[str, Key] = {
         "cutting edge: 'conjugate' (envelope method) or 'involute'",
         one_of("conjugate", "involute"),
     ),
+    # a guess: ground and honed edges of carbide and coated HSS cutters have 5-30 um (docs/forces.md)
+    "edge_radius": Key(
+        float, 0.010, "mm", "the cutting edge's rounding r_beta (ploughing, minimum chip thickness)", at_least(0.0)
+    ),
     **RAKE_KEYS,
 }
 
@@ -101,11 +105,13 @@ SkivingProcess = section_class("SkivingProcess", PROCESS_KEYS, "[process] of a s
 
 @dataclass(frozen=True)
 class CutterOptions:
-    """What [cutter] says beyond the cutter's gear data: the ``edge`` ("conjugate" or "involute") and the
-    ``holder_diameter`` [mm] (None: half the cutter's reference diameter)."""
+    """What [cutter] says beyond the cutter's gear data: the ``edge`` ("conjugate" or "involute"), the
+    ``holder_diameter`` [mm] (None: half the cutter's reference diameter) and the ``edge_radius`` [mm] of the
+    rounded cutting edge (the force model's)."""
 
     edge: str = "conjugate"
     holder_diameter: float | None = None
+    edge_radius: float = 0.010
 
 
 @dataclass(frozen=True)
@@ -205,7 +211,7 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
         SkivingProcess(**parsed["process"]),
         gear,
         cutter,
-        CutterOptions(c["edge"], c["holder_diameter"]),
+        CutterOptions(c["edge"], c["holder_diameter"], c["edge_radius"]),
         measurement,
         modification,
         rake_face(c),

@@ -2,8 +2,9 @@
 that the job's machine holds it (its motors' peak torques against the estimate x a margin).
 
 A job whose motors cannot hold its cut is refused as an input error before the run, naming the motor and what would
-hold it. The estimate uses the force law the co-simulation applies (cutting/forces.py: Kienzle, along each edge
-element's velocity, the chip thickness from the chip's volume over the swept area): :func:`pass_loads` per pass (its
+hold it. The estimate uses the force law the co-simulation applies (cutting/forces.py: the oblique model's cutting,
+thrust and passive components per edge element at its working rake and inclination, the chip thickness from the
+chip's volume over the swept area): :func:`pass_loads` per pass (its
 steps there), :func:`motor_loads` at the motors of the job's structure, :func:`check_machine_holds` the check. How the
 estimate compares with the co-simulated peaks, and the margin that covers it: docs/machines.md ("The cut against the
 motors").
@@ -18,11 +19,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from cutting.errors import MachineLimitError, Problem
+from cutting.forces import EdgeFaces, element_loads, oblique_sums
 from cutting.gear import Gear
-from cutting.materials import material, rake_factor
+from cutting.materials import material
+from cutting.oblique import ObliqueForces, load_cutting_model
 from cutting.skiving.edge import make_edge
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.sweep import outline_points, place, simplify_outline, split_sides
+from cutting.skiving.working_angles import rake_normal
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
@@ -50,7 +54,7 @@ class PassLoad:
     area: float  # removed transverse cross-section of one space, A [mm^2]
     chip_volume: float  # one engagement's chip, V = A s [mm^3]
     chip_thickness: float  # mean uncut chip thickness h [mm]
-    kc: float  # specific cutting force with the rake factor [N/mm^2]
+    kc: float  # the chip's specific energy: one engagement's work over its volume [N/mm^2]
     teeth_in_cut: float  # engagement window over the cutter pitch
     tool_torque_mean: float
     tool_torque_peak: float
@@ -94,7 +98,9 @@ def space_area(gear: Gear, delta: float, samples: int = 400) -> float:
     return float(np.trapezoid(width, r))
 
 
-def pass_loads(setup: SkivingSetup, material_key: str, samples: int = 121) -> list[PassLoad]:
+def pass_loads(
+    setup: SkivingSetup, material_key: str, samples: int = 121, edge_radius: float = 0.010
+) -> list[PassLoad]:
     """The estimated load of every pass of ``setup`` cutting ``material_key`` (a row of assets/materials.toml).
 
     Per pass k:
@@ -111,17 +117,20 @@ def pass_loads(setup: SkivingSetup, material_key: str, samples: int = 121) -> li
        within the tip cylinder) at the pass's centre distance, the carriage at mid face, by the ideal kinematics. The
        edge (the involute outline in elements of <= 0.2 mm, as the co-simulation's) inside the blank's envelope is
        the chip width b(t); each element dl moves at v relative to the work. Mean chip thickness
-       h = V_k / integral(sum dl |v| dt) and kc = kc1.1 h^-mc x the rake factor (0 deg rake: 1.09), exactly as
-       cutting/forces.py does.
-    4. Loads. Each element pushes the workpiece with kc h dl along v (the cutter takes the opposite): a torque about
+       h = V_k / integral(sum dl cos(lambda_s) |v| dt), exactly as cutting/forces.py does.
+    4. Loads. Each element pushes the workpiece with the oblique model's three components (cutting along v, thrust
+       normal to the cut surface, passive along the edge; ``edge_radius`` [mm] the cutter's; the cutter takes the
+       opposite): a torque about
        the work axis T2(phi) and one about the cutter axis T1(phi). Successive cutter teeth engage a cutter pitch
        apart and overlap (2-6 teeth in the cut on the shipped jobs): the torques of all teeth are summed over one
        pitch and the peak is taken. The mean power is the chips' energy rate, kc V_k z0 n0 (tested).
     """
-    mat = material(material_key)
+    model = ObliqueForces(material(material_key), load_cutting_model(), edge_radius)
     g = setup.gear
     edge = make_edge(setup, "involute")  # within micrometres of the conjugate edge: the same engaged length
     pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
+    # the rake face's normal in the cutter frame the outline is placed in here (the rake frame's rotation)
+    faces = EdgeFaces.of_outline(pts, setup.rake_frame[:, :3] @ rake_normal(setup))
     omega0 = setup.tool_speed * 2 * math.pi / 60
     omega2 = setup.speed_ratio * omega0
     pitch = 2 * math.pi / setup.cutter.teeth
@@ -138,16 +147,19 @@ def pass_loads(setup: SkivingSetup, material_key: str, samples: int = 121) -> li
         r = np.hypot(w[..., 0], w[..., 1])
         radial = r > g.tip_radius if g.internal else r < g.tip_radius
         inside = (radial & (np.abs(w[..., 2]) <= g.face_width / 2)).astype(float)
-        length = np.linalg.norm(w[:, 1:] - w[:, :-1], axis=2) * (inside[:, :-1] + inside[:, 1:]) / 2
         vel = ((after[:, :-1] + after[:, 1:]) - (before[:, :-1] + before[:, 1:])) / (4 * step) * omega0  # mm/s
         speed = np.linalg.norm(vel, axis=2)
-        swept = float(np.trapezoid((length * speed).sum(axis=1), phi / omega0))  # mm^2
+        rot, centre = setup.cutter_pose(phi, 0.0, a)
+        swept, width, _, dirs, factors = oblique_sums(
+            np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
+            faces.rake, faces.body, model.model.friction_angle, model.model.rake_floor,
+        )  # fmt: skip
         if volume <= 0 or swept <= 0:
             continue
         h = volume / swept
-        kc = mat.kc(h) * rake_factor(0.0)
-        force = kc * h * length[..., None] * vel / np.maximum(speed, 1e-12)[..., None]  # on the workpiece [N]
-        rot, centre = setup.cutter_pose(phi, 0.0, a)
+        force, comp = element_loads(model, width, dirs, factors, h, h)  # on the workpiece [N]
+        power = float(np.trapezoid((comp[..., 0] * speed).sum(axis=1), phi / omega0))  # one engagement's work [N mm]
+        kc = power / volume
         work = np.cross(mid, force)[..., 2].sum(axis=1) * 1e-3  # the load's torque about +z [N m]
         tool = (np.cross(mid - centre[:, None, :], -force) * rot[:, None, :, 2]).sum(axis=(1, 2)) * 1e-3
         total = _overlapped(phi, pitch, half)
@@ -209,7 +221,8 @@ def motor_loads(job: Job, params: SkivingMachineParams, loads: list[PassLoad] | 
     - hydraulic-shaft (S3): M1 the work (speed chain); GShD the tool through the generating chain.
     """
     setup = job.skiving
-    loads = pass_loads(setup, job.process.material) if loads is None else loads
+    if loads is None:
+        loads = pass_loads(setup, job.process.material, edge_radius=job.cutter_options.edge_radius)
     structure = job.machine.structure
     keys = MOTOR_TORQUE_KEYS[structure]
     p = params
@@ -261,7 +274,7 @@ def check_machine_holds(job: Job, params: SkivingMachineParams, margin: float = 
     """Refuse (MachineLimitError) a job whose estimated peak torque at a motor, x ``margin``, exceeds that motor's peak
     torque, naming the motor, both torques, and what would hold it: a larger machine size and the motor torque
     that would do. Returns the motors' loads when they all hold."""
-    loads = pass_loads(job.skiving, job.process.material)
+    loads = pass_loads(job.skiving, job.process.material, edge_radius=job.cutter_options.edge_radius)
     motors = motor_loads(job, params, loads)
     bad = [m for m in motors if m.torque * margin > m.limit]
     if not bad:

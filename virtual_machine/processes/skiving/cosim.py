@@ -23,8 +23,9 @@ from dataclasses import dataclass, field
 import manifold3d as mf
 import numpy as np
 
-from cutting.forces import EngagementLoad, engagement_load, repeated_means
+from cutting.forces import EdgeFaces, EngagementLoad, engagement_load, repeated_means
 from cutting.materials import Material, material
+from cutting.oblique import ObliqueForces, load_cutting_model
 from cutting.skiving.dexel_cut import removal_summary
 from cutting.skiving.edge import CuttingEdge, make_edge
 from cutting.skiving.holder import check_holder_side
@@ -41,7 +42,7 @@ from cutting.skiving.passages import (
 from cutting.skiving.path_correction import PathCorrection
 from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
-from cutting.skiving.working_angles import check_working_clearance
+from cutting.skiving.working_angles import check_working_clearance, rake_normal
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.job import Job, dexel_spacing
 from virtual_machine.processes.skiving.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
@@ -189,6 +190,9 @@ class CuttingRun:
         self.chunk = self.pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
         self.in_blank = functools.partial(in_blank_envelope, setup.gear)
         self.material = material(job.process.material)
+        # the three components per edge element at its working rake and inclination (cutting.oblique)
+        self.forces_model = ObliqueForces(self.material, load_cutting_model(), job.cutter_options.edge_radius)
+        self.faces = EdgeFaces.of_outline(self.edge_points, rake_normal(setup))
         self.sim = CoSimulation(
             None, self.removal.result, material=self.material, edge=edge, removal=removal, lag=self.lag
         )
@@ -304,9 +308,10 @@ class CuttingRun:
             chip.start,
             chip.end,
             chip.volume,
-            self.material,
+            self.forces_model,
             self.in_blank,
             thickness=chip.thickness_mean,
+            faces=self.faces,
         ).shifted(t0_stroke)
         if not len(load.t):  # a sliver at the blank's edge where no edge element is inside the envelope: no force
             self.force.clear()
