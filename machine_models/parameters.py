@@ -14,6 +14,8 @@ import math
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
+from machine_models.loop import LoopMode, parse_loop
+
 ARCSEC = math.pi / 180 / 3600
 RPM = 2 * math.pi / 60  # rad/s per rpm
 
@@ -139,6 +141,11 @@ class SkivingMachineParams:
     #: GShD1/GShD2 -> differential -> work spindle (S2), GShD -> tool spindle (S3), referred to the driven spindle
     differential_stage: DriveStage = field(default_factory=lambda: DriveStage(1.0, 1.5e5, 30 * ARCSEC, 40.0))
 
+    # ---- the tool-work loop's structural modes (machine_models/loop.py; docs/machines.md, "The loop") -------
+    #: at the tool (between the swivel head and the tool spindle) and at the workpiece (under the work spindle);
+    #: () is a rigid structure (the axes' own compliance, the radial servo and the nut, stays)
+    loop: tuple[LoopMode, ...] = ()
+
     # ---- simulation ---------------------------------------------------------------------------------------
     timestep: float = 1.25e-4  # s: 8 kHz physics, two sub-steps of a 4 kHz servo
     integrator: str = "implicitfast"  # damping implicit; the stages' springs stay well below 1/(2 pi h)
@@ -159,11 +166,19 @@ class SkivingMachineParams:
                 out.append(f"{name} = {getattr(self, name)}: must be > 0 (a top speed in rad/s, a length in m)")
         if not self.work_acceleration > 0:
             out.append(f"work_acceleration = {self.work_acceleration}: must be > 0 rad/s^2 (the table's run-up)")
+        for i, mode in enumerate(self.loop):
+            out += mode.problems(f"loop[{i}]")
+        carried = sum(m.mass for m in self.loop if m.at == "tool" and m.kind == "translation")
+        if carried > self.radial_mass:
+            out.append(
+                f"loop: the tool's translational modes have {carried:.0f} kg of modal mass, more than the radial "
+                f"slide's {self.radial_mass:.0f} kg that carries them (stiffer or higher modes, or more radial_mass)"
+            )
         return out
 
     def stiff(self) -> SkivingMachineParams:
-        """The ideal machine: every stage rigid and free of backlash, no friction (for the proofs)."""
-        return rigid(self, work_friction=0.0, tool_friction=0.0, ways_friction=0.0)
+        """The ideal machine: every stage rigid and free of backlash, no friction, a rigid loop (for the proofs)."""
+        return rigid(self, work_friction=0.0, tool_friction=0.0, ways_friction=0.0, loop=())
 
     def with_overrides(self, values: dict[str, Any]) -> SkivingMachineParams:
         return override(self, values)
@@ -250,6 +265,9 @@ def override(params, values: dict[str, Any]):
         head, _, tail = key.partition(".")
         default = parameter(params, key)
         current = getattr(params, head)
+        if head == "loop" and not tail:  # a list of modes (tables), checked as a whole
+            top[head] = parse_loop(value)
+            continue
         if tail:
             _check_type(key, value, default, tail == "stiffness")
             stages.setdefault(head, {})[tail] = value

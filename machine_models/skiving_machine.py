@@ -30,6 +30,7 @@ import mujoco
 import numpy as np
 
 from machine_models.drives import couple
+from machine_models.loop import MIN_MASS, add_modes
 from machine_models.parameters import DriveStage, SkivingMachineParams
 from machine_models.parts import (
     BLUE,
@@ -89,21 +90,11 @@ def build_spec(
     spec = machine_spec("skiving_machine", params.timestep, params.integrator, (0.0, 0.0, -9.81))
     world = spec.worldbody
     world.add_light(pos=[0, -1.0, 1.5], dir=[0, 0.6, -1], diffuse=[0.8, 0.8, 0.8])
-    r_blank, b = lay.blank_radius, lay.blank_width
+    b = lay.blank_width
     visual(world, mujoco.mjtGeom.mjGEOM_BOX, (0.45, 0.35, 0.04), DARK, pos=(0.1, 0, -b / 2 - 0.16))  # bed
 
-    # ---- work spindle B2 with the blank ----------------------------------------------------------------
-    work = world.add_body(name="work_spindle")
-    blank_mass = STEEL * math.pi * r_blank**2 * b
-    inertial(work, 60.0 + blank_mass, params.work_inertia + blank_mass * r_blank**2 / 2)
-    work.add_joint(name="B2", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.work_friction)
-    visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.15, 0.03), GREY, pos=(0, 0, -b / 2 - 0.09))  # table
-    visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_blank, b / 2), STEELC)  # blank
-    # the angle mark: a thin bar on the blank's top face from the axis to within the root circle (through the blank
-    # it stood across the cut teeth in the recording)
-    mark = (0.3 * r_blank, 0.0015, 0.0002)
-    visual(work, mujoco.mjtGeom.mjGEOM_BOX, mark, ORANGE, pos=(0.3 * r_blank, 0, b / 2 + 0.0002))
-    work.add_site(name="blank_frame", quat=quat_z(lay.work_phase))
+    _work_spindle(world, lay, params)
+    loop = params.loop
 
     # ---- carriage P3, radial slide X, swivel head, tool spindle B1 --------------------------------------
     carriage = world.add_body(name="carriage")
@@ -112,16 +103,21 @@ def build_spec(
     carriage.add_joint(name="P3", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0, 0, 1], frictionloss=params.ways_friction)
     visual(carriage, mujoco.mjtGeom.mjGEOM_BOX, (0.06, 0.2, 0.18), GREY, pos=(lay.centre_distance + 0.2, 0, 0))
     radial = carriage.add_body(name="radial_slide")
-    inertial(radial, params.radial_mass, 5.0, 5.0)
+    # the tool's translational modes move part of the slide's and the head's mass: the slide keeps the rest
+    tool_modal = sum(m.mass for m in loop if m.at == "tool" and m.kind == "translation")
+    inertial(radial, params.radial_mass - tool_modal, 5.0, 5.0)
     radial.gravcomp = params.counterbalance
     radial.add_joint(name="X", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0], damping=params.radial_damping)
     visual(radial, mujoco.mjtGeom.mjGEOM_BOX, (0.04, 0.12, 0.12), BLUE, pos=(0.13, 0, 0))
     head = radial.add_body(name="swivel_head", quat=quat_x(lay.tilt))
     visual(head, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.05, 0.08), BLUE, pos=(0, 0, 0.1))  # spindle housing
-    tool = head.add_body(name="tool_spindle")
     r_cut, width = lay.cutter_radius, lay.cutter_width
     cutter_mass = STEEL * math.pi * r_cut**2 * width  # the cutter as a disc at its tip diameter (HSS/carbide ~ steel)
-    inertial(tool, 12.0 + cutter_mass, params.tool_inertia + cutter_mass * r_cut**2 / 2)
+    tool_axial = params.tool_inertia + cutter_mass * r_cut**2 / 2
+    turn = np.array(_rot_x(lay.tilt))  # head frame -> machine frame; the tilts' pivots lie up the spindle (-z local)
+    mount = add_modes(head, loop, "tool", turn.T, turn @ np.array([0.0, 0.0, 1.0]), tool_axial / 2)
+    tool = mount.add_body(name="tool_spindle")
+    inertial(tool, MIN_MASS if _has(loop, "tool") else 12.0 + cutter_mass, tool_axial)
     tool.add_joint(name="B1", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.tool_friction)
     # the cutter as a disc and its angle mark (a recording that knows the cutter draws its teeth instead: CUTTER_GEOMS)
     visual(tool, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_cut, width / 2), ORANGE, pos=(0, 0, -width / 2), name="cutter")
@@ -161,6 +157,35 @@ def build_spec(
     drives = DRIVES[structure](spec, {"world": world, "head": head}, params, chains or ChainRatios())
     spec.add_key(name="home", qpos=_home_qpos(spec, lay, lead_screw_pitch, drives))
     return spec
+
+
+def _work_spindle(world, lay: MachineLayout, params: SkivingMachineParams) -> None:
+    """The work spindle B2 with table, fixture and blank, on the loop's work-side modes (machine_models/loop.py)."""
+    r_blank, b = lay.blank_radius, lay.blank_width
+    loop = params.loop
+    blank_mass = STEEL * math.pi * r_blank**2 * b
+    work_axial = params.work_inertia + blank_mass * r_blank**2 / 2
+    base = add_modes(world, loop, "work", np.eye(3), np.array([0.0, 0.0, 1.0]), work_axial / 2)
+    work = base.add_body(name="work_spindle")
+    # with modes the structure's modal masses hold the table's and the blank's translational mass
+    inertial(work, MIN_MASS if _has(loop, "work") else 60.0 + blank_mass, work_axial)
+    work.add_joint(name="B2", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1], frictionloss=params.work_friction)
+    visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (0.15, 0.03), GREY, pos=(0, 0, -b / 2 - 0.09))  # table
+    visual(work, mujoco.mjtGeom.mjGEOM_CYLINDER, (r_blank, b / 2), STEELC)  # blank
+    # the angle mark: a thin bar on the blank's top face from the axis to within the root circle (through the blank
+    # it stood across the cut teeth in the recording)
+    mark = (0.3 * r_blank, 0.0015, 0.0002)
+    visual(work, mujoco.mjtGeom.mjGEOM_BOX, mark, ORANGE, pos=(0.3 * r_blank, 0, b / 2 + 0.0002))
+    work.add_site(name="blank_frame", quat=quat_z(lay.work_phase))
+
+
+def _has(loop, at: str) -> bool:
+    return any(m.at == at for m in loop)
+
+
+def _rot_x(angle: float) -> list[list[float]]:
+    c, s = math.cos(angle), math.sin(angle)
+    return [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
 
 
 def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, lead_screw_pitch: float, drives) -> list[float]:

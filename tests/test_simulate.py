@@ -99,6 +99,39 @@ def test_relative_pose_is_mujocos_kinematics() -> None:
         assert np.allclose(trans, t2[0], atol=1e-9)  # mm
 
 
+def test_relative_pose_with_the_loops_deflection_is_mujocos_kinematics() -> None:
+    """With the loop's modes (machine_models/loop.py) the axes' kinematics plus the recorded deflection
+    (loop_deflection) is the cutter frame MuJoCo holds, the modes displaced by tens of micrometres."""
+    from machine_models.loop import LoopMode
+    from virtual_machine.runtime.machine_run import loop_deflection
+
+    job = load_job(str(JOBS / "helical_internal.toml"))
+    loop = (
+        LoopMode("tool", (1, 0, 0), 150, 0.03, 3e7),
+        LoopMode("tool", (0, 1, 0), 260, 0.03, 6e6, "tilt", 0.25),
+        LoopMode("work", (0, 1, 0), 200, 0.03, 5e7),
+        LoopMode("work", (1, 0, 0), 300, 0.03, 5e6, "tilt", 0.1),
+    )
+    params = dataclasses.replace(SkivingMachineParams(), loop=loop)
+    phys = MachinePhysics(build_spec(_layout(job.skiving, 10.0), params).compile(), params)
+    rng = np.random.default_rng(4)
+    axes = ("B1", "B2", "P3", "X", "TV")
+    for _ in range(5):
+        for axis, span in (("B1", 10.0), ("B2", 10.0), ("P3", 0.02), ("X", 0.001)):
+            phys.data.qpos[phys.qadr[axis]] += rng.uniform(-span, span)
+        for k in range(2):
+            for side in ("tool", "work"):
+                phys.data.qpos[phys.qadr[f"{side}_loop_{k}"]] = rng.uniform(-5e-5, 5e-5)
+        rot, trans = phys.cutter_pose()
+        deflection = np.array([loop_deflection(job.skiving, np.array([phys.q(a) for a in axes]), rot, trans)])
+        q = np.array([[phys.q("B1"), phys.q("B2"), phys.q("P3") * 1e3, phys.q("X") * 1e3]])
+        rigid = relative_pose(job.skiving, q)
+        assert np.abs(trans - rigid[1][0]).max() > 0.01  # the modes moved the cutter by more than 10 um
+        r2, t2 = relative_pose(job.skiving, q, deflection)
+        assert np.allclose(rot, r2[0], atol=1e-12)
+        assert np.allclose(trans, t2[0], atol=1e-9)  # mm
+
+
 def test_a_diverging_simulation_names_its_stage() -> None:
     params = dataclasses.replace(SkivingMachineParams(), work_drive=DriveStage(0.5, 1e10, 0.0, 0.0))
     with pytest.raises(SimulationDivergedError, match=r"work_drive.*stiffness"):

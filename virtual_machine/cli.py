@@ -270,6 +270,37 @@ def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
         sys.exit(1)
 
 
+@main.command(help="Draw each pass's stability lobes (critical radial infeed against tool speed) of a skiving JOB.")
+@click.argument("job", required=False, type=click.Path(path_type=Path))
+@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
+@click.option("--json", "as_json", is_flag=True, help="Print the passes' figures as JSON.")
+def stability(job: Path | None, out: Path, as_json: bool) -> None:
+    from virtual_machine.processes.skiving.stability import pass_stability, stability_chart
+    from virtual_machine.setting.machine_layout import machine_params
+
+    j = load_job(job or default_job_path())
+    if j.kind != "skiving":
+        raise InputError(Problem("job", j.kind, "skive stability draws a skiving job's lobes", "give a skiving job"))
+    results = pass_stability(j.skiving, machine_params(j), j.process.material, j.cutter_options.edge_radius)
+    out.mkdir(parents=True, exist_ok=True)
+    doc = {"job": str(job or default_job_path()), "passes": [r.summary() for r in results]}
+    (out / "stability.json").write_text(json_text(doc))
+    stability_chart(results, out / "stability.png", f"stability lobes: {Path(doc['job']).name}")
+    if as_json:
+        click.echo(json.dumps({"job": doc["job"], "passes": [{k: v for k, v in p.items() if k != "lobes"}
+                                                             for p in doc["passes"]]}, indent=2))  # fmt: skip
+        return
+    for p in doc["passes"]:
+        crit = p["critical_infeed_mm"]
+        verdict = "stable" if p["stable"] else "CHATTERS"
+        limit = f"{crit:.3f} mm" if crit is not None else "beyond 4x the infeed"
+        click.echo(
+            f"pass {p['pass']}: infeed {p['infeed_mm']:.3f} mm at {p['tool_speed_rpm']:.0f} rpm, critical {limit}: "
+            f"{verdict}" + (f" (at {p['chatter_frequency_hz']:.0f} Hz)" if p["chatter_frequency_hz"] else "")
+        )
+    click.echo(f"files: {out / 'stability.json'}, {out / 'stability.png'}")
+
+
 @main.command(help="Run the machine through JOB's passes (no cutting); write the pose trajectory and motion record.")
 @click.argument("job", required=False, type=click.Path(path_type=Path))
 @click.option("--duration", type=click.FloatRange(min=0.0, min_open=True), help="Stop after S seconds of machine time.")

@@ -77,6 +77,9 @@ class MotionRecord:
     actuators: tuple[str, ...] = ("M1", "M2", "M3")
     model_xml: str = ""  # the MJCF the run used
     passes: list[PassTrajectory] = field(default_factory=list)
+    #: (n, 6) the loop's deflection: the cutter frame's pose in the blank frame beyond what the axes give, as a small
+    #: rotation vector [rad] and a translation [mm] in the blank frame (:func:`loop_deflection`); None: a rigid loop
+    deflection: np.ndarray | None = None
 
     def sync_stats(self, during: str = "cut") -> dict[str, float]:
         """Synchronisation error statistics over a segment kind, or "cut": while the cutter can touch the blank."""
@@ -293,6 +296,8 @@ class MachineRun:
         # the CNC of the servo structures watches the synchronisation (following error); a chain has no CNC loop
         self.following_limit = settings.following_error_limit if structure == "mechatronic" else math.inf
         self.rows: list[tuple] = []
+        #: per tick the loop's deflection (6 numbers, :func:`loop_deflection`) when the machine has loop modes
+        self.deflections: list[tuple[float, ...]] | None = [] if self.params.loop else None
         self.home = (phys.q("B1"), phys.q("B2"), phys.q("P3") / MM)
         self._clutch_state: dict[str, bool] = {}
         self._last_cnc = None
@@ -357,7 +362,10 @@ class MachineRun:
         qpos, tick = self._qpos, self._tick
         t = self.phys.data.time
         segment = self._segment[tick.segment]
-        self.rows.append((t, *qpos.take(self._qa).tolist(), segment, tick.pass_index, *self._torques))
+        axes = qpos.take(self._qa)
+        self.rows.append((t, *axes.tolist(), segment, tick.pass_index, *self._torques))
+        if self.deflections is not None:
+            self.deflections.append(loop_deflection(self.setup, axes, *self.phys.cutter_pose()))
         wanted = tick.cnc.correction_b4 / self.work_pulses_per_rad  # a modification's extra turn is no error
         self.corrections.append(wanted)
         b1_0, b2_0, p3_0 = self.home
@@ -422,10 +430,12 @@ class MachineRun:
         lo, hi = reach[np.clip(pass_index, 0, len(reach) - 1)].T
         b = setup.gear.face_width / 2
         cutting = (segment == feed) & (q[:, 2] + lo <= b) & (q[:, 2] + hi >= -b)
+        deflection = np.array(self.deflections).reshape(-1, 6) if self.deflections is not None else None
         rec = MotionRecord(
             t=a[:, 0],
             q=q,
             torque=a[:, 3 + n_ax :],
+            deflection=deflection,
             actuators=tuple(self.machine.actuators),
             model_xml=self.spec.to_xml(),
             sync_um=r2 * delta * 1e3,
@@ -435,13 +445,17 @@ class MachineRun:
         )
         for index in sorted(set(rec.pass_index[rec.segment == feed].tolist())):
             sel = (rec.segment == feed) & (rec.pass_index == index)
-            rec.passes.append(pass_trajectory(setup, index, rec.t[sel], rec.q[sel]))
+            defl = deflection[sel] if deflection is not None else None
+            rec.passes.append(pass_trajectory(setup, index, rec.t[sel], rec.q[sel], defl))
         return rec
 
 
-def pass_trajectory(setup, index: int, t: np.ndarray, q: np.ndarray) -> PassTrajectory:
-    """The pose trajectory of one feed stroke from its recorded axis positions (t from the stroke's start)."""
-    rot, trans = relative_pose(setup, q)
+def pass_trajectory(
+    setup, index: int, t: np.ndarray, q: np.ndarray, deflection: np.ndarray | None = None
+) -> PassTrajectory:
+    """The pose trajectory of one feed stroke from its recorded axis positions and the loop's deflection (t from
+    the stroke's start)."""
+    rot, trans = relative_pose(setup, q, deflection)
     return PassTrajectory(index, t - t[0], rot, trans, q[:, 0], q[:, 2], q[:, 3])
 
 
@@ -468,15 +482,45 @@ def simulate(
     return run.record()
 
 
-def relative_pose(setup, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The cutter frame in the blank frame for recorded axis values ``q`` (rows as MotionRecord.q).
+def relative_pose(setup, q: np.ndarray, deflection: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The cutter frame in the blank frame for recorded axis values ``q`` (rows as MotionRecord.q) and the loop's
+    ``deflection`` (rows as MotionRecord.deflection; None: a rigid loop).
 
-    The bodies between the two frames are rigid, so this is the forward kinematics of the model
-    (blank_frame = Rz(B2 + work_phase); cutter_frame at (X, 0, P3), Rx(tilt) Rz(B1 + cutter_phase));
-    tests check it against MuJoCo's own site poses."""
+    The axes' part is the forward kinematics of the model (blank_frame = Rz(B2 + work_phase); cutter_frame at
+    (X, 0, P3), Rx(tilt) Rz(B1 + cutter_phase)); the loop's modes move the cutter frame further, by the recorded
+    small rotation and translation in the blank frame (MuJoCo's own site poses; tests check both)."""
     from cutting.skiving.kinematics import rot_x, rot_z
 
     back = rot_z(-(q[:, 1] + setup.work_phase))
     rot = back @ rot_x(setup.tilt) @ rot_z(q[:, 0] + setup.cutter_phase)
     centre = np.stack([q[:, 3], np.zeros(len(q)), q[:, 2]], -1)
-    return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
+    trans = np.matmul(back, centre[:, :, None])[:, :, 0]
+    if deflection is None:
+        return rot, trans
+    turn = _rotation(deflection[:, :3])
+    return turn @ rot, np.matmul(turn, trans[:, :, None])[:, :, 0] + deflection[:, 3:]
+
+
+def _rotation(v: np.ndarray) -> np.ndarray:
+    """Rotation matrices (n, 3, 3) of rotation vectors (n, 3) (Rodrigues)."""
+    angle = np.linalg.norm(v, axis=1)
+    k = v / np.maximum(angle, 1e-300)[:, None]
+    kx = np.zeros((len(v), 3, 3))
+    kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    kx[:, 1, 0], kx[:, 2, 0], kx[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
+    return np.eye(3) + s * kx + (1 - c) * (kx @ kx)
+
+
+def loop_deflection(setup, axes: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> tuple[float, ...]:
+    """The loop's deflection at one instant: the cutter frame's pose in the blank frame ``rot``, ``trans`` [mm]
+    (MuJoCo's sites) against the pose its axes give (``axes``: B1, B2 [rad], P3, X [m], TV as MuJoCo holds them), as
+    C = real o rigid^-1 in the blank frame: its rotation vector [rad] and translation [mm] (6 numbers)."""
+    q = np.array(axes, dtype=float)[None, :]
+    q[:, 2:4] /= MM
+    rot_r, trans_r = relative_pose(setup, q)
+    turn = rot @ rot_r[0].T
+    # the rotation vector of a small rotation: its skew part (exact to theta^3 / 6, 1e-16 rad at 1e-5 rad)
+    v = 0.5 * np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]])
+    shift = trans - turn @ trans_r[0]
+    return (*v.tolist(), *shift.tolist())

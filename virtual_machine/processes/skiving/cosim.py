@@ -123,9 +123,10 @@ class CoSimulation:
 class _Stroke:
     """The recorded samples of one feed stroke and the passages submitted from it."""
 
-    def __init__(self, index: int, half: float):
+    def __init__(self, index: int, half: float, width: int = 6):
         self.index, self.half = index, half
-        self._rows = np.zeros((1024, 6))  # t and the five axes, grown by doubling (a stroke has ~10^4 samples)
+        # t and the five axes (and the loop's deflection, 6 more), grown by doubling (a stroke has ~10^4 samples)
+        self._rows = np.zeros((1024, width))
         self.n = 0
         self.next_m: int | None = None
         self.first_m = 0
@@ -136,15 +137,18 @@ class _Stroke:
         self.step: float | None = None  # cutter angle per sample (_ready_passages)
         self.step_n = 0  # samples when it was taken
 
-    def append(self, row) -> None:
+    def append(self, row, deflection=None) -> None:
         if self.n == len(self._rows):
             self._rows = np.concatenate([self._rows, np.zeros_like(self._rows)])
-        self._rows[self.n] = row[:6]
+        self._rows[self.n, :6] = row[:6]
+        if deflection is not None:
+            self._rows[self.n, 6:] = deflection
         self.n += 1
 
     @property
     def rows(self) -> np.ndarray:
-        """The samples so far (a view): t [s] and the five axes (B1, B2 [rad], P3, X [m], TV [rad])."""
+        """The samples so far (a view): t [s] and the five axes (B1, B2 [rad], P3, X [m], TV [rad]), then the loop's
+        deflection if the machine has modes (MotionRecord.deflection)."""
         return self._rows[: self.n]
 
 
@@ -250,14 +254,15 @@ class CuttingRun:
     def _cut_chunk(self, alive: bool, progress: Callable[[float, int], None] | None) -> None:
         """The machine's new rows to the feed stroke they belong to; the passages they complete submitted to the
         removal, the chips due applied."""
-        rows = self.machine.rows
+        rows, deflections = self.machine.rows, self.machine.deflections
         stroke = self._stroke
-        for row in rows[self._seen :]:
+        for i in range(self._seen, len(rows)):
+            row = rows[i]
             segment, index = int(row[6]), int(row[7])
             if segment == FEED:
                 if stroke is None or stroke.index != index:
-                    stroke = _Stroke(index, self.halves[index])
-                stroke.append(row)
+                    stroke = _Stroke(index, self.halves[index], 6 if deflections is None else 12)
+                stroke.append(row, None if deflections is None else deflections[i])
             elif stroke is not None:
                 stroke.ended = True
         self._seen = len(rows)
@@ -447,6 +452,6 @@ def _ready_passages(stroke: _Stroke, setup, pitch: float):
         t = rows[lo:hi, 0]
         q = rows[lo:hi, 1:6].copy()
         q[:, 2:4] /= 1e-3  # carriage P3 and radial X in mm
-        rot, trans = relative_pose(setup, q)
+        rot, trans = relative_pose(setup, q, rows[lo:hi, 6:12] if rows.shape[1] > 6 else None)
         stroke.next_m += 1
         yield m, (t - rows[0, 0], rot, trans, q[:, 0], q[:, 2], q[:, 3]), float(rows[0, 0])

@@ -1,0 +1,82 @@
+"""Regenerative chatter: the stability of a cut whose chip is the surface an earlier cut left, T seconds ago.
+
+The dynamic part of the cutting force is delta F = lambda D (Delta(t) - Delta(t - T)): Delta the tool's displacement
+relative to the workpiece, D [N/m] the oriented cutting coefficients of the engaged edge at unit scale (for an edge
+element of width b cutting along e_c with the cut surface's normal n towards the tool, thrust and passive directions
+n, p and linearised coefficients K' = dF/dh per unit width: D = sum b (K'_c e_c - K'_t n + K'_p p) n^T; a
+chip-thinning displacement along n lowers every component), averaged over a tooth period (the zeroth-order, average
+force approach: Altintas and Budak, Annals of the CIRP 44/1 (1995) 357), and lambda the scale of the cut (the chip
+width, or the infeed through the width it engages). With the loop's relative frequency response G(i omega) (tool
+plus workpiece, m/N) the cut is on the stability limit where
+
+    det(I - lambda (1 - exp(-i omega T)) G(i omega) D) = 0.
+
+For an eigenvalue mu of G D this is lambda (1 - exp(-i omega T)) = 1 / mu: a real, positive lambda needs
+lambda = 1 / (2 Re mu) (Re mu > 0) and omega T = pi + 2 arg(mu) + 2 pi k, k = 0, 1, ... (the lobes). One mode normal
+to the cut, D = -K b n n^T: mu = -K G and lambda_lim b = -1 / (2 K Re G), Tlusty's limit (tests/test_regeneration.py).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+FrequencyResponse = Callable[[np.ndarray], np.ndarray]  # omega (n,) -> G (n, 3, 3) [m/N]
+
+
+@dataclass(frozen=True)
+class Lobes:
+    """Stability lobes: per lobe k (``k`` (m,)), over the chatter frequency ``omega`` (n,) [rad/s], the delay
+    ``delay`` (m, n) [s] and the limiting scale ``limit`` (m, n) (inf where no eigenvalue can chatter)."""
+
+    k: np.ndarray
+    omega: np.ndarray
+    delay: np.ndarray
+    limit: np.ndarray
+
+    def at(self, delay: float) -> tuple[float, float]:
+        """The least limit of any lobe at ``delay`` [s] and its chatter frequency [Hz] (interpolated along each lobe
+        between the frequencies that bracket it; inf, nan where no lobe reaches it)."""
+        best, freq = math.inf, math.nan
+        for d, lim in zip(self.delay, self.limit, strict=True):
+            ok = np.isfinite(lim)
+            for i in np.flatnonzero(ok[:-1] & ok[1:] & ((d[:-1] - delay) * (d[1:] - delay) <= 0)):
+                f = (delay - d[i]) / (d[i + 1] - d[i]) if d[i + 1] != d[i] else 0.0
+                value = lim[i] + f * (lim[i + 1] - lim[i])
+                if value < best:
+                    best, freq = value, (self.omega[i] + f * (self.omega[i + 1] - self.omega[i])) / (2 * math.pi)
+        return best, freq
+
+
+def lobes(g: FrequencyResponse, d: np.ndarray, omega: np.ndarray, count: int = 8) -> Lobes:
+    """The lobes of the loop ``g`` and the oriented coefficients ``d`` (3, 3) [N/m] over the chatter frequencies
+    ``omega`` [rad/s]: for each frequency every eigenvalue of G D with Re mu > 0 gives a limit 1 / (2 Re mu) at the
+    delays (pi + 2 arg mu + 2 pi k) / omega; per frequency and lobe the least limit is kept."""
+    omega = np.asarray(omega, dtype=float)
+    mu = np.linalg.eigvals(g(omega) @ np.asarray(d, dtype=float))  # (n, 3)
+    k = np.arange(count)
+    delay = np.full((count, len(omega)), np.nan)
+    limit = np.full((count, len(omega)), np.inf)
+    for j in range(mu.shape[1]):
+        m = mu[:, j]
+        ok = m.real > 1e-300
+        lam = np.where(ok, 1.0 / (2 * np.where(ok, m.real, 1.0)), np.inf)
+        theta = np.mod(math.pi + 2 * np.angle(m), 2 * math.pi)
+        for kk in k:
+            t = (theta + 2 * math.pi * kk) / omega
+            better = ok & (lam < limit[kk])
+            limit[kk] = np.where(better, lam, limit[kk])
+            delay[kk] = np.where(better, t, delay[kk])
+    return Lobes(k, omega, delay, limit)
+
+
+def tlusty_limit(g: np.ndarray, coefficient: float) -> float:
+    """Tlusty's absolute limit b_lim = -1 / (2 K Re[G]_min) [m] of one direction's frequency response ``g`` (n,)
+    [m/N] and the specific force K [N/m^2] in that direction."""
+    worst = float(np.min(np.real(g)))
+    if worst >= 0:
+        return math.inf
+    return -1.0 / (2 * coefficient * worst)

@@ -1,0 +1,276 @@
+"""`skive stability JOB`: each pass's stability lobe diagram, the critical radial infeed against the tool speed, from
+the loop's frequency response at the cutting point and the oriented cutting coefficients of the pass's engaged edge
+(cutting/regeneration.py: the average-force approach of Altintas and Budak).
+
+Regeneration in skiving: each tooth space is passed once per work revolution, so the surface a passage meets was
+left by the passage through the same space one work revolution earlier (offset by the feed): the delay is the work's
+period T = 60 / n2 = 60 / (n0 |z0 / z2|) s, so the tool speed n0 = 60 / (T |z0 / z2|) rpm.
+
+The loop at the cutting point (the generating point at the pitch circle on the mesh line, +x of the machine frame):
+the machine's `[machine.model.loop]` modes at the tool and at the workpiece (their shapes there: machine_models/loop.py)
+plus the axes' own compliance as modes: the radial slide's position servo along x (radial_stiffness, radial_mass and
+what rides on it, radial_damping) and the nut along z (nut_stiffness, the carriage with everything on it).
+
+The oriented coefficients D of a pass (3 x 3, N/m): its engaged edge (the involute edge inside the blank's envelope,
+as the co-simulation's force model spreads the chip) over one engagement at the pass's centre distance by the ideal
+kinematics, each element's oblique components linearised in the chip (dF/dh per unit width: the model's
+tau_s(h) f (1 - mc (h - h_min) / h), h the pass's mean chip), summed and averaged over a cutter pitch (the teeth in the
+cut together). The critical infeed at a speed: the infeed whose D (the edge engaged at that depth, its chip from the
+pass's removed cross-section) reaches the lobes' limit there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cutting.forces import EdgeFaces, oblique_sums
+from cutting.materials import material
+from cutting.oblique import ObliqueForces, load_cutting_model
+from cutting.regeneration import Lobes, lobes
+from cutting.skiving.edge import make_edge
+from cutting.skiving.kinematics import SkivingSetup
+from cutting.skiving.sweep import outline_points, place, simplify_outline, split_sides
+from cutting.skiving.working_angles import rake_normal
+from machine_models.loop import LoopMode, frequency_response
+from machine_models.parameters import SkivingMachineParams
+from virtual_machine.reach.skiving_load import _engagement_half_angle, space_area
+
+
+@dataclass(frozen=True)
+class PassStability:
+    """One pass: its infeed [mm] and the job's tool speed [rpm]; the critical infeed at that speed [mm] and the
+    chatter frequency there [Hz]; the lobe diagrams over the tool speeds [rpm]: the critical infeed [mm] and the
+    stability margin of the pass as it is (the factor on its dynamic cutting stiffness D at which it would chatter:
+    > 1 stable).
+
+    In skiving the chip's width is the engaged profile (both flanks and the bottom of the space, the layer every
+    passage takes), which the infeed hardly changes once the edge is in the full depth: a finishing pass's stability
+    then hardly depends on its infeed (the linear theory's width is fixed), and its margin says more than a critical
+    infeed; a roughing pass into the blank engages more edge the deeper it goes."""
+
+    index: int
+    infeed: float
+    tool_speed: float
+    critical_infeed: float
+    chatter_frequency: float
+    speeds: np.ndarray
+    critical: np.ndarray
+    margins: np.ndarray
+
+    @property
+    def margin(self) -> float:
+        """The stability margin at the job's speed: > 1 stable."""
+        return float(np.interp(self.tool_speed, self.speeds, self.margins))
+
+    def summary(self) -> dict:
+        return {
+            "pass": self.index + 1,
+            "infeed_mm": self.infeed,
+            "tool_speed_rpm": self.tool_speed,
+            "critical_infeed_mm": _finite(self.critical_infeed),
+            "margin": _finite(self.margin),
+            "stable": bool(self.margin > 1.0),
+            "chatter_frequency_hz": _finite(self.chatter_frequency),
+            "lobes": {
+                "tool_speed_rpm": self.speeds.tolist(),
+                "critical_infeed_mm": [_finite(v) for v in self.critical.tolist()],
+                "margin": [_finite(v) for v in self.margins.tolist()],
+            },
+        }
+
+
+def _finite(v: float) -> float | None:
+    return float(v) if math.isfinite(v) else None
+
+
+def axis_modes(params: SkivingMachineParams) -> tuple[LoopMode, ...]:
+    """The axes' own compliance as modes at the tool: the radial slide's servo along x and the nut along z (an axis
+    above 5 kHz, the loop modes' range, counts as rigid: it cannot ring with the cut's tooth frequencies)."""
+    out = []
+    riding = params.radial_mass + sum(m.mass for m in params.loop if m.at == "tool" and m.kind == "translation")
+    for direction, k, mass, c in (
+        ((1.0, 0.0, 0.0), params.radial_stiffness, params.radial_mass, params.radial_damping),
+        ((0.0, 0.0, 1.0), params.nut_stiffness, params.carriage_mass + riding, params.nut_damping),
+    ):
+        if k is None or k <= 0:
+            continue
+        omega = math.sqrt(k / mass)
+        if omega > 2 * math.pi * 5000.0:
+            continue
+        out.append(LoopMode("tool", direction, omega / (2 * math.pi), max(c / (2 * math.sqrt(k * mass)), 1e-4), k))
+    return tuple(out)
+
+
+def loop_response(setup: SkivingSetup, params: SkivingMachineParams):
+    """G(omega) (n, 3, 3) [m/N]: the tool's displacement relative to the workpiece per force on the tool at the
+    cutting point (tool side plus work side: the workpiece takes the opposite force)."""
+    tilt = setup.tilt
+    c, s = math.cos(tilt), math.sin(tilt)
+    tool_axis = np.array([0.0, -s, c])  # the head's z turned by the tilt about x
+    point = np.array([setup.gear.reference_radius, 0.0, 0.0])  # the pitch point on the mesh line
+    a = setup.pass_centre_distances[-1]
+    modes = params.loop + axis_modes(params)
+
+    def g(omega: np.ndarray) -> np.ndarray:
+        tool = frequency_response(modes, "tool", omega, tool_axis, point - np.array([a, 0.0, 0.0]))
+        work = frequency_response(modes, "work", omega, np.array([0.0, 0.0, 1.0]), point)
+        return tool + work
+
+    return g
+
+
+def oriented_coefficients(
+    setup: SkivingSetup, model: ObliqueForces, centre_distance: float, volume: float, samples: int = 121
+) -> tuple[np.ndarray, float]:
+    """D (3, 3) [N/m] of one engagement at ``centre_distance`` [mm] taking ``volume`` [mm^3] (the chip of the
+    pass's cross-section over a work turn's feed), averaged over a cutter pitch; and the mean chip h [mm]."""
+    edge = make_edge(setup, "involute")
+    pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
+    faces = EdgeFaces.of_outline(pts, setup.rake_frame[:, :3] @ rake_normal(setup))
+    g = setup.gear
+    omega0 = setup.tool_speed * 2 * math.pi / 60
+    half = _engagement_half_angle(setup, pts, centre_distance)
+    if half <= 0 or volume <= 0:
+        return np.zeros((3, 3)), 0.0
+    phi = np.linspace(-half, half, samples)
+    step = 1e-4
+    w, before, after = (place(pts, *setup.cutter_pose(phi + d, 0.0, centre_distance)) for d in (0.0, -step, step))
+    r = np.hypot(w[..., 0], w[..., 1])
+    radial = r > g.tip_radius if g.internal else r < g.tip_radius
+    inside = (radial & (np.abs(w[..., 2]) <= g.face_width / 2)).astype(float)
+    rot, _ = setup.cutter_pose(phi, 0.0, centre_distance)
+    c = model.model
+    swept, width, _, dirs, factors = oblique_sums(
+        np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
+        faces.rake, faces.body, c.friction_angle, c.rake_floor,
+    )  # fmt: skip
+    if swept <= 0:
+        return np.zeros((3, 3)), 0.0
+    h = volume / swept
+    tau = float(model.shear_stress(h))
+    slope = tau * max(1.0 - model.material.mc * max(h - model.min_chip, 0.0) / h, 0.0) if h > model.min_chip else 0.0
+    # the directions from the turning work frame into the machine frame (the work's turn phi2 at each sample)
+    phi2 = setup.speed_ratio * phi + setup.work_phase
+    turn = np.zeros((len(phi), 3, 3))
+    turn[:, 0, 0], turn[:, 0, 1], turn[:, 1, 0], turn[:, 1, 1] = np.cos(phi2), -np.sin(phi2), np.sin(phi2), np.cos(phi2)
+    turn[:, 2, 2] = 1.0
+    dirs = np.einsum("nij,nkdj->nkdi", turn, dirs)
+    # per element: (f_c e_c - f_t n + f_p p) n^T x b x dF/dh; [N/mm / mm] = N/mm^2 -> x 1e3 per mm -> N/m
+    force_dir = (
+        factors[..., 0:1] * dirs[..., 0, :] - factors[..., 1:2] * dirs[..., 1, :] + factors[..., 2:3] * dirs[..., 2, :]
+    )
+    per_time = np.einsum("nk,nki,nkj->nij", width * slope, force_dir, dirs[..., 1, :])  # N/mm per mm of displacement
+    dt = np.diff(phi / omega0)
+    integral = np.sum((per_time[1:] + per_time[:-1]) / 2 * dt[:, None, None], axis=0)
+    pitch_time = 2 * math.pi / setup.cutter.teeth / omega0
+    return integral / pitch_time * 1e3, h
+
+
+def pass_stability(
+    setup: SkivingSetup,
+    params: SkivingMachineParams,
+    material_key: str,
+    edge_radius: float = 0.010,
+    speeds: np.ndarray | None = None,
+    depths: int = 16,
+) -> list[PassStability]:
+    """Every pass's lobes (see the module docstring): tool speeds from 0.4 to 2.5 times the job's (``speeds`` [rpm]
+    to choose), the critical infeed at each by ``depths`` trial infeeds from 0.1 to 4 times the pass's."""
+    model = ObliqueForces(material(material_key), load_cutting_model(), edge_radius)
+    ratio = abs(setup.speed_ratio)  # work turns per tool turn
+    n0 = setup.tool_speed
+    speeds = np.linspace(0.4 * n0, 2.5 * n0, 300) if speeds is None else np.asarray(speeds, dtype=float)
+    delays = 60.0 / (speeds * ratio)
+    g = loop_response(setup, params)
+    modes = params.loop + axis_modes(params)
+    f_lo = 0.5 * min(m.frequency for m in modes)
+    f_hi = 1.6 * max(m.frequency for m in modes)
+    omega = 2 * math.pi * np.geomspace(f_lo, f_hi, 3000)
+    count = math.ceil(omega[-1] * delays.max() / (2 * math.pi)) + 2
+    out = []
+    previous = setup.pass_centre_distances[0] + setup.passes[0]  # the tip circle just touching
+    done = 0.0
+    for k, (a, infeed) in enumerate(zip(setup.pass_centre_distances, setup.passes, strict=True)):
+        trials = infeed * np.unique(np.append(np.geomspace(0.1, 4.0, depths), 1.0))
+        lims = np.empty((len(trials), len(speeds)))
+        freqs = np.empty((len(trials), len(speeds)))
+        for i, d in enumerate(trials):
+            area = space_area(setup.gear, setup.full_depth - done - d) - space_area(setup.gear, setup.full_depth - done)
+            dmat, _ = oriented_coefficients(setup, model, previous - d, area * setup.axial_feed)
+            lb = lobes(g, dmat, omega, count)
+            lims[i], freqs[i] = _limits(lb, delays)
+        critical = np.array([_critical(trials, lims[:, j]) for j in range(len(speeds))])
+        # at the job's own speed and infeed
+        mine = int(np.argmin(np.abs(trials - infeed)))
+        own = float(np.interp(n0, speeds, critical))
+        j0 = int(np.argmin(np.abs(speeds - n0)))
+        out.append(PassStability(k, infeed, n0, own, float(freqs[mine, j0]), speeds, critical, lims[mine]))
+        previous, done = a, done + infeed
+    return out
+
+
+def _limits(lb: Lobes, delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The least limit (the scale of D at which the cut chatters) over all lobes at each delay, and its chatter
+    frequency [Hz]: each lobe's limit interpolated along its delay (np.interp over the lobe sorted by delay)."""
+    best = np.full(len(delays), np.inf)
+    freq = np.full(len(delays), np.nan)
+    for d, lim in zip(lb.delay, lb.limit, strict=True):
+        ok = np.isfinite(lim) & np.isfinite(d)
+        if ok.sum() < 2:
+            continue
+        order = np.argsort(d[ok])
+        x, y, w = d[ok][order], lim[ok][order], lb.omega[ok][order]
+        inside = (delays >= x[0]) & (delays <= x[-1])
+        v = np.where(inside, np.interp(delays, x, y), np.inf)
+        better = v < best
+        best = np.where(better, v, best)
+        freq = np.where(better, np.interp(delays, x, w) / (2 * math.pi), freq)
+    return best, freq
+
+
+def _critical(trials: np.ndarray, limits: np.ndarray) -> float:
+    """The infeed at which the scale limit falls to 1 (the trial infeed's own D chatters), interpolated in the
+    log of the infeed; inf if none of the trials chatters."""
+    margin = np.log(limits)  # > 0 stable
+    for i in range(len(trials)):
+        if margin[i] <= 0:
+            if i == 0 or not math.isfinite(margin[i - 1]):
+                return float(trials[i])
+            f = margin[i - 1] / (margin[i - 1] - margin[i])
+            return float(math.exp(math.log(trials[i - 1]) + f * (math.log(trials[i]) - math.log(trials[i - 1]))))
+    return math.inf
+
+
+def stability_chart(results: list[PassStability], path, title: str = "") -> None:
+    """The lobe diagrams: per pass the critical infeed [mm] against the tool speed [rpm], the job's operating point
+    (its infeed at its speed) marked; below a curve the pass is stable."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (top, ax) = plt.subplots(2, 1, figsize=(8, 7), dpi=110, sharex=True)
+    for r in results:
+        (line,) = top.plot(r.speeds, np.minimum(r.margins, 1e3), label=f"pass {r.index + 1}")
+        top.plot([r.tool_speed], [r.margin], "o", color=line.get_color(), mfc="white" if r.margin > 1 else None)
+        cap = 4.0 * r.infeed  # the trials' reach: beyond it drawn at it (stable there)
+        ax.plot(r.speeds, np.minimum(r.critical, cap), color=line.get_color(), label=f"pass {r.index + 1}")
+        ax.plot([r.tool_speed], [r.infeed], "o", color=line.get_color(), mfc="white" if r.margin > 1 else None)
+    top.axhline(1.0, color="k", lw=0.8)
+    top.set_yscale("log")
+    top.set_ylabel("stability margin (x the pass's D)")
+    top.set_title(title or "stability lobes")
+    top.text(0.01, 0.02, "o the job's passes (filled: chatters); below 1 the pass chatters", transform=top.transAxes,
+             fontsize=8)  # fmt: skip
+    ax.set_yscale("log")
+    ax.set_xlabel("tool speed n0 [rpm]")
+    ax.set_ylabel("critical radial infeed [mm]\n(capped at 4x the pass's)")
+    for a in (top, ax):
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
