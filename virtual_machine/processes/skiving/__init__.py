@@ -318,6 +318,14 @@ def format_run(run: dict, out: Path, rrd: Path | None) -> str:
         f"  {run['cut']['passages']} engagements, {run['cut']['chip_volume_mm3']:.1f} mm^3 of chips, peak force "
         f"{f['peak_force_N']:.0f} N, cutting energy {f['chip_energy_J']:.0f} J ({f['material']})"
     )
+    for p in f.get("passes", []):
+        normal = p.get("flank_normal_deflection_um") or {}
+        lines.append(
+            f"  pass {p['pass']}: cutting {p['cutting_mean_N']:.0f} N, thrust {p['thrust_mean_N']:.0f} N, passive "
+            f"{p['passive_mean_N']:.0f} N (means); the tool off the flanks by {normal.get('mean', 0.0):.2f} um "
+            f"(peak {normal.get('peak', 0.0):.1f} um) at the generating point"
+        )
+    lines += [f"  warning: {v['warning']}" for v in run.get("vibration", []) if "warning" in v]
     lines.append("  " + format_gear_stl(run["cut"]["gear_stl"]))
     if run.get("modification"):
         lines.append(f"  modification: {run['modification']}")

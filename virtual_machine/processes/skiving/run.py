@@ -43,6 +43,12 @@ from virtual_machine.output.report import run_chart, write_report
 from virtual_machine.processes.base import run_identity
 from virtual_machine.processes.sheets import sheet_product
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
+from virtual_machine.processes.skiving.machine_effect import (
+    flank_normals,
+    generating_point_displacement,
+    pass_deflection,
+    pass_forces,
+)
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.version import versions
 
@@ -237,6 +243,13 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
     rows = sim.load_rows if sim.load_rows is not None else np.zeros((0, 5))
     force = np.linalg.norm(rows[:, 1:4], axis=1) if len(rows) else np.zeros(1)
     text = path.read_text()
+    moved = {d["pass"]: d for d in pass_deflection(rec, job.skiving)}
+    per_pass = [
+        {**f, "flank_normal_deflection_um": moved.get(f["pass"], {}).get("flank_normal_deflection_um")}
+        for f in pass_forces(loads, rows, len(job.skiving.passes), rec, job.skiving)
+    ]
+    vibration = [{"pass": k, **d["vibration"], **({"warning": d["warning"]} if "warning" in d else {})}
+                 for k, d in moved.items()]  # fmt: skip
     return {
         "job": {"path": str(path), "sha256": hashlib.sha256(text.encode()).hexdigest(), "kind": job.kind},
         "versions": versions(),
@@ -251,6 +264,7 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             "kc11": mat.kc11,
             "mc": mat.mc,
             "source": mat.source,
+            "model": "oblique cutting per edge element: cutting, thrust and passive components (docs/forces.md)",
             "granularity": "one tooth engagement: each engagement feels the load of the newest chip already cut, "
             f"at most {sim.lag + 1} engagements earlier plus the engagements in the cut",
             "peak_force_N": float(force.max()),
@@ -262,7 +276,10 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             "load_work_J": sim.load_work,
             "median_chip_thickness_mm": float(np.median([a.load.thickness for a in loads])) if loads else 0.0,
             "chip_change_between_engagements": sim.chip_change(),
+            # the three components per pass and the tool's displacement normal to the flanks at the generating point
+            "passes": per_pass,
         },
+        "vibration": vibration,
         "modification": None
         if job.modification is None
         else "the job's [modification] made by the finishing pass's path (radial and tangential corrections), "
@@ -301,6 +318,14 @@ def _record(
     middles = engagement_middles(sim)
     if sim.loads:
         series["chip volume [mm^3]"] = (middles[0], middles[2])
+        # each engagement's three components at its middle (one tooth's; the teeth in the cut add up)
+        comp = np.array([a.load.components[len(a.load.t) // 2] for a in sim.loads if a.load.components is not None])
+        if len(comp) == len(middles[0]):
+            series["cutting thrust passive force of a tooth [N]"] = (middles[0], np.abs(comp))
+    t, _, disp = generating_point_displacement(sim.record, job.skiving)
+    if len(t):
+        normal = disp @ flank_normals(job.skiving).T
+        series["tool off the flanks at the generating point [um]"] = (t, normal.mean(axis=1))
     write_recording(
         rrd,
         model_xml=sim.record.model_xml,
