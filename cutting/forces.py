@@ -314,7 +314,7 @@ def oblique_load(
     placed = place_few(edge, rot, trans)
     ins = inside(placed[:samples]).astype(float)
     c = model.model
-    swept, width, mid, dirs, factors = oblique_sums(
+    swept, width, mid, dirs, factors, speed = oblique_sums(
         placed, ins, np.ascontiguousarray(rot[:samples]), times, step, faces.rake, faces.body,
         c.friction_angle, c.rake_floor,
     )  # fmt: skip
@@ -323,20 +323,10 @@ def oblique_load(
         return EngagementLoad(np.zeros(0), zero, zero, zero, max(volume, 0.0), 0.0, 0.0, zero)
     h = volume / swept
     h_chip = thickness if thickness is not None and thickness > 0 else h
-    f_el, comp = element_loads(model, width, dirs, factors, h, h_chip)
-    force = f_el.sum(axis=1)
-    weight = np.maximum(np.linalg.norm(f_el, axis=2), 0.0)
-    total = weight.sum(axis=1, keepdims=True)
-    lengths = (width > 0).astype(float)
-    w = np.where(total > 0, weight / np.maximum(total, 1e-300), lengths / np.maximum(lengths.sum(1, keepdims=True), 1))
-    point = np.einsum("nk,nkc->nc", w, mid)
-    moment = np.cross(mid - point[:, None, :], f_el).sum(axis=1) * 1e-3  # N mm -> N m
-    components = comp.sum(axis=1)
-    # the chip's work: the cutting components along the velocities (speed = the width rate over the width)
-    speed = np.linalg.norm((placed[2 * samples :, 1:] + placed[2 * samples :, :-1]) - (placed[samples:2 * samples, 1:]
-                           + placed[samples:2 * samples, :-1]), axis=2) / (4 * step)  # fmt: skip
-    power = (comp[..., 0] * speed).sum(axis=1)
-    work = float(np.sum((power[1:] + power[:-1]) / 2 * np.diff(times))) * 1e-3  # N mm -> J
+    tau = float(model.shear_stress(h_chip))
+    sheared = h * max(1.0 - model.min_chip / h_chip, 0.0)
+    ce, te = model.edge_coefficients
+    force, point, moment, components, work = assemble(width, mid, dirs, factors, speed, times, tau * sheared, ce, te)
     return EngagementLoad(times, force, point, moment, volume, h_chip, work / volume * 1e3, components)
 
 
@@ -362,53 +352,62 @@ def element_loads(
 def oblique_sums(placed, ins, rot, times, step, rake, body, friction, floor):
     """For :func:`oblique_load`: the area the engaged edge sweeps normal to the velocities [mm^2] and per (time,
     element): its chip width b = dl cos(lambda_s) x its share in the blank [mm], its midpoint, its directions
-    (cutting v, cut-surface normal n towards the body, passive p) and the oblique factors (K_c, K_t, K_p) / tau_s
-    at its working normal rake and inclination (cutting.oblique.ObliqueForces.factors, with Merchant's shear angle).
-    ``rot`` (n, 3, 3): the rake frame's rotations at ``times``; ``rake`` (3,), ``body`` (k - 1, 3) in the rake
-    frame."""
+    (cutting v, cut-surface normal n towards the body, passive p), the oblique factors (K_c, K_t, K_p) / tau_s at its
+    working normal rake and inclination (cutting.oblique.ObliqueForces.factors, with Merchant's shear angle) and its
+    speed [mm/s]. ``rot`` (n, 3, 3): the rake frame's rotations at ``times``; ``rake`` (3,), ``body`` (k - 1, 3) in
+    the rake frame. Scalars only inside the loops: it runs once per engagement."""
     n, k = ins.shape
     e = k - 1
     width = np.zeros((n, e))
     mid = np.zeros((n, e, 3))
     dirs = np.zeros((n, e, 3, 3))
     factors = np.zeros((n, e, 3))
+    speeds = np.zeros((n, e))
     tan_beta = math.tan(friction)
     rate = np.zeros(n)
     for i in range(n):
-        g = rot[i] @ rake
+        r = rot[i]
+        g0 = r[0, 0] * rake[0] + r[0, 1] * rake[1] + r[0, 2] * rake[2]
+        g1 = r[1, 0] * rake[0] + r[1, 1] * rake[1] + r[1, 2] * rake[2]
+        g2 = r[2, 0] * rake[0] + r[2, 1] * rake[1] + r[2, 2] * rake[2]
         for j in range(e):
             share = (ins[i, j] + ins[i, j + 1]) / 2
-            t = np.empty(3)
-            v = np.empty(3)
-            for c in range(3):
-                t[c] = placed[i, j + 1, c] - placed[i, j, c]
-                mid[i, j, c] = (placed[i, j, c] + placed[i, j + 1, c]) / 2
-                after = placed[2 * n + i, j, c] + placed[2 * n + i, j + 1, c]
-                before = placed[n + i, j, c] + placed[n + i, j + 1, c]
-                v[c] = (after - before) / (4 * step)
-            dl = math.sqrt(t[0] ** 2 + t[1] ** 2 + t[2] ** 2)
-            speed = math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2)
+            if share <= 0:  # outside the blank: no chip, no force (most of the edge most of the time)
+                continue
+            tx = placed[i, j + 1, 0] - placed[i, j, 0]
+            ty = placed[i, j + 1, 1] - placed[i, j, 1]
+            tz = placed[i, j + 1, 2] - placed[i, j, 2]
+            mid[i, j, 0] = (placed[i, j, 0] + placed[i, j + 1, 0]) / 2
+            mid[i, j, 1] = (placed[i, j, 1] + placed[i, j + 1, 1]) / 2
+            mid[i, j, 2] = (placed[i, j, 2] + placed[i, j + 1, 2]) / 2
+            vx = placed[2 * n + i, j, 0] + placed[2 * n + i, j + 1, 0] - placed[n + i, j, 0] - placed[n + i, j + 1, 0]
+            vy = placed[2 * n + i, j, 1] + placed[2 * n + i, j + 1, 1] - placed[n + i, j, 1] - placed[n + i, j + 1, 1]
+            vz = placed[2 * n + i, j, 2] + placed[2 * n + i, j + 1, 2] - placed[n + i, j, 2] - placed[n + i, j + 1, 2]
+            vx, vy, vz = vx / (4 * step), vy / (4 * step), vz / (4 * step)
+            dl = math.sqrt(tx * tx + ty * ty + tz * tz)
+            speed = math.sqrt(vx * vx + vy * vy + vz * vz)
             if dl <= 0 or speed <= 0:
                 continue
-            t /= dl
-            v /= speed
-            along = t[0] * v[0] + t[1] * v[1] + t[2] * v[2]
+            tx, ty, tz = tx / dl, ty / dl, tz / dl
+            vx, vy, vz = vx / speed, vy / speed, vz / speed
+            along = tx * vx + ty * vy + tz * vz
             lam = math.asin(min(max(along, -1.0), 1.0))
-            p = t - along * v
-            pn = math.sqrt(p[0] ** 2 + p[1] ** 2 + p[2] ** 2)
+            px, py, pz = tx - along * vx, ty - along * vy, tz - along * vz
+            pn = math.sqrt(px * px + py * py + pz * pz)
             if pn <= 1e-12:  # the edge along its velocity: no chip
                 continue
-            p /= pn
-            nrm = np.array([p[1] * v[2] - p[2] * v[1], p[2] * v[0] - p[0] * v[2], p[0] * v[1] - p[1] * v[0]])
-            b = rot[i] @ body[j]
-            if nrm[0] * b[0] + nrm[1] * b[1] + nrm[2] * b[2] < 0:
-                nrm = -nrm
-            # working normal rake in the plane normal to the edge: e1 = v's part normal to t (= v cos lam + ...),
-            # e2 = the cut surface's normal towards the body
-            e1 = v - along * t
-            e1 /= math.sqrt(e1[0] ** 2 + e1[1] ** 2 + e1[2] ** 2)
-            up = g[0] * nrm[0] + g[1] * nrm[1] + g[2] * nrm[2]
-            gamma = max(math.atan2(up, g[0] * e1[0] + g[1] * e1[1] + g[2] * e1[2]), floor)
+            px, py, pz = px / pn, py / pn, pz / pn
+            nx, ny, nz = py * vz - pz * vy, pz * vx - px * vz, px * vy - py * vx
+            b = body[j]
+            bx = r[0, 0] * b[0] + r[0, 1] * b[1] + r[0, 2] * b[2]
+            by = r[1, 0] * b[0] + r[1, 1] * b[1] + r[1, 2] * b[2]
+            bz = r[2, 0] * b[0] + r[2, 1] * b[1] + r[2, 2] * b[2]
+            if nx * bx + ny * by + nz * bz < 0:
+                nx, ny, nz = -nx, -ny, -nz
+            # working normal rake in the plane normal to the edge: e1 = v's part normal to t, e2 = n (towards the body)
+            ex, ey, ez = vx - along * tx, vy - along * ty, vz - along * tz
+            en = math.sqrt(ex * ex + ey * ey + ez * ez)
+            gamma = max(math.atan2(g0 * nx + g1 * ny + g2 * nz, (g0 * ex + g1 * ey + g2 * ez) / en), floor)
             beta_n = math.atan(tan_beta * math.cos(lam))
             phi = math.pi / 4 - (beta_n - gamma) / 2
             te = math.tan(lam)
@@ -418,12 +417,70 @@ def oblique_sums(placed, ins, rot, times, step, rake, body, friction, floor):
             factors[i, j, 1] = base * math.sin(beta_n - gamma) / math.cos(lam)
             factors[i, j, 2] = base * (math.cos(beta_n - gamma) * te - te * math.sin(beta_n))
             width[i, j] = dl * math.cos(lam) * share
+            speeds[i, j] = speed
             rate[i] += width[i, j] * speed
-            for c in range(3):
-                dirs[i, j, 0, c] = v[c]
-                dirs[i, j, 1, c] = nrm[c]
-                dirs[i, j, 2, c] = p[c]
+            dirs[i, j, 0, 0], dirs[i, j, 0, 1], dirs[i, j, 0, 2] = vx, vy, vz
+            dirs[i, j, 1, 0], dirs[i, j, 1, 1], dirs[i, j, 1, 2] = nx, ny, nz
+            dirs[i, j, 2, 0], dirs[i, j, 2, 1], dirs[i, j, 2, 2] = px, py, pz
     swept = 0.0
     for i in range(n - 1):
         swept += (rate[i + 1] + rate[i]) / 2 * (times[i + 1] - times[i])
-    return swept, width, mid, dirs, factors
+    return swept, width, mid, dirs, factors, speeds
+
+
+@njit(cache=True, error_model="numpy")
+def assemble(width, mid, dirs, factors, speeds, times, shear, ce, te):
+    """For :func:`oblique_load`, per time: the resultant force on the workpiece [N] of the elements (each
+    shear f b + the edge's K_ce b, K_te b; ``shear`` = tau_s (h - h_min) [N/mm^2 x mm]), its force-weighted point
+    [mm] (the engaged elements' mean where no force acts), the moment about it [N m] and the sums of the cutting,
+    thrust and passive components [N]; and the cutting components' work over the engagement [J] (element speeds
+    ``speeds`` [mm/s], trapezoid rule over ``times``). On the workpiece: cutting along v, thrust along -n, passive
+    along p (:func:`element_loads` in numpy)."""
+    n, e = width.shape
+    force = np.zeros((n, 3))
+    point = np.zeros((n, 3))
+    moment = np.zeros((n, 3))
+    comp = np.zeros((n, 3))
+    power = np.zeros(n)
+    fe = np.zeros((e, 3))
+    for i in range(n):
+        weight = 0.0
+        count = 0.0
+        plain = np.zeros(3)
+        for j in range(e):
+            b = width[i, j]
+            if b <= 0:
+                for c in range(3):
+                    fe[j, c] = 0.0
+                continue
+            fc = shear * factors[i, j, 0] * b + ce * b
+            ft = shear * factors[i, j, 1] * b + te * b
+            fp = shear * factors[i, j, 2] * b
+            comp[i, 0] += fc
+            comp[i, 1] += ft
+            comp[i, 2] += fp
+            power[i] += fc * speeds[i, j]
+            mag = 0.0
+            for c in range(3):
+                fe[j, c] = fc * dirs[i, j, 0, c] - ft * dirs[i, j, 1, c] + fp * dirs[i, j, 2, c]
+                force[i, c] += fe[j, c]
+                mag += fe[j, c] * fe[j, c]
+            mag = math.sqrt(mag)
+            weight += mag
+            count += 1.0
+            for c in range(3):
+                point[i, c] += mag * mid[i, j, c]
+                plain[c] += mid[i, j, c]
+        for c in range(3):
+            point[i, c] = point[i, c] / weight if weight > 0 else (plain[c] / count if count > 0 else 0.0)
+        for j in range(e):
+            if width[i, j] <= 0:
+                continue
+            r0, r1, r2 = mid[i, j, 0] - point[i, 0], mid[i, j, 1] - point[i, 1], mid[i, j, 2] - point[i, 2]
+            moment[i, 0] += (r1 * fe[j, 2] - r2 * fe[j, 1]) * 1e-3
+            moment[i, 1] += (r2 * fe[j, 0] - r0 * fe[j, 2]) * 1e-3
+            moment[i, 2] += (r0 * fe[j, 1] - r1 * fe[j, 0]) * 1e-3
+    work = 0.0
+    for i in range(n - 1):
+        work += (power[i + 1] + power[i]) / 2 * (times[i + 1] - times[i])
+    return force, point, moment, comp, work * 1e-3

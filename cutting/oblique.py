@@ -44,6 +44,7 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -144,11 +145,19 @@ class ObliqueForces:
         kp = base * (np.cos(beta_n - g) * np.tan(lam) - np.tan(eta) * np.sin(beta_n))
         return kc, kt, kp
 
-    def shear_stress(self, h) -> np.ndarray:
-        """tau_s(h) [N/mm^2] that gives the table's kc(h) at the table's tool (rake +6 deg, no inclination)."""
-        ref, _, _ = self.factors(math.radians(REFERENCE_RAKE_DEG), 0.0)
-        hh = np.maximum(np.asarray(h, dtype=float), max(self.min_chip, H_FLOOR))
-        return self.material.kc11 * hh ** (-self.material.mc) / ref
+    @cached_property
+    def _reference(self) -> float:
+        """K_c / tau_s of the table's tool (rake +6 deg, no inclination)."""
+        return float(self.factors(math.radians(REFERENCE_RAKE_DEG), 0.0)[0])
+
+    def shear_stress(self, h) -> np.ndarray | float:
+        """tau_s(h) [N/mm^2] that gives the table's kc(h) at the table's tool (rake +6 deg, no inclination); a float
+        for a float h (the co-simulation asks once per engagement)."""
+        floor = max(self.min_chip, H_FLOOR)
+        if isinstance(h, float | int):
+            return self.material.kc11 * max(float(h), floor) ** (-self.material.mc) / self._reference
+        hh = np.maximum(np.asarray(h, dtype=float), floor)
+        return self.material.kc11 * hh ** (-self.material.mc) / self._reference
 
     def coefficients(self, h, rake, inclination) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(K_c, K_t, K_p) [N/mm^2] at uncut chip thickness ``h`` [mm], normal rake and inclination [rad]."""

@@ -150,7 +150,7 @@ def pass_loads(
         vel = ((after[:, :-1] + after[:, 1:]) - (before[:, :-1] + before[:, 1:])) / (4 * step) * omega0  # mm/s
         speed = np.linalg.norm(vel, axis=2)
         rot, centre = setup.cutter_pose(phi, 0.0, a)
-        swept, width, _, dirs, factors = oblique_sums(
+        swept, width, _, dirs, factors, _ = oblique_sums(
             np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
             faces.rake, faces.body, model.model.friction_angle, model.model.rake_floor,
         )  # fmt: skip

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+from numba import njit
 
 from cutting.errors import InputError, LostSynchronismError, Problem
 from cutting.skiving.path_correction import PathCorrection
@@ -515,12 +516,33 @@ def _rotation(v: np.ndarray) -> np.ndarray:
 def loop_deflection(setup, axes: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> tuple[float, ...]:
     """The loop's deflection at one instant: the cutter frame's pose in the blank frame ``rot``, ``trans`` [mm]
     (MuJoCo's sites) against the pose its axes give (``axes``: B1, B2 [rad], P3, X [m], TV as MuJoCo holds them), as
-    C = real o rigid^-1 in the blank frame: its rotation vector [rad] and translation [mm] (6 numbers)."""
-    q = np.array(axes, dtype=float)[None, :]
-    q[:, 2:4] /= MM
-    rot_r, trans_r = relative_pose(setup, q)
-    turn = rot @ rot_r[0].T
-    # the rotation vector of a small rotation: its skew part (exact to theta^3 / 6, 1e-16 rad at 1e-5 rad)
-    v = 0.5 * np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]])
-    shift = trans - turn @ trans_r[0]
-    return (*v.tolist(), *shift.tolist())
+    C = real o rigid^-1 in the blank frame: its rotation vector [rad] and translation [mm] (6 numbers). Compiled:
+    the run asks for it every servo tick."""
+    out = _deflection(
+        float(axes[0]), float(axes[1]), float(axes[2]) / MM, float(axes[3]) / MM,
+        setup.tilt, setup.cutter_phase, setup.work_phase, np.ascontiguousarray(rot), np.ascontiguousarray(trans),
+    )  # fmt: skip
+    return tuple(out.tolist())
+
+
+@njit(cache=True)
+def _deflection(b1, b2, p3, x, tilt, cutter_phase, work_phase, rot, trans):
+    """:func:`loop_deflection` in scalars: the rigid pose Rz(-(B2 + wp)) Rx(tilt) Rz(B1 + cp), centre
+    Rz(-(B2 + wp)) (X, 0, P3); turn = rot rigid^T; its skew part (the rotation vector, exact to theta^3 / 6:
+    1e-16 rad at 1e-5 rad) and shift = trans - turn centre."""
+    cb, sb = math.cos(-(b2 + work_phase)), math.sin(-(b2 + work_phase))
+    ct, st = math.cos(tilt), math.sin(tilt)
+    cc, sc = math.cos(b1 + cutter_phase), math.sin(b1 + cutter_phase)
+    back = np.array([[cb, -sb, 0.0], [sb, cb, 0.0], [0.0, 0.0, 1.0]])
+    tx = np.array([[1.0, 0.0, 0.0], [0.0, ct, -st], [0.0, st, ct]])
+    tc = np.array([[cc, -sc, 0.0], [sc, cc, 0.0], [0.0, 0.0, 1.0]])
+    rigid = back @ tx @ tc
+    centre = back @ np.array([x, 0.0, p3])
+    turn = rot @ rigid.T
+    out = np.empty(6)
+    out[0] = 0.5 * (turn[2, 1] - turn[1, 2])
+    out[1] = 0.5 * (turn[0, 2] - turn[2, 0])
+    out[2] = 0.5 * (turn[1, 0] - turn[0, 1])
+    shift = trans - turn @ centre
+    out[3], out[4], out[5] = shift[0], shift[1], shift[2]
+    return out

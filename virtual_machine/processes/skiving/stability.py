@@ -143,7 +143,7 @@ def oriented_coefficients(
     inside = (radial & (np.abs(w[..., 2]) <= g.face_width / 2)).astype(float)
     rot, _ = setup.cutter_pose(phi, 0.0, centre_distance)
     c = model.model
-    swept, width, _, dirs, factors = oblique_sums(
+    swept, width, _, dirs, factors, _ = oblique_sums(
         np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
         faces.rake, faces.body, c.friction_angle, c.rake_floor,
     )  # fmt: skip
