@@ -291,12 +291,14 @@ def stability(job: Path | None, out: Path, as_json: bool) -> None:
                                                              for p in doc["passes"]]}, indent=2))  # fmt: skip
         return
     for p in doc["passes"]:
-        crit = p["critical_infeed_mm"]
+        crit, margin = p["critical_infeed_mm"], p["margin"]
         verdict = "stable" if p["stable"] else "CHATTERS"
-        limit = f"{crit:.3f} mm" if crit is not None else "beyond 4x the infeed"
+        at = f" at {p['chatter_frequency_hz']:.0f} Hz" if p["chatter_frequency_hz"] else ""
+        first = f"{crit:.3f} mm" if crit is not None else "none up to 4x its infeed"
         click.echo(
-            f"pass {p['pass']}: infeed {p['infeed_mm']:.3f} mm at {p['tool_speed_rpm']:.0f} rpm, critical {limit}: "
-            f"{verdict}" + (f" (at {p['chatter_frequency_hz']:.0f} Hz)" if p["chatter_frequency_hz"] else "")
+            f"pass {p['pass']}: infeed {p['infeed_mm']:.3f} mm at {p['tool_speed_rpm']:.0f} rpm: {verdict}, margin "
+            + (f"{margin:.2f}" if margin is not None else "unlimited (no regenerative chip)")
+            + f"{at}; the least infeed that chatters at this speed: {first}"
         )
     click.echo(f"files: {out / 'stability.json'}, {out / 'stability.png'}")
 
