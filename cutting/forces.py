@@ -330,24 +330,6 @@ def oblique_load(
     return EngagementLoad(times, force, point, moment, volume, h_chip, work / volume * 1e3, components)
 
 
-def element_loads(
-    model: ObliqueForces, width: np.ndarray, dirs: np.ndarray, factors: np.ndarray, h: float, h_chip: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per (time, element) of :func:`oblique_sums`'s ``width``, ``dirs`` and ``factors``: the force on the workpiece
-    (..., 3) [N] and its [cutting, thrust, passive] components (..., 3) [N] for a chip h [mm] thick (the volume's)
-    whose size effect and share under the minimum chip are those of ``h_chip`` (the measured mean thickness):
-    tau_s(h_chip) f (h - h_min) b plus the edge's ploughing b (K_ce, K_te); cutting along v, thrust away from the
-    tool's body (-n), passive along p."""
-    tau = float(model.shear_stress(h_chip))
-    sheared = h * max(1.0 - model.min_chip / h_chip, 0.0)
-    ce, te = model.edge_coefficients
-    comp = tau * factors * sheared * width[..., None]
-    comp[..., 0] += ce * width
-    comp[..., 1] += te * width
-    f_el = comp[..., 0:1] * dirs[..., 0, :] - comp[..., 1:2] * dirs[..., 1, :] + comp[..., 2:3] * dirs[..., 2, :]
-    return f_el, comp
-
-
 @njit(cache=True, error_model="numpy")
 def oblique_sums(placed, ins, rot, times, step, rake, body, friction, floor):
     """For :func:`oblique_load`: the area the engaged edge sweeps normal to the velocities [mm^2] and per (time,
@@ -435,7 +417,7 @@ def assemble(width, mid, dirs, factors, speeds, times, shear, ce, te):
     [mm] (the engaged elements' mean where no force acts), the moment about it [N m] and the sums of the cutting,
     thrust and passive components [N]; and the cutting components' work over the engagement [J] (element speeds
     ``speeds`` [mm/s], trapezoid rule over ``times``). On the workpiece: cutting along v, thrust along -n, passive
-    along p (:func:`element_loads` in numpy)."""
+    along p."""
     n, e = width.shape
     force = np.zeros((n, 3))
     point = np.zeros((n, 3))

@@ -38,16 +38,28 @@ class Lobes:
     limit: np.ndarray
 
     def at(self, delay: float) -> tuple[float, float]:
-        """The least limit of any lobe at ``delay`` [s] and its chatter frequency [Hz] (interpolated along each lobe
-        between the frequencies that bracket it; inf, nan where no lobe reaches it)."""
-        best, freq = math.inf, math.nan
+        """The least limit of any lobe at ``delay`` [s] and its chatter frequency [Hz] (inf, nan where no lobe
+        reaches it): :meth:`limits` at one delay."""
+        limit, freq = self.limits(np.array([delay]))
+        return float(limit[0]), float(freq[0])
+
+    def limits(self, delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The least limit over all lobes at each of ``delays`` [s] and its chatter frequency [Hz]: each lobe's limit
+        interpolated along its delay (the lobe's samples sorted by delay)."""
+        delays = np.asarray(delays, dtype=float)
+        best = np.full(len(delays), np.inf)
+        freq = np.full(len(delays), np.nan)
         for d, lim in zip(self.delay, self.limit, strict=True):
-            ok = np.isfinite(lim)
-            for i in np.flatnonzero(ok[:-1] & ok[1:] & ((d[:-1] - delay) * (d[1:] - delay) <= 0)):
-                f = (delay - d[i]) / (d[i + 1] - d[i]) if d[i + 1] != d[i] else 0.0
-                value = lim[i] + f * (lim[i + 1] - lim[i])
-                if value < best:
-                    best, freq = value, (self.omega[i] + f * (self.omega[i + 1] - self.omega[i])) / (2 * math.pi)
+            ok = np.isfinite(lim) & np.isfinite(d)
+            if ok.sum() < 2:
+                continue
+            order = np.argsort(d[ok])
+            x, y, w = d[ok][order], lim[ok][order], self.omega[ok][order]
+            inside = (delays >= x[0]) & (delays <= x[-1])
+            v = np.where(inside, np.interp(delays, x, y), np.inf)
+            better = v < best
+            best = np.where(better, v, best)
+            freq = np.where(better, np.interp(delays, x, w) / (2 * math.pi), freq)
         return best, freq
 
 

@@ -114,7 +114,9 @@ def build_spec(
     r_cut, width = lay.cutter_radius, lay.cutter_width
     cutter_mass = STEEL * math.pi * r_cut**2 * width  # the cutter as a disc at its tip diameter (HSS/carbide ~ steel)
     tool_axial = params.tool_inertia + cutter_mass * r_cut**2 / 2
-    turn = np.array(_rot_x(lay.tilt))  # head frame -> machine frame; the tilts' pivots lie up the spindle (-z local)
+    turn = np.empty(9)
+    mujoco.mju_quat2Mat(turn, np.array(quat_x(lay.tilt)))  # head frame -> machine frame
+    turn = turn.reshape(3, 3)  # the tilts' pivots lie up the spindle (-z local)
     mount = add_modes(head, loop, "tool", turn.T, turn @ np.array([0.0, 0.0, 1.0]), tool_axial / 2)
     tool = mount.add_body(name="tool_spindle")
     inertial(tool, MIN_MASS if _has(loop, "tool") else 12.0 + cutter_mass, tool_axial)
@@ -181,11 +183,6 @@ def _work_spindle(world, lay: MachineLayout, params: SkivingMachineParams) -> No
 
 def _has(loop, at: str) -> bool:
     return any(m.at == at for m in loop)
-
-
-def _rot_x(angle: float) -> list[list[float]]:
-    c, s = math.cos(angle), math.sin(angle)
-    return [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
 
 
 def _home_qpos(spec: mujoco.MjSpec, lay: MachineLayout, lead_screw_pitch: float, drives) -> list[float]:

@@ -56,8 +56,9 @@ def test_one_soft_mode_gives_tlustys_floor() -> None:
     u = np.array([0.0, 1.0, 0.0])
     floor = 2 * mode.stiffness * mode.damping * (1 + mode.damping) / -(u @ d @ u)
     assert float(np.min(first.margins)) == pytest.approx(floor, rel=0.02)
-    # the lobes' chatter frequencies lie just above the mode's
-    assert 180.0 < first.chatter_frequency < 200.0 or math.isnan(first.chatter_frequency)
+    # at the job's speed the margin lies on or above that floor (measured 0.40: it chatters) and the chatter frequency
+    # just above the mode's (measured 195.9 Hz), within the band where Re[g] < 0
+    assert floor * 0.999 <= first.margin < 1.0 and 180.0 < first.chatter_frequency < 200.0
     g = frequency_response((mode,), "tool", np.array([2 * math.pi * 180.0 * math.sqrt(1.06)]), np.zeros(3))
     assert g[0, 1, 1].real == pytest.approx(-1 / (4 * 5e7 * 0.03 * 1.03), rel=1e-3)
 

@@ -257,7 +257,7 @@ def _sampled(w, o, t):
     v0 = h10 * (w[e + 3] * h) + h01 * w[e] + h11 * (w[e + 6] * h)
     v1 = h10 * (w[e + 4] * h) + h01 * w[e + 1] + h11 * (w[e + 7] * h)
     v2 = h10 * (w[e + 5] * h) + h01 * w[e + 2] + h11 * (w[e + 8] * h)
-    # Rodrigues, as sampled_motion._exp
+    # Rodrigues, as sampled_motion.exp_rotations
     angle = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
     den = max(angle, 1e-300)
     k0, k1, k2 = v0 / den, v1 / den, v2 / den

@@ -29,7 +29,7 @@ def _log(r: np.ndarray) -> np.ndarray:
     return axis * scale[..., None]
 
 
-def _exp(v: np.ndarray) -> np.ndarray:
+def exp_rotations(v: np.ndarray) -> np.ndarray:
     """Rotation matrices of rotation vectors (..., 3) (Rodrigues)."""
     angle = np.linalg.norm(v, axis=-1)
     k = v / np.maximum(angle, 1e-300)[..., None]
@@ -125,7 +125,7 @@ class SampledMotion:
         w1 = (v2 - v0) / (self.t[i2] - self.t[i0])[:, None] * h[:, None]
         w2 = (v3 - 0.0) / (self.t[i3] - self.t[i])[:, None] * h[:, None]
         v = h10[:, None] * w1 + h01[:, None] * v2 + h11[:, None] * w2
-        return self.rot[i] @ _exp(v), trans
+        return self.rot[i] @ exp_rotations(v), trans
 
 
 def sampled_passes(setup: SkivingSetup, passes) -> list[SampledMotion]:

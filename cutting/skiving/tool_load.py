@@ -4,7 +4,9 @@ load its teeth unequally; tool life follows the most loaded one.
 
 The cutting path of an engagement is the cutting speed at the pitch point times the time the tooth spends in the
 blank's envelope; the chip energy is Kienzle's kc(h) times the chip's volume at its mean thickness h, with the
-force model's rake factor (:mod:`cutting.forces`: the same energy the machine's load does work with).
+handbook's rake factor at 0 deg: a per-tooth figure to compare the teeth by. The run's own chip energy, from the
+oblique model at each element's working angles (:mod:`cutting.forces`), is measurement.json's
+``run.forces.chip_energy_J`` (within ~15 % of this on the shipped jobs, tests/test_cosim.py).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from cutting.materials import Material, rake_factor
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.passages import Chip
 
-#: the rake angle the force model takes for the edge (cutting.forces) [deg]
+#: the rake angle of this per-tooth estimate [deg] (the run's force model takes each element's working rake)
 FORCE_MODEL_RAKE = 0.0
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cutting.errors import MachineLimitError, Problem
-from cutting.forces import EdgeFaces, element_loads, oblique_sums
+from cutting.forces import EdgeFaces, assemble, oblique_sums
 from cutting.gear import Gear
 from cutting.materials import material
 from cutting.oblique import ObliqueForces, load_cutting_model
@@ -127,10 +127,6 @@ def pass_loads(
     """
     model = ObliqueForces(material(material_key), load_cutting_model(), edge_radius)
     g = setup.gear
-    edge = make_edge(setup, "involute")  # within micrometres of the conjugate edge: the same engaged length
-    pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
-    # the rake face's normal in the cutter frame the outline is placed in here (the rake frame's rotation)
-    faces = EdgeFaces.of_outline(pts, setup.rake_frame[:, :3] @ rake_normal(setup))
     omega0 = setup.tool_speed * 2 * math.pi / 60
     omega2 = setup.speed_ratio * omega0
     pitch = 2 * math.pi / setup.cutter.teeth
@@ -139,32 +135,21 @@ def pass_loads(
     for k, a in enumerate(setup.pass_centre_distances):
         area = space_area(g, setup.full_depth - depths[k + 1]) - space_area(g, setup.full_depth - depths[k])
         volume = area * setup.axial_feed
-        half = _engagement_half_angle(setup, pts, a)
-        phi = np.linspace(-half, half, samples)
-        step = 1e-4
-        w, before, after = (place(pts, *setup.cutter_pose(phi + d, 0.0, a)) for d in (0.0, -step, step))
-        mid = (w[:, :-1] + w[:, 1:]) / 2
-        r = np.hypot(w[..., 0], w[..., 1])
-        radial = r > g.tip_radius if g.internal else r < g.tip_radius
-        inside = (radial & (np.abs(w[..., 2]) <= g.face_width / 2)).astype(float)
-        vel = ((after[:, :-1] + after[:, 1:]) - (before[:, :-1] + before[:, 1:])) / (4 * step) * omega0  # mm/s
-        speed = np.linalg.norm(vel, axis=2)
-        rot, centre = setup.cutter_pose(phi, 0.0, a)
-        swept, width, _, dirs, factors, _ = oblique_sums(
-            np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
-            faces.rake, faces.body, model.model.friction_angle, model.model.rake_floor,
-        )  # fmt: skip
-        if volume <= 0 or swept <= 0:
+        e = ideal_engagement(setup, model, a, samples)
+        if e is None or volume <= 0 or e.swept <= 0:
             continue
-        h = volume / swept
-        force, comp = element_loads(model, width, dirs, factors, h, h)  # on the workpiece [N]
-        power = float(np.trapezoid((comp[..., 0] * speed).sum(axis=1), phi / omega0))  # one engagement's work [N mm]
-        kc = power / volume
-        work = np.cross(mid, force)[..., 2].sum(axis=1) * 1e-3  # the load's torque about +z [N m]
-        tool = (np.cross(mid - centre[:, None, :], -force) * rot[:, None, :, 2]).sum(axis=(1, 2)) * 1e-3
-        total = _overlapped(phi, pitch, half)
+        h = volume / e.swept
+        shear = float(model.shear_stress(h)) * max(h - model.min_chip, 0.0)
+        force, point, moment, _, energy = assemble(
+            e.width, e.mid, e.dirs, e.factors, e.speed, e.t, shear, *model.edge_coefficients
+        )  # on the workpiece: the resultant at its point and the moment about it [N, mm, N m]; the work [J]
+        kc = energy * 1e3 / volume
+        work = np.cross(point, force)[:, 2] * 1e-3 + moment[:, 2]  # the load's torque about +z [N m]
+        axis = e.rot[:, :, 2]  # the cutter axis
+        tool = -(np.sum(np.cross(point - e.centre, force) * axis, axis=1) * 1e-3 + np.sum(moment * axis, axis=1))
+        total = _overlapped(e.phi, pitch, e.half)
         t1, t2 = -total(tool), -total(work) * math.copysign(1.0, omega2)  # what the drives supply
-        f = np.stack([total(force.sum(axis=1)[:, i]) for i in range(3)], axis=-1)
+        f = np.stack([total(force[:, i]) for i in range(3)], axis=-1)
         out.append(
             PassLoad(
                 k,
@@ -173,7 +158,7 @@ def pass_loads(
                 volume,
                 h,
                 kc,
-                2 * half / pitch,
+                2 * e.half / pitch,
                 float(t1.mean()),
                 float(np.abs(t1).max()),
                 float(t2.mean()),
@@ -184,6 +169,57 @@ def pass_loads(
             )
         )
     return out
+
+
+@dataclass(frozen=True)
+class IdealEngagement:
+    """One cutter tooth's engagement at a centre distance by the ideal kinematics (the carriage at mid face), in the
+    turning work frame: the cutter angles ``phi`` (n,) over the window +-``half`` [rad], their times ``t`` [s], the
+    cutter's pose (``rot`` (n, 3, 3), ``centre`` (n, 3) [mm]) and the engaged edge's elements as
+    :func:`cutting.forces.oblique_sums` gives them (``swept`` [mm^2], ``width``, ``mid``, ``dirs``, ``factors``,
+    ``speed``): what the pre-run estimate and the stability lobes both read."""
+
+    phi: np.ndarray
+    half: float
+    t: np.ndarray
+    rot: np.ndarray
+    centre: np.ndarray
+    swept: float
+    width: np.ndarray
+    mid: np.ndarray
+    dirs: np.ndarray
+    factors: np.ndarray
+    speed: np.ndarray
+
+
+def ideal_engagement(
+    setup: SkivingSetup, model: ObliqueForces, centre_distance: float, samples: int = 121
+) -> IdealEngagement | None:
+    """The engagement at ``centre_distance`` [mm] (None when the edge stays clear of the blank): the involute edge
+    (within micrometres of the conjugate one: the same engaged length) in elements of <= 0.2 mm as the
+    co-simulation's, inside the blank's envelope (tip cylinder and faces), each element at its working angles."""
+    g = setup.gear
+    edge = make_edge(setup, "involute")
+    pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
+    # the rake face's normal in the cutter frame the outline is placed in here (the rake frame's rotation)
+    faces = EdgeFaces.of_outline(pts, setup.rake_frame[:, :3] @ rake_normal(setup))
+    half = _engagement_half_angle(setup, pts, centre_distance)
+    if half <= 0:
+        return None
+    omega0 = setup.tool_speed * 2 * math.pi / 60
+    phi = np.linspace(-half, half, samples)
+    step = 1e-4
+    w, before, after = (place(pts, *setup.cutter_pose(phi + d, 0.0, centre_distance)) for d in (0.0, -step, step))
+    r = np.hypot(w[..., 0], w[..., 1])
+    radial = r > g.tip_radius if g.internal else r < g.tip_radius
+    inside = (radial & (np.abs(w[..., 2]) <= g.face_width / 2)).astype(float)
+    rot, centre = setup.cutter_pose(phi, 0.0, centre_distance)
+    c = model.model
+    swept, width, mid, dirs, factors, speed = oblique_sums(
+        np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
+        faces.rake, faces.body, c.friction_angle, c.rake_floor,
+    )  # fmt: skip
+    return IdealEngagement(phi, half, phi / omega0, rot, centre, swept, width, mid, dirs, factors, speed)
 
 
 def _engagement_half_angle(setup: SkivingSetup, pts: np.ndarray, centre_distance: float) -> float:

@@ -18,6 +18,7 @@ from numba import njit
 
 from cutting.errors import InputError, LostSynchronismError, Problem
 from cutting.skiving.path_correction import PathCorrection
+from cutting.skiving.sampled_motion import exp_rotations
 from machine_models.parameters import SkivingMachineParams
 from machine_models.skiving_machine import MM, build_spec
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
@@ -498,19 +499,8 @@ def relative_pose(setup, q: np.ndarray, deflection: np.ndarray | None = None) ->
     trans = np.matmul(back, centre[:, :, None])[:, :, 0]
     if deflection is None:
         return rot, trans
-    turn = _rotation(deflection[:, :3])
+    turn = exp_rotations(deflection[:, :3])
     return turn @ rot, np.matmul(turn, trans[:, :, None])[:, :, 0] + deflection[:, 3:]
-
-
-def _rotation(v: np.ndarray) -> np.ndarray:
-    """Rotation matrices (n, 3, 3) of rotation vectors (n, 3) (Rodrigues)."""
-    angle = np.linalg.norm(v, axis=1)
-    k = v / np.maximum(angle, 1e-300)[:, None]
-    kx = np.zeros((len(v), 3, 3))
-    kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
-    kx[:, 1, 0], kx[:, 2, 0], kx[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
-    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
-    return np.eye(3) + s * kx + (1 - c) * (kx @ kx)
 
 
 def loop_deflection(setup, axes: np.ndarray, rot: np.ndarray, trans: np.ndarray) -> tuple[float, ...]:

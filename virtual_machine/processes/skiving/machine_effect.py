@@ -22,6 +22,7 @@ from virtual_machine.runtime.machine_run import SEGMENTS, MotionRecord, relative
 
 FEED = SEGMENTS.index("feed")
 #: a pass whose vibration grows by this over its cut (last quarter against the first) and reaches CHATTER_UM warns
+#: (a choice, not a published criterion: growth marks regeneration, 1 um is a tenth of a class-6 gear's f_falpha)
 CHATTER_GROWTH = 2.0
 CHATTER_UM = 1.0
 #: the moving average whose residue is the vibration [s]

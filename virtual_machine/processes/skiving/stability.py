@@ -26,17 +26,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.forces import EdgeFaces, oblique_sums
 from cutting.materials import material
 from cutting.oblique import ObliqueForces, load_cutting_model
-from cutting.regeneration import Lobes, lobes
-from cutting.skiving.edge import make_edge
-from cutting.skiving.kinematics import SkivingSetup
-from cutting.skiving.sweep import outline_points, place, simplify_outline, split_sides
-from cutting.skiving.working_angles import rake_normal
+from cutting.regeneration import lobes
+from cutting.skiving.kinematics import SkivingSetup, rot_x, rot_z
 from machine_models.loop import LoopMode, frequency_response
 from machine_models.parameters import SkivingMachineParams
-from virtual_machine.reach.skiving_load import _engagement_half_angle, space_area
+from virtual_machine.reach.skiving_load import ideal_engagement, space_area
 
 
 @dataclass(frozen=True)
@@ -107,9 +103,7 @@ def axis_modes(params: SkivingMachineParams) -> tuple[LoopMode, ...]:
 def loop_response(setup: SkivingSetup, params: SkivingMachineParams):
     """G(omega) (n, 3, 3) [m/N]: the tool's displacement relative to the workpiece per force on the tool at the
     cutting point (tool side plus work side: the workpiece takes the opposite force)."""
-    tilt = setup.tilt
-    c, s = math.cos(tilt), math.sin(tilt)
-    tool_axis = np.array([0.0, -s, c])  # the head's z turned by the tilt about x
+    tool_axis = rot_x(setup.tilt) @ np.array([0.0, 0.0, 1.0])  # the head's z turned by the tilt about x
     point = np.array([setup.gear.reference_radius, 0.0, 0.0])  # the pitch point on the mesh line
     a = setup.pass_centre_distances[-1]
     modes = params.loop + axis_modes(params)
@@ -127,45 +121,22 @@ def oriented_coefficients(
 ) -> tuple[np.ndarray, float]:
     """D (3, 3) [N/m] of one engagement at ``centre_distance`` [mm] taking ``volume`` [mm^3] (the chip of the
     pass's cross-section over a work turn's feed), averaged over a cutter pitch; and the mean chip h [mm]."""
-    edge = make_edge(setup, "involute")
-    pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
-    faces = EdgeFaces.of_outline(pts, setup.rake_frame[:, :3] @ rake_normal(setup))
-    g = setup.gear
-    omega0 = setup.tool_speed * 2 * math.pi / 60
-    half = _engagement_half_angle(setup, pts, centre_distance)
-    if half <= 0 or volume <= 0:
+    e = ideal_engagement(setup, model, centre_distance, samples)
+    if e is None or volume <= 0 or e.swept <= 0:
         return np.zeros((3, 3)), 0.0
-    phi = np.linspace(-half, half, samples)
-    step = 1e-4
-    w, before, after = (place(pts, *setup.cutter_pose(phi + d, 0.0, centre_distance)) for d in (0.0, -step, step))
-    r = np.hypot(w[..., 0], w[..., 1])
-    radial = r > g.tip_radius if g.internal else r < g.tip_radius
-    inside = (radial & (np.abs(w[..., 2]) <= g.face_width / 2)).astype(float)
-    rot, _ = setup.cutter_pose(phi, 0.0, centre_distance)
-    c = model.model
-    swept, width, _, dirs, factors, _ = oblique_sums(
-        np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
-        faces.rake, faces.body, c.friction_angle, c.rake_floor,
-    )  # fmt: skip
-    if swept <= 0:
-        return np.zeros((3, 3)), 0.0
-    h = volume / swept
+    width, factors = e.width, e.factors
+    h = volume / e.swept
     tau = float(model.shear_stress(h))
     slope = tau * max(1.0 - model.material.mc * max(h - model.min_chip, 0.0) / h, 0.0) if h > model.min_chip else 0.0
     # the directions from the turning work frame into the machine frame (the work's turn phi2 at each sample)
-    phi2 = setup.speed_ratio * phi + setup.work_phase
-    turn = np.zeros((len(phi), 3, 3))
-    turn[:, 0, 0], turn[:, 0, 1], turn[:, 1, 0], turn[:, 1, 1] = np.cos(phi2), -np.sin(phi2), np.sin(phi2), np.cos(phi2)
-    turn[:, 2, 2] = 1.0
-    dirs = np.einsum("nij,nkdj->nkdi", turn, dirs)
+    dirs = np.einsum("nij,nkdj->nkdi", rot_z(setup.speed_ratio * e.phi + setup.work_phase), e.dirs)
     # per element: (f_c e_c - f_t n + f_p p) n^T x b x dF/dh; [N/mm / mm] = N/mm^2 -> x 1e3 per mm -> N/m
     force_dir = (
         factors[..., 0:1] * dirs[..., 0, :] - factors[..., 1:2] * dirs[..., 1, :] + factors[..., 2:3] * dirs[..., 2, :]
     )
     per_time = np.einsum("nk,nki,nkj->nij", width * slope, force_dir, dirs[..., 1, :])  # N/mm per mm of displacement
-    dt = np.diff(phi / omega0)
-    integral = np.sum((per_time[1:] + per_time[:-1]) / 2 * dt[:, None, None], axis=0)
-    pitch_time = 2 * math.pi / setup.cutter.teeth / omega0
+    integral = np.trapezoid(per_time, e.t, axis=0)
+    pitch_time = 2 * math.pi / setup.cutter.teeth / (setup.tool_speed * 2 * math.pi / 60)
     return integral / pitch_time * 1e3, h
 
 
@@ -201,7 +172,7 @@ def pass_stability(
             area = space_area(setup.gear, setup.full_depth - done - d) - space_area(setup.gear, setup.full_depth - done)
             dmat, _ = oriented_coefficients(setup, model, previous - d, area * setup.axial_feed)
             lb = lobes(g, dmat, omega, count)
-            lims[i], freqs[i] = _limits(lb, delays)
+            lims[i], freqs[i] = lb.limits(delays)
         critical = np.array([_critical(trials, lims[:, j]) for j in range(len(speeds))])
         # at the job's own speed and infeed
         mine = int(np.argmin(np.abs(trials - infeed)))
@@ -210,25 +181,6 @@ def pass_stability(
         out.append(PassStability(k, infeed, n0, own, float(freqs[mine, j0]), speeds, critical, lims[mine]))
         previous, done = a, done + infeed
     return out
-
-
-def _limits(lb: Lobes, delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The least limit (the scale of D at which the cut chatters) over all lobes at each delay, and its chatter
-    frequency [Hz]: each lobe's limit interpolated along its delay (np.interp over the lobe sorted by delay)."""
-    best = np.full(len(delays), np.inf)
-    freq = np.full(len(delays), np.nan)
-    for d, lim in zip(lb.delay, lb.limit, strict=True):
-        ok = np.isfinite(lim) & np.isfinite(d)
-        if ok.sum() < 2:
-            continue
-        order = np.argsort(d[ok])
-        x, y, w = d[ok][order], lim[ok][order], lb.omega[ok][order]
-        inside = (delays >= x[0]) & (delays <= x[-1])
-        v = np.where(inside, np.interp(delays, x, y), np.inf)
-        better = v < best
-        best = np.where(better, v, best)
-        freq = np.where(better, np.interp(delays, x, w) / (2 * math.pi), freq)
-    return best, freq
 
 
 def _critical(trials: np.ndarray, limits: np.ndarray) -> float:
