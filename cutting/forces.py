@@ -48,6 +48,8 @@ class EngagementLoad:
     kc: float  # specific cutting force used [N/mm^2] (oblique: the chip's work over its volume)
     #: (n, 3) [N]: the sums of the elements' cutting, thrust and passive components (oblique model only)
     components: np.ndarray | None = None
+    #: the chip volume the force model took over the engagement [mm^3] (the chip of the moment's; None: ``volume``)
+    model_volume: float | None = None
 
     @property
     def energy(self) -> float:
@@ -57,101 +59,12 @@ class EngagementLoad:
     def peak(self) -> float:
         return float(np.linalg.norm(self.force, axis=1).max()) if len(self.t) else 0.0
 
-    def mean(self, a: float, b: float) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """The load averaged over [a, b] [s] (a servo tick): the mean force, the force-weighted mean point and the
-        mean moment about that point, so that the tick gets the engagement's impulse and angular impulse even when
-        the engagement is shorter than the tick. None if they do not overlap (:func:`interval_mean`)."""
-        out = np.empty(9)
-        if not len(self.t) or not interval_mean(self.t, self.rows, a, b, out):
-            return None
-        return out[0:3], out[3:6], out[6:9]
-
-    @property
-    def rows(self) -> np.ndarray:
-        """Force, point and moment side by side per sample (n, 9)."""
-        rows = self.__dict__.get("_stacked")
-        if rows is None:
-            rows = self.__dict__["_stacked"] = np.ascontiguousarray(
-                np.concatenate([self.force, self.point, self.moment], axis=1), dtype=float
-            )
-        return rows
-
     def shifted(self, dt: float) -> EngagementLoad:
         """The same load ``dt`` seconds later (the prediction for the next tooth: one cutter pitch on)."""
         return EngagementLoad(
-            self.t + dt, self.force, self.point, self.moment, self.volume, self.thickness, self.kc, self.components
-        )
-
-
-@njit(cache=True, error_model="numpy")
-def interval_mean(t: np.ndarray, rows: np.ndarray, a: float, b: float, out: np.ndarray) -> bool:
-    """EngagementLoad.mean over [a, b] into ``out`` (force, point, moment): the samples ``t`` (n,) of ``rows`` (n,
-    9) inside [a, b] as they are, the ends interpolated linearly, integrated by the trapezoid rule; False where
-    they do not overlap or the force vanishes. Compiled: the co-simulation asks for it every servo tick."""
-    n = len(t)
-    if n < 2 or b <= t[0] or a >= t[n - 1] or b <= a:
-        return False
-    lo, hi = max(a, t[0]), min(b, t[n - 1])
-    i0 = np.searchsorted(t, lo, "right")
-    i1 = np.searchsorted(t, hi, "left")
-    m = i1 - i0 + 2
-    ts = np.empty(m)
-    y = np.empty((m, 9))
-    ts[0], ts[m - 1] = lo, hi
-    for e, x in ((0, lo), (m - 1, hi)):
-        j = min(max(np.searchsorted(t, x, "right") - 1, 0), n - 2)
-        f = (x - t[j]) / (t[j + 1] - t[j]) if t[j + 1] > t[j] else 0.0
-        for c in range(9):
-            y[e, c] = rows[j, c] + f * (rows[j + 1, c] - rows[j, c])
-    for k in range(i0, i1):
-        ts[k - i0 + 1] = t[k]
-        y[k - i0 + 1] = rows[k]
-    mag = np.sqrt(y[:, 0] ** 2 + y[:, 1] ** 2 + y[:, 2] ** 2)
-    weight = 0.0
-    fsum, psum = np.zeros(3), np.zeros(3)
-    for k in range(m - 1):
-        w = (ts[k + 1] - ts[k]) / 2
-        weight += (mag[k] + mag[k + 1]) * w
-        for c in range(3):
-            fsum[c] += (y[k, c] + y[k + 1, c]) * w
-            psum[c] += (mag[k] * y[k, 3 + c] + mag[k + 1] * y[k + 1, 3 + c]) * w
-    if weight <= 0:
-        return False
-    point = psum / weight
-    msum = np.zeros(3)
-    for k in range(m - 1):
-        w = (ts[k + 1] - ts[k]) / 2
-        for s in (k, k + 1):
-            r0, r1, r2 = y[s, 3] - point[0], y[s, 4] - point[1], y[s, 5] - point[2]
-            f0, f1, f2 = y[s, 0], y[s, 1], y[s, 2]
-            msum[0] += (y[s, 6] + (r1 * f2 - r2 * f1) * 1e-3) * w
-            msum[1] += (y[s, 7] + (r2 * f0 - r0 * f2) * 1e-3) * w
-            msum[2] += (y[s, 8] + (r0 * f1 - r1 * f0) * 1e-3) * w
-    for c in range(3):
-        out[c] = fsum[c] / (b - a)
-        out[3 + c] = point[c]
-        out[6 + c] = msum[c] / (b - a)
-    return True
-
-
-@njit(cache=True, error_model="numpy")
-def repeated_means(t, rows, a, b, first, last, period, turn_rate, feed_rate, out) -> int:
-    """The load repeated every ``period`` [s] (engagements first .. last on), each averaged over [a, b] shifted back
-    by its delay, turned about the work axis by turn_rate * delay and moved along it by feed_rate * delay: the rows
-    written to ``out`` (k, 9), their count returned (the co-simulation's predictor, cosim.ForcePredictor)."""
-    k = 0
-    one = np.empty(9)
-    for j in range(first, last + 1):
-        delay = j * period
-        if not interval_mean(t, rows, a - delay, b - delay, one):
-            continue
-        c, s = math.cos(turn_rate * delay), math.sin(turn_rate * delay)
-        for base in (0, 3, 6):
-            x, y = one[base], one[base + 1]
-            out[k, base], out[k, base + 1], out[k, base + 2] = c * x - s * y, s * x + c * y, one[base + 2]
-        out[k, 5] += feed_rate * delay
-        k += 1
-    return k
+            self.t + dt, self.force, self.point, self.moment, self.volume, self.thickness, self.kc, self.components,
+            self.model_volume,
+        )  # fmt: skip
 
 
 def engaged_speed(

@@ -13,8 +13,9 @@ import time
 
 import numpy as np
 
-from cutting.forces import EngagementLoad, engagement_sums, repeated_means
+from cutting.forces import engagement_sums
 from cutting.gear import Gear
+from cutting.skiving.chip_of_the_moment import COLUMNS, tick_load
 from cutting.skiving.dexel_cut import cut_dexel
 from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import make_edge
@@ -43,11 +44,20 @@ def warm() -> float:
     points = np.column_stack([r * np.cos(angle), r * np.sin(angle), np.zeros(8)])
     # lines a pitch long cross a flank: the measurement's item solve (exact_margins, exact_roots) compiles too
     sv.probe(points, np.column_stack([-np.sin(angle), np.cos(angle), np.zeros(8)]), 2.0)
-    # the co-simulation's load of a servo tick (cutting/forces.py)
-    t = np.linspace(0.0, 1e-3, 5)
-    load = EngagementLoad(t, np.ones((5, 3)), np.ones((5, 3)), np.zeros((5, 3)), 1.0, 0.05, 3000.0)
-    repeated_means(load.t, load.rows, 2e-3, 2.25e-3, 1, 3, 0.8e-3, 10.0, 1.0, np.empty((3, 9)))
+    # the co-simulation's load of a servo tick (cutting/skiving/chip_of_the_moment.py): two teeth of a 4-point edge
+    frames = np.zeros((2, 3, 4))
+    frames[:, :, :3] = np.eye(3)
+    edge_pts = np.array([[9.0, -1.0, 0.0], [10.0, -0.5, 0.0], [10.0, 0.5, 0.0], [9.0, 1.0, 0.0]])
+    body = np.tile([-1.0, 0.0, 0.0], (3, 1))
+    axes, rates = np.array([0.1, 0.2, 0.0, 20.0]), np.array([200.0, -180.0, -5.0, 0.0])
+    chip = np.array([2000.0, 0.25, 1e-3, 1.6, 3e-3, 10.0, 17.0, 0.5, -0.5])
+    tick_load(
+        axes, rates, np.zeros(6), np.array([0.3, math.pi, 0.0]), frames, np.eye(3, 4), edge_pts,
+        np.array([0.0, 0.0, 1.0]), body, np.array([17.0, 0.0, 5.0]), frames, axes, np.zeros(6), True, axes, True,
+        chip, np.empty((2, COLUMNS)),
+    )  # fmt: skip
     # and an engagement's load from its chip (the edge at 3 x 5 instants, 4 points)
+    t = np.linspace(0.0, 1e-3, 5)
     engagement_sums(place_few(np.zeros((4, 3)), np.zeros((15, 3, 3)), np.zeros((15, 3))), np.ones((5, 4)), t, 1e-6)
     return time.perf_counter() - t0
 

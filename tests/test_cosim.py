@@ -8,30 +8,12 @@ import numpy as np
 import pytest
 from small_jobs import small_job
 
-from cutting.forces import EngagementLoad
 from cutting.materials import H_MIN
 from virtual_machine.job import load_job
-from virtual_machine.processes.skiving.cosim import ForcePredictor, cosimulate
+from virtual_machine.processes.skiving.cosim import cosimulate
 from virtual_machine.setting.machine_layout import machine_params
 
 SMALL_JOB = small_job(sweep_error=0.02)
-
-
-def test_predictor_repeats_the_latest_load_every_pitch_turned_with_the_work() -> None:
-    t = np.array([0.0, 1e-3])
-    f, p, m = np.array([[0.0, 100.0, 0.0]] * 2), np.array([[50.0, 0.0, 1.0]] * 2), np.array([[0.0, 0.0, 2.0]] * 2)
-    load = EngagementLoad(t, f, p, m, 1.0, 0.05, 3000.0)
-    pred = ForcePredictor()
-    assert pred(0.5e-3, 1e-6) == []
-    pred.update(load, 0.4e-3, turn_rate=-100.0, feed_rate=-2.0)
-    # at 1.3 ms the windows of the engagements 1, 2 and 3 pitches on contain t: three teeth in the cut
-    acting = pred(1.3e-3, 1e-6)
-    assert len(acting) == 3
-    for j, (force, point, moment) in zip((1, 2, 3), acting, strict=True):
-        turn = -100.0 * j * 0.4e-3
-        assert point == pytest.approx([50 * math.cos(turn), 50 * math.sin(turn), 1.0 - 2.0 * j * 0.4e-3])
-        assert np.linalg.norm(force) == pytest.approx(100.0) and moment == pytest.approx([0.0, 0.0, 2.0])
-    assert pred(0.9e-3, 1e-6) != [] and pred(5e-3, 1e-6) == []
 
 
 @pytest.fixture(scope="module")
@@ -48,23 +30,28 @@ def test_the_motors_pay_for_the_chips(runs) -> None:
     chip_energy = sum(a.load.energy for a in loaded.loads)
     volume = sum(c.volume for c in loaded.cut.chips)
     assert len(loaded.loads) > 300 and volume > 100.0  # a full-depth pass of an 18-tooth m1 gear
-    # the chips absorb their specific energy kc(h) V: the loads acting (each the previous chip's) do that work
-    assert -loaded.load_work == pytest.approx(chip_energy, rel=0.08)  # measured -5 %: the first teeth, unpredicted
+    # the load of each servo tick is the chip of the moment (cutting.skiving.chip_of_the_moment): its cutting power,
+    # summed, is the work MuJoCo's integration sees the applied wrenches do (measured to 1e-5)
+    assert -loaded.load_work == pytest.approx(chip_energy, rel=1e-3)
     # and the actuators deliver exactly the extra work (the run without forces is otherwise the same)
     assert loaded.actuator_work - free.actuator_work == pytest.approx(-loaded.load_work, rel=0.01)
-    # the oblique model on each chip (cutting.oblique): its level is Kienzle's kc(h) = 2100 h^-0.26 at the table's
-    # +6 deg tool, moved by each element's working rake and inclination, plus the 10 um edge's ploughing; over the
-    # pass the specific energy lies near Kienzle's at 0 deg rake (x 1.09; measured 0.99 of it at the median chip)
+    # the oblique model (cutting.oblique): its level is Kienzle's kc(h) = 2100 h^-0.26 at the table's +6 deg tool,
+    # moved by each element's working rake and inclination, plus the 10 um edge's ploughing. The chips sit where the
+    # feed puts them: on the elements whose previous surface lies towards the tool's body, the flank and tip that
+    # meet the material at a positive working rake (the exact working-angles map of this cut agrees: +18 deg
+    # chip-weighted mean); so the specific energy over the chip is about half Kienzle's at 0 deg rake (measured
+    # 0.56 of it at the median chip, the chip-weighted K_c / tau_s 1.89 against the table tool's 3.08)
     h = np.array([a.load.thickness for a in loaded.loads])
     kc = np.array([a.load.kc for a in loaded.loads])
-    kienzle = 2100 * np.maximum(h, H_MIN) ** -0.26 * 1.09
-    assert float(np.median(kc / kienzle)) == pytest.approx(1.0, abs=0.15)
+    cut = kc > 0
+    kienzle = 2100 * np.maximum(h[cut], H_MIN) ** -0.26 * 1.09
+    assert 0.45 < float(np.median(kc[cut] / kienzle)) < 0.7
     loads_volume = sum(a.load.volume for a in loaded.loads)
     assert chip_energy == pytest.approx(1e-3 * sum(k * a.load.volume for k, a in zip(kc, loaded.loads, strict=True)))
     assert 1e-3 * kc.min() <= chip_energy / loads_volume <= 1e-3 * kc.max()
     # and every chip pushes the tool off the flank it cuts: a thrust on every engagement, a passive force too
     comp = np.array([np.abs(a.load.components).mean(axis=0) for a in loaded.loads])
-    assert (comp[:, 1] > 0).all() and 0.3 < comp[:, 1].sum() / comp[:, 0].sum() < 2.0 and comp[:, 2].sum() > 0
+    assert (comp[:, 1] > 0).all() and 0.2 < comp[:, 1].sum() / comp[:, 0].sum() < 2.0 and comp[:, 2].sum() > 0
 
 
 def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
@@ -90,13 +77,12 @@ def test_forces_change_the_chips_only_by_the_machines_deflection(runs) -> None:
     assert base == pytest.approx(friction, rel=0.01) and cutting > base
     # what it gives beyond that while cutting is the tool spindle's share of the work on the chips, the work spindle
     # the rest. The cutting components alone would leave most of it to the tool (89 % here); the thrust, normal to
-    # the flanks, differs between the flanks (the leading flank cuts at strongly negative working rake) and its net
-    # moment about the axes moves work from the tool spindle to the work spindle, like a gear pair's tooth force
-    # (17 % here with the thrust, docs/forces.md)
+    # the flanks, and its net moment about the axes move work from the tool spindle to the work spindle, like a gear
+    # pair's tooth force (31 % left to the tool here, docs/forces.md)
     omega = np.gradient(rec.q[:, 0], rec.t) / params.tool_drive.ratio
     extra = float(((rec.torque[:, 0] - friction) * omega * np.gradient(rec.t))[rec.cutting].sum())
     assert 0.05 * -loaded.load_work < extra < -loaded.load_work
-    assert loaded.chip_change() < 0.1  # consecutive chips: the prediction's error
+    assert loaded.chip_change() < 0.1  # consecutive chips of the removal: the cut changes slowly along the face
 
 
 def test_the_dexel_cosimulation_equals_a_cut_afterwards_from_its_recorded_motion(runs) -> None:

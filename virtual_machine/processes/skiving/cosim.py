@@ -1,20 +1,17 @@
 """Machine and cut together: the simulated machine moves, the removal cuts every tooth passage as soon as the
-machine has moved through it, and the chip's cutting force acts back on the machine.
+machine has moved through it, and the chips being cut act back on the machine.
 
-Granularity: one tooth engagement. A passage is cut (cutting.skiving.removal.PassCutter) once the recorded motion covers
-its engagement window; its chip gives the engagement's Kienzle load (cutting.forces). A passage's own force is
-needed while it is being cut, before its chip exists, so the force acting during an engagement is the load of
-the newest chip already cut, carried forward by whole cutter pitches (rotated with the work and moved with the
-feed in the blank frame). Cutting in this process, that chip is the one of the engagement just before (its
-window overlaps); with worker processes the machine runs at most :func:`max_lag` passages ahead of the newest
-finished chip. Consecutive engagements take almost the same chip (the chip changes over L / f ~ tens of
-engagements at the face's ends, and with the machine's own deviations), so the prediction is off by the change
-of the chip over the engagements of lag; the run reports that change per engagement.
+The force: every servo tick the teeth in the cut take the chip of the moment (:mod:`cutting.skiving.chip_of_the_moment`
+through the load hook :class:`~virtual_machine.processes.skiving.chip_load.ChipLoad`): the pass's nominal layer
+changed by the machine's deviation now against one work revolution earlier, so that the loop's own motion changes
+the chip that makes its force (regeneration, chatter). The removal: a passage is cut (the dexel lines, or the
+manifold solid in worker processes) once the recorded motion covers its engagement window, the exact geometry of
+the motion; its chip's volume is reported beside the force model's and its mean thickness sets the coefficients'
+size effect for the pass.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from collections.abc import Callable
@@ -23,7 +20,7 @@ from dataclasses import dataclass, field
 import manifold3d as mf
 import numpy as np
 
-from cutting.forces import EdgeFaces, EngagementLoad, engagement_load, repeated_means
+from cutting.forces import EdgeFaces, EngagementLoad
 from cutting.materials import Material, material
 from cutting.oblique import ObliqueForces, load_cutting_model
 from cutting.skiving.dexel_cut import removal_summary
@@ -35,62 +32,24 @@ from cutting.skiving.passages import (
     CutResult,
     engagement_half_angle,
     expected_genus,
-    in_blank_envelope,
     passage_count,
-    tooth_pose,
 )
 from cutting.skiving.path_correction import PathCorrection
-from cutting.skiving.sampled_motion import SampledMotion
 from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
 from cutting.skiving.working_angles import check_working_clearance, rake_normal
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.job import Job, dexel_spacing
+from virtual_machine.processes.skiving.chip_load import ChipLoad
 from virtual_machine.processes.skiving.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
 from virtual_machine.runtime.machine_run import SEGMENTS, MachineRun, MotionRecord, relative_pose
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 
 FEED = SEGMENTS.index("feed")
-#: samples of an engagement's load: spur_external's engagement lasts ~2.7 ms, so 25 samples are ~0.11 ms apart, under
-#: half the servo tick (0.25 ms) the load is averaged over (41 cost 4 s more of its run for nothing the tick sees)
-LOAD_SAMPLES = 25
-
-
-class ForcePredictor:
-    """The cutting loads acting at a time: the latest engagement's load (machine time, blank frame) repeated every
-    cutter pitch ``period`` [s]; each repetition is turned by the work's rotation and moved by the feed over its
-    delay (``turn_rate`` [rad/s] and ``feed_rate`` [mm/s] of the mesh zone in the blank frame)."""
-
-    def __init__(self, lag: int = 0) -> None:
-        self.latest: EngagementLoad | None = None
-        self.period = self.turn_rate = self.feed_rate = 0.0
-        self.lag = lag  # passages the machine may run ahead of the newest chip
-
-    def update(self, load: EngagementLoad, period: float, turn_rate: float, feed_rate: float) -> None:
-        self.latest, self.period, self.turn_rate, self.feed_rate = load, period, turn_rate, feed_rate
-
-    def clear(self) -> None:
-        self.latest = None
-
-    def __call__(self, t: float, dt: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """The loads over the servo tick [t, t + dt], each averaged over it (see EngagementLoad.mean)."""
-        ld = self.latest
-        if ld is None or not len(ld.t) or self.period <= 0:
-            return []
-        first = max(1, math.ceil((t - ld.t[-1]) / self.period))
-        # the engagements up to one window plus two pitches on (plus the lag): later ones get the load of a newer
-        # chip, and a prediction that old is stale (the cutter may have left the blank)
-        horizon = math.ceil((ld.t[-1] - ld.t[0]) / self.period) + 2 + self.lag
-        last = min(math.floor((t + dt - ld.t[0]) / self.period), horizon)
-        if last < first:
-            return []
-        out = np.empty((last - first + 1, 9))
-        k = repeated_means(ld.t, ld.rows, t, t + dt, first, last, self.period, self.turn_rate, self.feed_rate, out)
-        return [(row[0:3], row[3:6], row[6:9]) for row in out[:k]]
 
 
 @dataclass
 class AppliedLoad:
-    """The load of one cut engagement, in machine time (what the engagements after it felt)."""
+    """The load that acted over one engagement, in machine time, with its removal chip's volume."""
 
     pass_index: int
     passage: int
@@ -110,12 +69,12 @@ class CoSimulation:
     snapshots: list[tuple[float, np.ndarray, np.ndarray]] = field(default_factory=list)  # t, vertices, triangles
     edge: CuttingEdge | None = None  # the cutting edge the removal swept
     removal: str = "dexel"  # "dexel" or "manifold"
-    lag: int = 0  # passages the machine ran ahead of the newest chip
+    lag: int = 0  # passages the removal's chips were taken behind the machine
     dexel: dict | None = None  # the dexel removal's figures (cutting.skiving.dexel_cut.removal_summary)
 
     def chip_change(self) -> float:
-        """Median relative change of the chip volume between consecutive engagements of a pass: the size of the
-        prediction's error (the force acting is the previous chips')."""
+        """Median relative change of the chip volume between consecutive engagements of a pass (the removal's
+        chips)."""
         changes = []
         for a, b in zip(self.loads, self.loads[1:], strict=False):
             if a.pass_index == b.pass_index and b.passage == a.passage + 1 and a.load.volume > 0:
@@ -180,33 +139,34 @@ class CuttingRun:
         self.plans = plans = plan.passes
         self.edge = edge = make_edge(setup, edge_kind or job.cutter_options.edge)
         self.lag = max_lag(workers, removal)
-        self.force = ForcePredictor(self.lag)
+        self.material = material(job.process.material)
+        # the three components per edge element at its working rake and inclination (cutting.oblique)
+        self.forces_model = ObliqueForces(self.material, load_cutting_model(), job.cutter_options.edge_radius)
+        # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
+        # finest facets of the sweep
+        self.edge_points = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
+        self.faces = EdgeFaces.of_outline(self.edge_points, rake_normal(setup))
+        self.pitch = 2 * math.pi / setup.cutter.teeth
+        # each pass's own engagement: a deeper pass engages earlier, and its passages' samples must cover the window
+        self.halves = [engagement_half_angle(p, edge) for p in plans]
+        self.force = ChipLoad(setup, plans, self.edge_points, self.faces, self.forces_model, self.halves)
         cut = self.force if forces else _no_force  # no force: the work accounting runs alike
         self.machine = MachineRun(job, params, servo_substeps, correction=correction, plan=plan, cut=cut)
+        self.force.bind(self.machine)
         check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
         check_working_clearance(setup, edge)  # the relieved flank off the flank it generates
         check_body_interference(setup, edge)  # and the relieved tooth off the finished teeth over the whole mesh
         self.removal = _removal(job, setup, edge, plans, removal, workers)
         self.workers, self.snapshots_per_pass = workers, snapshots_per_pass
-        # the force needs the edge's shape within 5 um and its engaged length (elements of at most 0.2 mm), not the
-        # finest facets of the sweep
-        self.edge_points = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
-        self.pitch = 2 * math.pi / setup.cutter.teeth
-        # each pass's own engagement: a deeper pass engages earlier, and its passages' samples must cover the window
-        self.halves = [engagement_half_angle(p, edge) for p in plans]
         self.chunk = self.pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
-        self.in_blank = functools.partial(in_blank_envelope, setup.gear)
-        self.material = material(job.process.material)
-        # the three components per edge element at its working rake and inclination (cutting.oblique)
-        self.forces_model = ObliqueForces(self.material, load_cutting_model(), job.cutter_options.edge_radius)
-        self.faces = EdgeFaces.of_outline(self.edge_points, rake_normal(setup))
         self.sim = CoSimulation(
             None, self.removal.result, material=self.material, edge=edge, removal=removal, lag=self.lag
         )
+        self.chips: dict[tuple[int, int], tuple[float, float]] = {}  # (pass, passage): the removal's volume, thickness
         self._pending: dict[tuple[int, int], tuple[Samples, float]] = {}
         self._arrived: dict[tuple[int, int], Chip | None] = {}
         self._submitted: list[tuple[int, int]] = []
-        self.applied = 0  # chips that have become the force
+        self.applied = 0  # chips the removal has handed back
         self._stroke: _Stroke | None = None
         self._seen = 0  # machine rows read so far
         self.t_cut = 0.0  # wall seconds in the removal (or waiting for its workers)
@@ -242,6 +202,7 @@ class CuttingRun:
         sim.record = machine.record()
         sim.load_work, sim.actuator_work = machine.loop.load_work, machine.loop.actuator_work
         sim.load_rows = np.array(machine.load.rows).reshape(-1, 5)
+        sim.loads = self.force.engagements(machine.dt, self.chips)
         if isinstance(self.removal, DexelRemoval):
             sim.dexel = removal_summary(self.removal.workpiece, self.removal.land_touched)
         sim.seconds = {
@@ -291,46 +252,23 @@ class CuttingRun:
             _snapshot(self.sim, self.removal, stroke, self.machine.time, self.snapshots_per_pass, self.plans, self.edge)
         self.t_cut += time.perf_counter() - c0
         if stroke.ended:
-            self.force.clear()  # no chip in the return stroke
             self._stroke = None
 
     def _apply(self, key: tuple[int, int]) -> None:
-        """The chip of passage ``key`` (waiting for it) becomes the force for the engagements after it. Chips are
-        applied in submission order at a fixed point of the simulation (``lag`` submissions later), never when a
-        worker happens to finish: the run does not depend on the workers' timing."""
+        """The chip of passage ``key`` (waiting for it): its volume for the report, its thickness for the size effect
+        of the coefficients (:meth:`ChipLoad.chip_measured`). Chips are taken in submission order at a fixed point
+        of the simulation (``lag`` submissions later), never when a worker happens to finish: the run does not
+        depend on the workers' timing."""
         while key not in self._arrived:
             self._arrived.update({(i, m): chip for i, m, chip in self.removal.finished(block=True)})
         chip = self._arrived.pop(key)
-        index, m = key
-        samples, t0_stroke = self._pending.pop(key)
+        self._pending.pop(key)
+        if hasattr(self.removal, "motions"):
+            self.removal.motions.pop(key, None)
         self.applied += 1
         if chip is None or chip.volume <= 0:
-            self.force.clear()  # the tooth took nothing: none of the next engagements is predicted to cut
             return
-        # the motion the removal cut the passage along (the dexel removal keeps it), else made from the samples
-        motion = self.removal.motions.pop(key, None) if hasattr(self.removal, "motions") else None
-        motion = motion or SampledMotion(self.setup, index, *samples, checked=True)
-        load = engagement_load(
-            tooth_pose(motion, m),
-            self.edge_points,
-            chip.start,
-            chip.end,
-            chip.volume,
-            self.forces_model,
-            self.in_blank,
-            samples=LOAD_SAMPLES,
-            thickness=chip.thickness_mean,
-            faces=self.faces,
-        ).shifted(t0_stroke)
-        if not len(load.t):  # a sliver at the blank's edge where no edge element is inside the envelope: no force
-            self.force.clear()
-            return
-        self.sim.loads.append(AppliedLoad(index, m, load))
-        # the mesh zone's motion in the blank frame: the cutter centre's turn about and travel along the axis
-        trans = samples[2]
-        ang = np.unwrap(np.arctan2(trans[:, 1], trans[:, 0]))
-        dt = motion.t[-1] - motion.t[0]
-        self.force.update(load, self.pitch / motion.omega0, (ang[-1] - ang[0]) / dt, (trans[-1, 2] - trans[0, 2]) / dt)
+        self.chips[key] = (chip.volume, chip.thickness_mean)
 
     def _close(self) -> CutResult:
         """The removal's result: the chips in order, the solid checked."""
@@ -397,10 +335,8 @@ def cosimulate(
     return run.run(progress, live)
 
 
-#: passages the machine runs ahead of the dexel removal's newest chip: none. The chips and the cut would not depend
-#: on a batch, but the forces would act later, and a delay of a few passages (~4 ms on spur_external, a third of the
-#: tool spindle's 80 Hz speed loop) lets the cut's torque feed back into it until the motor saturates: the reason
-#: why spur_external stopped with the two-worker manifold removal (docs/skiving-run.md, "spur_external's machine")
+#: passages the dexel removal's chips are taken behind the machine: none (the removal is in this process; the force
+#: does not wait for it either way: the chip of the moment)
 DEXEL_LAG = 0
 
 

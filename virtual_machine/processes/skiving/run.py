@@ -265,8 +265,11 @@ def run_metadata(job: Job, path: Path, sim: CoSimulation, durations: dict[str, f
             "mc": mat.mc,
             "source": mat.source,
             "model": "oblique cutting per edge element: cutting, thrust and passive components (docs/forces.md)",
-            "granularity": "one tooth engagement: each engagement feels the load of the newest chip already cut, "
-            f"at most {sim.lag + 1} engagements earlier plus the engagements in the cut",
+            "granularity": "the servo tick: each tooth in the cut takes the chip of the moment, between where the "
+            "machine puts its edge and the surfaces left before it (one work revolution earlier, the previous pass, "
+            "the blank)",
+            # the force model's chip against the removal's (the exact geometry of the same motion)
+            "model_chip_volume_mm3": float(sum(a.load.model_volume or 0.0 for a in loads)),
             "peak_force_N": float(force.max()),
             "peak_work_torque_Nm": float(np.abs(rows[:, 4]).max()) if len(rows) else 0.0,
             # its range (the cut pulls the work spindle back and forth as teeth enter and leave)

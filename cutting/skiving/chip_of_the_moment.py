@@ -1,0 +1,287 @@
+"""The chip of the moment: the load of the teeth in the cut at one servo tick, from where the machine has really
+put the cutter at that tick and where the teeth were when they last passed the same place (regeneration).
+
+Every space of the gear is passed once per work revolution, so an edge element cutting at x_e now takes the layer
+between the surface it cuts and the surfaces left before it, measured along the cut surface's normal n_e (towards
+the tool's body, the side the layer lies on): the linear chip model of milling's stability theory (Martellotti;
+Altintas and Budak, CIRP Annals 44/1 (1995) 357) per element, with three surfaces that can bound the layer::
+
+    h_e = min( n_e . (x_prev - x_e),     the same element one work revolution earlier (the previous tooth in
+                                          this space: cutter pitches z2 before, its own frame and errors), where
+                                          the ideal kinematics had it one revolution back plus the machine's
+                                          deviation recorded then
+               n_e . (x_pass - x_e),      the same element at the previous pass's centre distance (that pass's
+                                          surface, taken as ideal)
+               distance along n_e to the blank's envelope (tip cylinder and faces) )
+
+The first term counts once the stroke has run a work revolution, the second from the second pass on. With the
+deviation of the machine from the ideal kinematics as a small rigid displacement delta(x, t) = w(t) x x + s(t) of
+the cutter in the blank frame (the axes' following errors, the synchronisation error, the carriage's error along
+its feed, the loop's modes), the first term is the nominal layer of the feed minus
+n_e . (delta(x_e, t) - delta(x_e, t - T)): the loop's motion changes the chip that makes its force. A chip that runs
+out (h_e <= 0: the element passes through air, or the tool has left the cut) takes no force; this is what bounds
+chatter. Each element then takes the oblique model's three components (:mod:`cutting.oblique`) at its own chip,
+working rake and inclination, computed at this tick's pose.
+
+The removal stays the exact geometry (the dexel lines and the manifold solid); this is only the force. Its chip,
+integrated over an engagement, is compared with the removal's (the run reports both).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from cutting.forces import oblique_sums
+
+#: columns of :func:`tick_load`'s output per engaged tooth
+FORCE, POINT, MOMENT, COMPONENTS = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+POWER, VOLUME_RATE, WIDTH, CHIP, FACTOR = 12, 13, 14, 15, 16
+COLUMNS = 17
+#: the central difference's half step for the elements' velocities [s] (the tick is 2.5e-4 s)
+VELOCITY_STEP = 1e-6
+
+
+@njit(cache=True)
+def rigid_pose(b1, b2, p3, x, tilt, cutter_phase, work_phase, rot, trans):
+    """The cutter frame in the blank frame from the axes alone (as
+    :func:`virtual_machine.runtime.machine_run.relative_pose`): Rz(-(B2 + wp)) Rx(tilt) Rz(B1 + cp) and the centre
+    Rz(-(B2 + wp)) (X, 0, P3) [mm], into ``rot`` (3, 3) and ``trans`` (3,)."""
+    cb, sb = math.cos(b2 + work_phase), math.sin(b2 + work_phase)
+    ct, st = math.cos(tilt), math.sin(tilt)
+    cc, sc = math.cos(b1 + cutter_phase), math.sin(b1 + cutter_phase)
+    # Rx(tilt) Rz(B1 + cp)
+    m = np.array([[cc, -sc, 0.0], [ct * sc, ct * cc, -st], [st * sc, st * cc, ct]])
+    for j in range(3):
+        rot[0, j] = cb * m[0, j] + sb * m[1, j]
+        rot[1, j] = -sb * m[0, j] + cb * m[1, j]
+        rot[2, j] = m[2, j]
+    trans[0], trans[1], trans[2] = cb * x, -sb * x, p3
+
+
+@njit(cache=True)
+def turn_of(w):
+    """The rotation matrix of the rotation vector ``w`` (3,) (Rodrigues)."""
+    angle = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    out = np.eye(3)
+    if angle <= 0.0:
+        return out
+    k0, k1, k2 = w[0] / angle, w[1] / angle, w[2] / angle
+    kx = np.array([[0.0, -k2, k1], [k2, 0.0, -k0], [-k1, k0, 0.0]])
+    return out + math.sin(angle) * kx + (1.0 - math.cos(angle)) * (kx @ kx)
+
+
+@njit(cache=True)
+def _place(axes, turn, shift, geometry, teeth, blank, edge, placed, row0, frames):
+    """The edges of ``teeth`` (n, 3, 4) at the axes ``axes`` (B1, B2 [rad], P3, X [mm]) with the small displacement
+    (``turn``, ``shift``) on top, in the blank frame, into ``placed[row0 + i]``; their rake frames' rotations into
+    ``frames`` (n, 3, 3) if it has rows."""
+    rot, trans = np.empty((3, 3)), np.empty(3)
+    rigid_pose(axes[0], axes[1], axes[2], axes[3], geometry[0], geometry[1], geometry[2], rot, trans)
+    r = turn @ rot
+    c = turn @ trans + shift
+    lb = np.ascontiguousarray(blank[:, :3])
+    for i in range(len(teeth)):
+        rt = lb @ (r @ np.ascontiguousarray(teeth[i, :, :3]))
+        ot = lb @ (r @ np.ascontiguousarray(teeth[i, :, 3]) + c) + blank[:, 3]
+        if len(frames):
+            frames[i] = rt
+        for j in range(len(edge)):
+            e0, e1, e2 = edge[j, 0], edge[j, 1], edge[j, 2]
+            for a in range(3):
+                placed[row0 + i, j, a] = rt[a, 0] * e0 + rt[a, 1] * e1 + rt[a, 2] * e2 + ot[a]
+
+
+@njit(cache=True)
+def _inside(p, envelope) -> bool:
+    """A point (3,) inside the blank's envelope: tip radius, 1.0 for a ring gear, half the face width."""
+    r = math.sqrt(p[0] * p[0] + p[1] * p[1])
+    radial = r > envelope[0] if envelope[1] > 0.5 else r < envelope[0]
+    return radial and abs(p[2]) <= envelope[2]
+
+
+@njit(cache=True)
+def _to_envelope(p, n, envelope) -> float:
+    """The distance from ``p`` inside the envelope along the unit ``n`` to its boundary [mm]."""
+    best = math.inf
+    if n[2] > 1e-12:
+        best = (envelope[2] - p[2]) / n[2]
+    elif n[2] < -1e-12:
+        best = (-envelope[2] - p[2]) / n[2]
+    # |p + t n|^2 = r^2 in the transverse plane
+    a = n[0] * n[0] + n[1] * n[1]
+    if a > 1e-18:
+        b = p[0] * n[0] + p[1] * n[1]
+        c = p[0] * p[0] + p[1] * p[1] - envelope[0] * envelope[0]
+        disc = b * b - a * c
+        if disc >= 0.0:
+            root = math.sqrt(disc)
+            for t in ((-b - root) / a, (-b + root) / a):
+                if t > 0.0 and t < best:
+                    best = t
+    return best
+
+
+@njit(cache=True, error_model="numpy")
+def element_chips(
+    axes, rates, deflection, geometry, teeth, blank, edge, rake, body, envelope,
+    previous, before, deviation_before, visited, last_pass, passed, friction, floor,
+):  # fmt: skip
+    """The engaged teeth's edge elements at one instant and the chip each takes (module docstring): per (tooth,
+    element) the chip width b = dl cos(lambda_s) inside the blank [mm] (0 outside), the midpoint [mm], the directions
+    (cutting v, cut-surface normal n towards the body, passive p) and the oblique factors K / tau_s
+    (cutting.forces.oblique_sums), the speed [mm/s] and the chip h [mm] (<= 0: no chip).
+
+    ``axes`` (4,): B1, B2 [rad], P3, X [mm] at the instant and ``rates`` (4,) their speeds (the elements'
+    velocities); ``deflection`` (6,): the loop's rotation vector [rad] and translation [mm] on top of the axes (as
+    MotionRecord.deflection); ``geometry``: tilt, cutter phase, work phase [rad]; ``teeth`` (n, 3, 4): the engaged
+    teeth's rake frames in the cutter frame; ``blank`` (3, 4): the blank frame in the work spindle's; ``edge`` (k, 3)
+    the edge in the rake frame, ``rake`` (3,) and ``body`` (k - 1, 3) its faces (cutting.forces.EdgeFaces);
+    ``envelope``: tip radius [mm], 1.0 for a ring gear, half the face width [mm]. The surfaces left before:
+    ``previous`` (n, 3, 4) the teeth that passed one work revolution earlier, at the ideal axes ``before`` (4,) plus
+    the deviation recorded then ``deviation_before`` (6,: w [rad], s [mm]), if ``visited``; the previous pass's ideal
+    axes ``last_pass`` (4,), if ``passed``. ``friction``, ``floor``: the friction angle and the rake floor [rad]."""
+    n, k = len(teeth), len(edge)
+    turn = turn_of(deflection[:3])
+    placed = np.empty((3 * n, k, 3))
+    frames = np.empty((n, 3, 3))
+    for s in range(3):
+        dt = (0.0, -VELOCITY_STEP, VELOCITY_STEP)[s]
+        rows = frames[: n if s == 0 else 0]
+        _place(axes + rates * dt, turn, deflection[3:], geometry, teeth, blank, edge, placed, s * n, rows)
+    ins = np.zeros((n, k))
+    for i in range(n):
+        for j in range(k):
+            if _inside(placed[i, j], envelope):
+                ins[i, j] = 1.0
+    _, width, mid, dirs, factors, speeds = oblique_sums(
+        placed, ins, frames, np.zeros(n), VELOCITY_STEP, rake, body, friction, floor
+    )
+    none = np.empty((0, 3, 3))
+    earlier = np.empty((n, k, 3))
+    if visited:
+        turned = turn_of(deviation_before[:3])
+        _place(before, turned, deviation_before[3:], geometry, previous, blank, edge, earlier, 0, none)
+    lower = np.empty((n, k, 3))
+    if passed:
+        _place(last_pass, np.eye(3), np.zeros(3), geometry, teeth, blank, edge, lower, 0, none)
+    chips = np.zeros((n, k - 1))
+    normal, there = np.empty(3), np.empty(3)
+    for i in range(n):
+        for j in range(k - 1):
+            if width[i, j] <= 0:
+                continue
+            for a in range(3):
+                normal[a] = dirs[i, j, 1, a]
+            h = _to_envelope(mid[i, j], normal, envelope)
+            if visited:
+                for a in range(3):
+                    there[a] = (earlier[i, j, a] + earlier[i, j + 1, a]) / 2
+                h = min(h, sum_product(normal, there, mid[i, j]))
+            if passed:
+                for a in range(3):
+                    there[a] = (lower[i, j, a] + lower[i, j + 1, a]) / 2
+                h = min(h, sum_product(normal, there, mid[i, j]))
+            chips[i, j] = h
+    return width, mid, dirs, factors, speeds, chips
+
+
+@njit(cache=True, error_model="numpy")
+def tick_load(
+    axes, rates, deflection, geometry, teeth, blank, edge, rake, body, envelope,
+    previous, before, deviation_before, visited, last_pass, passed, chip, out,
+):  # fmt: skip
+    """The load of each engaged tooth at one instant into ``out`` (n, COLUMNS): the force on the workpiece [N], its
+    point [mm] and the moment about it [N m] in the blank frame, the sums of the cutting, thrust and passive
+    components [N], the cutting power [W], the chip volume rate [mm^3/s], the chip width [mm], the width-weighted
+    mean chip [mm] and the chip-weighted cutting factor K_c / tau_s (the working rake's effect); returns the number
+    of teeth with a chip. The arguments as :func:`element_chips`'; ``chip``: kc1.1 [N/mm^2], mc, the floor of h in
+    kc(h) [mm], K_c / tau_s of the table's tool, h_min [mm], K_ce, K_te [N/mm], the friction angle and the rake floor
+    [rad] (cutting.oblique.ObliqueForces: tau_s(h) = kc1.1 h^-mc / (K_c / tau_s of the table's tool))."""
+    n = len(teeth)
+    kc11, mc, h_floor, reference, h_min = chip[0], chip[1], chip[2], chip[3], chip[4]
+    ce, te = chip[5], chip[6]
+    width, mid, dirs, factors, speeds, chips = element_chips(
+        axes, rates, deflection, geometry, teeth, blank, edge, rake, body, envelope,
+        previous, before, deviation_before, visited, last_pass, passed, chip[7], chip[8],
+    )  # fmt: skip
+    e = width.shape[1]
+    out[:n] = 0.0
+    cut = 0
+    for i in range(n):
+        weight = 0.0
+        fe = np.zeros((e, 3))
+        active = np.zeros(e, dtype=np.bool_)
+        for j in range(e):
+            b, h = width[i, j], chips[i, j]
+            if b <= 0 or h <= 0.0:  # outside the blank; passing through air, or the tool has left the cut
+                continue
+            tau = kc11 * max(h, h_floor) ** (-mc) / reference
+            sheared = tau * max(h - h_min, 0.0)
+            fc = (sheared * factors[i, j, 0] + ce) * b
+            ft = (sheared * factors[i, j, 1] + te) * b
+            fp = sheared * factors[i, j, 2] * b
+            out[i, 9] += fc
+            out[i, 10] += ft
+            out[i, 11] += fp
+            out[i, POWER] += fc * speeds[i, j] * 1e-3
+            out[i, VOLUME_RATE] += b * h * speeds[i, j]
+            out[i, WIDTH] += b
+            out[i, CHIP] += b * h
+            out[i, FACTOR] += b * h * factors[i, j, 0]
+            mag = 0.0
+            for a in range(3):
+                fe[j, a] = fc * dirs[i, j, 0, a] - ft * dirs[i, j, 1, a] + fp * dirs[i, j, 2, a]
+                out[i, a] += fe[j, a]
+                mag += fe[j, a] * fe[j, a]
+            mag = math.sqrt(mag)
+            weight += mag
+            active[j] = True
+            for a in range(3):
+                out[i, 3 + a] += mag * mid[i, j, a]
+        if weight <= 0.0:
+            continue
+        cut += 1
+        out[i, FACTOR] /= out[i, CHIP]
+        out[i, CHIP] /= out[i, WIDTH]
+        for a in range(3):
+            out[i, 3 + a] /= weight
+        for j in range(e):
+            if not active[j]:
+                continue
+            r0, r1, r2 = mid[i, j, 0] - out[i, 3], mid[i, j, 1] - out[i, 4], mid[i, j, 2] - out[i, 5]
+            out[i, 6] += (r1 * fe[j, 2] - r2 * fe[j, 1]) * 1e-3
+            out[i, 7] += (r2 * fe[j, 0] - r0 * fe[j, 2]) * 1e-3
+            out[i, 8] += (r0 * fe[j, 1] - r1 * fe[j, 0]) * 1e-3
+    return cut
+
+
+@njit(cache=True)
+def sum_product(n, a, b) -> float:
+    """n . (a - b)."""
+    return n[0] * (a[0] - b[0]) + n[1] * (a[1] - b[1]) + n[2] * (a[2] - b[2])
+
+
+@njit(cache=True)
+def deviation(axes, deflection, reference, geometry):
+    """The machine's deviation from the ideal kinematics at one instant as a small rigid displacement of the cutter in
+    the blank frame, x_real = turn(w) x_ideal + s: (w [rad], s [mm]) (6,). ``axes`` (4,): B1, B2 [rad], P3, X [mm]
+    as the machine holds them, ``deflection`` (6,) the loop's on top of them, ``reference`` (4,) the ideal kinematics'
+    axes at the same cutter angle; ``geometry``: tilt, cutter phase, work phase."""
+    rot_a, c_a = np.empty((3, 3)), np.empty(3)
+    rot_i, c_i = np.empty((3, 3)), np.empty(3)
+    rigid_pose(axes[0], axes[1], axes[2], axes[3], geometry[0], geometry[1], geometry[2], rot_a, c_a)
+    rigid_pose(
+        reference[0], reference[1], reference[2], reference[3], geometry[0], geometry[1], geometry[2], rot_i, c_i
+    )
+    loop = turn_of(deflection[:3])
+    turn = loop @ rot_a @ rot_i.T
+    shift = loop @ c_a + deflection[3:] - turn @ c_i
+    out = np.empty(6)
+    out[0] = 0.5 * (turn[2, 1] - turn[1, 2])
+    out[1] = 0.5 * (turn[0, 2] - turn[2, 0])
+    out[2] = 0.5 * (turn[1, 0] - turn[0, 1])
+    out[3], out[4], out[5] = shift[0], shift[1], shift[2]
+    return out
