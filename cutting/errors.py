@@ -71,6 +71,11 @@ class LostSynchronismError(RunError):
     """The simulated machine stopped the job (the CNC's alarm), with what happened and what to change."""
 
 
+class ChatterError(RunError):
+    """The machine chattered so hard that the cut tore the gear (its solid is no gear); the message names the pass,
+    the vibration and what to change."""
+
+
 class UnmeasurableGearError(RunError):
     """The machine cut a gear the measuring machine cannot measure (a tooth damaged or missing)."""
 

@@ -103,7 +103,7 @@ def test_each_elements_chip_against_the_exact_chip_thickness() -> None:
     frames = edge_frames(setup, edge, Relief.of(setup))
     near = np.array([np.argmin(np.linalg.norm(mids[:, :2] - p[:2], axis=1)) for p in frames.points])
     model, truth, stray, air = [], [], 0, 0
-    for i, (width, *_, chips) in enumerate(elements):
+    for i, (width, *_, chips, _) in enumerate(elements):
         h = np.where(width[0] > 0, chips[0], 0.0)[near]
         known = np.isfinite(exact.thickness[i])
         model += list(np.maximum(h[known], 0.0))
@@ -127,13 +127,14 @@ def test_the_previous_surface_moved_by_s_changes_each_chip_by_n_dot_s() -> None:
     m = round(motion.omega0 * motion.duration / 2 / (2 * math.pi / setup.cutter.teeth))
     b1 = m * 2 * math.pi / setup.cutter.teeth
     _, _, at, _ = _ideal_chips(setup, motion, m, np.zeros(0))
-    width, _, dirs, _, _, h0 = at(b1)
+    width, _, dirs, _, _, h0, bound = at(b1)
     shift = np.array([0.0, 0.0, 0.0, 0.002, -0.001, 0.0015])  # 2, -1, 1.5 um
-    _, _, _, _, _, h1 = at(b1, shift)
+    h1 = at(b1, shift)[5]
     cut = (width[0] > 0) & (h0[0] > 0.0) & (h1[0] > 0.0)
     expected = (dirs[0, :, 1, :] @ shift[3:])[cut]
     change = (h1[0] - h0[0])[cut]
     moved = np.abs(change - expected) < 1e-12  # the previous revolution's surface bounds the chip
     still = np.abs(change) < 1e-12  # the blank's envelope does (the tooth's entry)
     assert (moved | still).all() and moved.sum() >= 0.8 * cut.sum() and cut.sum() > 10
+    assert (moved == (bound[0][cut] == 1)).all()  # and the kernel says which
     assert np.abs(expected[moved]).max() > 1e-3  # the shift matters here

@@ -142,7 +142,10 @@ def element_chips(
     ``envelope``: tip radius [mm], 1.0 for a ring gear, half the face width [mm]. The surfaces left before:
     ``previous`` (n, 3, 4) the teeth that passed one work revolution earlier, at the ideal axes ``before`` (4,) plus
     the deviation recorded then ``deviation_before`` (6,: w [rad], s [mm]), if ``visited``; the previous pass's ideal
-    axes ``last_pass`` (4,), if ``passed``. ``friction``, ``floor``: the friction angle and the rake floor [rad]."""
+    axes ``last_pass`` (4,), if ``passed``. ``friction``, ``floor``: the friction angle and the rake floor [rad].
+
+    Also returns per element which surface bounds its chip (``bound``): 0 the blank, 1 the previous revolution's (the
+    regenerative one), 2 the previous pass's."""
     n, k = len(teeth), len(edge)
     turn = turn_of(deflection[:3])
     placed = np.empty((3 * n, k, 3))
@@ -168,6 +171,7 @@ def element_chips(
     if passed:
         _place(last_pass, np.eye(3), np.zeros(3), geometry, teeth, blank, edge, lower, 0, none)
     chips = np.zeros((n, k - 1))
+    bound = np.zeros((n, k - 1), dtype=np.int64)
     normal, there = np.empty(3), np.empty(3)
     for i in range(n):
         for j in range(k - 1):
@@ -179,13 +183,17 @@ def element_chips(
             if visited:
                 for a in range(3):
                     there[a] = (earlier[i, j, a] + earlier[i, j + 1, a]) / 2
-                h = min(h, sum_product(normal, there, mid[i, j]))
+                hv = sum_product(normal, there, mid[i, j])
+                if hv < h:
+                    h, bound[i, j] = hv, 1
             if passed:
                 for a in range(3):
                     there[a] = (lower[i, j, a] + lower[i, j + 1, a]) / 2
-                h = min(h, sum_product(normal, there, mid[i, j]))
+                hp = sum_product(normal, there, mid[i, j])
+                if hp < h:
+                    h, bound[i, j] = hp, 2
             chips[i, j] = h
-    return width, mid, dirs, factors, speeds, chips
+    return width, mid, dirs, factors, speeds, chips, bound
 
 
 @njit(cache=True, error_model="numpy")
@@ -203,7 +211,7 @@ def tick_load(
     n = len(teeth)
     kc11, mc, h_floor, reference, h_min = chip[0], chip[1], chip[2], chip[3], chip[4]
     ce, te = chip[5], chip[6]
-    width, mid, dirs, factors, speeds, chips = element_chips(
+    width, mid, dirs, factors, speeds, chips, _ = element_chips(
         axes, rates, deflection, geometry, teeth, blank, edge, rake, body, envelope,
         previous, before, deviation_before, visited, last_pass, passed, chip[7], chip[8],
     )  # fmt: skip

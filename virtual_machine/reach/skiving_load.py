@@ -203,7 +203,7 @@ def ideal_engagement(
     pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
     # the rake face's normal in the cutter frame the outline is placed in here (the rake frame's rotation)
     faces = EdgeFaces.of_outline(pts, setup.rake_frame[:, :3] @ rake_normal(setup))
-    half = _engagement_half_angle(setup, pts, centre_distance)
+    half = engagement_half_angle_at(setup, pts, centre_distance)
     if half <= 0:
         return None
     omega0 = setup.tool_speed * 2 * math.pi / 60
@@ -222,7 +222,7 @@ def ideal_engagement(
     return IdealEngagement(phi, half, phi / omega0, rot, centre, swept, width, mid, dirs, factors, speed)
 
 
-def _engagement_half_angle(setup: SkivingSetup, pts: np.ndarray, centre_distance: float) -> float:
+def engagement_half_angle_at(setup: SkivingSetup, pts: np.ndarray, centre_distance: float) -> float:
     """Cutter rotation from the mesh [rad] beyond which no point of the edge is within the blank's radius."""
     g = setup.gear
     phi = np.linspace(-math.pi, math.pi, 3601)

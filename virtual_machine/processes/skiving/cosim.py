@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import manifold3d as mf
 import numpy as np
 
+from cutting.errors import ChatterError
 from cutting.forces import EdgeFaces, EngagementLoad
 from cutting.materials import Material, material
 from cutting.oblique import ObliqueForces, load_cutting_model
@@ -279,12 +280,28 @@ class CuttingRun:
         if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
             raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
         if result.gear.genus() != expected_genus(gear):
+            torn = _chatter(self.machine.record(), self.setup)
+            if torn:
+                raise ChatterError(
+                    f"the cut left a solid of genus {result.gear.genus()} (a gear has {expected_genus(gear)}): the "
+                    f"machine chattered and tore the gear ({torn}). Make the tool-work loop stiffer or better damped "
+                    "([[machine.model.loop]]), take less per pass, or move the tool speed to a stable lobe "
+                    "(`skive stability JOB` draws them)"
+                )
             raise RuntimeError(
                 f"the removal left a solid of genus {result.gear.genus()} (a gear has {expected_genus(gear)}): "
                 "report it with the job"
             )
         self.t_cut += time.perf_counter() - c0
         return result
+
+
+def _chatter(record: MotionRecord, setup) -> str:
+    """The passes whose vibration grew like chatter, as the run reports them (machine_effect.pass_deflection), or
+    ""."""
+    from virtual_machine.processes.skiving.machine_effect import pass_deflection
+
+    return "; ".join(d["warning"] for d in pass_deflection(record, setup) if "warning" in d)
 
 
 def _no_force(t: float, dt: float) -> tuple:

@@ -103,8 +103,9 @@ def flank_normals(setup) -> np.ndarray:
 def pass_deflection(rec: MotionRecord, setup) -> list[dict]:
     """Per pass: the displacement normal to the flanks at the generating point while the cutter is in the blank
     [um] (mean of the two flanks' and their peak; each flank's mean) and the vibration: the half range of the
-    flank-normal displacement about its 25 ms moving average, its dominant frequency [Hz] and its growth (last quarter
-    of the cut against the first), with a warning when it grows like chatter."""
+    flank-normal displacement about its 25 ms moving average on the flank where it is larger, its dominant frequency
+    [Hz] and its growth (the largest later quarter of the cut against the first), with a warning when it grows like
+    chatter."""
     t, index, disp = generating_point_displacement(rec, setup)
     in_cut = rec.cutting[rec.segment == FEED]
     normal = disp @ flank_normals(setup).T  # (n, 2)
@@ -118,15 +119,21 @@ def pass_deflection(rec: MotionRecord, setup) -> list[dict]:
         tt = t[sel]
         dt = float(np.median(np.diff(tt)))
         # the vibration: what a 25 ms moving average leaves (the structure's modes, 50 Hz and up; the slow course of
-        # the deflection over the pass, the entry and exit at the faces, are the static part)
+        # the deflection over the pass, the entry and exit at the faces, are the static part), on each flank (a
+        # tangential vibration moves the two flanks' normals oppositely: their mean would hide it); the larger one
         w = max(3, round(TREND_S / dt) | 1)
-        trend = np.convolve(np.pad(both, w // 2, mode="edge"), np.ones(w) / w, mode="valid")
-        wave = both - trend
+        waves = [
+            d[:, f] - np.convolve(np.pad(d[:, f], w // 2, mode="edge"), np.ones(w) / w, mode="valid") for f in (0, 1)
+        ]
+        wave = max(waves, key=np.ptp)
         n = len(wave)
         spec = np.abs(np.fft.rfft(wave * np.hanning(n)))
         freq = np.fft.rfftfreq(n, dt)
         quarter = max(n // 4, 1)
-        first, last = np.ptp(wave[:quarter]) / 2, np.ptp(wave[-quarter:]) / 2
+        first = np.ptp(wave[:quarter]) / 2
+        # the largest quarter after the first (a chatter that has grown may fade as the cutter leaves the face)
+        step = max(quarter // 4, 1)
+        last = max(np.ptp(wave[i : i + quarter]) / 2 for i in range(quarter, max(n - quarter, quarter) + 1, step))
         growth = float(last / first) if first > 0 else math.inf
         row = {
             "pass": k + 1,

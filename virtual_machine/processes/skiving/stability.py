@@ -26,13 +26,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cutting.forces import EdgeFaces
 from cutting.materials import material
 from cutting.oblique import ObliqueForces, load_cutting_model
 from cutting.regeneration import lobes
+from cutting.skiving.chip_of_the_moment import element_chips
+from cutting.skiving.edge import make_edge
 from cutting.skiving.kinematics import SkivingSetup, rot_x, rot_z
+from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
+from cutting.skiving.trajectory import ideal_passes
+from cutting.skiving.working_angles import rake_normal
 from machine_models.loop import LoopMode, frequency_response
 from machine_models.parameters import SkivingMachineParams
-from virtual_machine.reach.skiving_load import ideal_engagement, space_area
+from virtual_machine.reach.skiving_load import engagement_half_angle_at
 
 
 @dataclass(frozen=True)
@@ -117,27 +123,71 @@ def loop_response(setup: SkivingSetup, params: SkivingMachineParams):
 
 
 def oriented_coefficients(
-    setup: SkivingSetup, model: ObliqueForces, centre_distance: float, volume: float, samples: int = 121
+    setup: SkivingSetup, model: ObliqueForces, centre_distance: float, previous: float | None, samples: int = 121
 ) -> tuple[np.ndarray, float]:
-    """D (3, 3) [N/m] of one engagement at ``centre_distance`` [mm] taking ``volume`` [mm^3] (the chip of the
-    pass's cross-section over a work turn's feed), averaged over a cutter pitch; and the mean chip h [mm]."""
-    e = ideal_engagement(setup, model, centre_distance, samples)
-    if e is None or volume <= 0 or e.swept <= 0:
+    """D (3, 3) [N/m] of one engagement at ``centre_distance`` [mm] after a pass at ``previous`` [mm] (None: into the
+    blank), averaged over a cutter pitch, and the engagement's mean chip [mm] (the chips' area over the width).
+
+    The chips are the co-simulation's (cutting.skiving.chip_of_the_moment) on the ideal machine at mid face: each
+    element's chip between it and the surface the previous revolution left (the regenerative bound), the previous
+    pass's or the blank's. An element whose chip the previous revolution bounds changes it by -n . (delta(t) -
+    delta(t - T)); its force changes by dF/dh = tau_s(h) (1 - mc (h - h_min) / h) b (f_c e_c - f_t n + f_p p), so it
+    adds dF/dh n^T. The elements bounded by the previous pass or the blank have no delayed term (no regeneration:
+    they stiffen the process and are left out)."""
+    g = setup.gear
+    edge = make_edge(setup, "involute")
+    pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
+    faces = EdgeFaces.of_outline(pts, rake_normal(setup))
+    half = engagement_half_angle_at(setup, pts, centre_distance)
+    if half <= 0:
         return np.zeros((3, 3)), 0.0
-    width, factors = e.width, e.factors
-    h = volume / e.swept
-    tau = float(model.shear_stress(h))
-    slope = tau * max(1.0 - model.material.mc * max(h - model.min_chip, 0.0) / h, 0.0) if h > model.min_chip else 0.0
-    # the directions from the turning work frame into the machine frame (the work's turn phi2 at each sample)
-    dirs = np.einsum("nij,nkdj->nkdi", rot_z(setup.speed_ratio * e.phi + setup.work_phase), e.dirs)
-    # per element: (f_c e_c - f_t n + f_p p) n^T x b x dF/dh; [N/mm / mm] = N/mm^2 -> x 1e3 per mm -> N/m
-    force_dir = (
-        factors[..., 0:1] * dirs[..., 0, :] - factors[..., 1:2] * dirs[..., 1, :] + factors[..., 2:3] * dirs[..., 2, :]
-    )
-    per_time = np.einsum("nk,nki,nkj->nij", width * slope, force_dir, dirs[..., 1, :])  # N/mm per mm of displacement
-    integral = np.trapezoid(per_time, e.t, axis=0)
-    pitch_time = 2 * math.pi / setup.cutter.teeth / (setup.tool_speed * 2 * math.pi / 60)
-    return integral / pitch_time * 1e3, h
+    pitch = 2 * math.pi / setup.cutter.teeth
+    omega0 = setup.tool_speed * 2 * math.pi / 60
+    rev = 2 * math.pi / abs(setup.speed_ratio)
+    ratio, diff = setup.speed_ratio, setup.differential_rotation_per_mm
+    zeta = ideal_passes(setup)[0].v_s / omega0  # the carriage per cutter radian [mm/rad], signed
+
+    def ideal(b1: float, a: float) -> np.ndarray:
+        z = zeta * b1
+        return np.array([b1, ratio * b1 + diff * z, z, a])
+
+    rates = np.array([omega0, ratio * omega0 + diff * zeta * omega0, zeta * omega0, 0.0])
+    geometry = np.array([setup.tilt, setup.cutter_phase, setup.work_phase])
+    envelope = np.array([g.tip_radius, 1.0 if g.internal else 0.0, g.face_width / 2])
+    teeth = np.ascontiguousarray(setup.passage_frames(np.array([0])))
+    before = np.ascontiguousarray(setup.passage_frames(np.array([-round(rev / pitch)])))
+    blank = np.ascontiguousarray(setup.blank_frame)
+    c, mat = model.model, model.material
+    h_min = model.min_chip
+    phi = np.linspace(-half, half, samples)
+    per_time = np.zeros((samples, 3, 3))
+    area = width_sum = 0.0
+    for i, b1 in enumerate(phi):
+        width, _, dirs, factors, _, chips, bound = element_chips(
+            ideal(b1, centre_distance), rates, np.zeros(6), geometry, teeth, blank, pts, faces.rake, faces.body,
+            envelope, before, ideal(b1 - rev, centre_distance), np.zeros(6), True,
+            ideal(b1, previous if previous is not None else 0.0), previous is not None,
+            c.friction_angle, c.rake_floor,
+        )  # fmt: skip
+        b, h = width[0], chips[0]
+        on = (b > 0) & (h > 0)
+        area += float((b[on] * h[on]).sum())
+        width_sum += float(b[on].sum())
+        regen = on & (bound[0] == 1) & (h > h_min)
+        if not regen.any():
+            continue
+        hh = h[regen]
+        tau = np.asarray(model.shear_stress(hh))
+        slope = tau * np.maximum(1.0 - mat.mc * (hh - h_min) / hh, 0.0) * b[regen]
+        # the directions from the blank frame into the machine frame (the work's turn at this instant)
+        turn = rot_z(ratio * b1 + diff * zeta * b1 + setup.work_phase)
+        d = dirs[0][regen] @ turn.T  # (e, 3, 3): e_c, n, p in the machine frame
+        f = factors[0][regen]
+        force = f[:, 0:1] * d[:, 0] - f[:, 1:2] * d[:, 1] + f[:, 2:3] * d[:, 2]
+        per_time[i] = np.einsum("e,ei,ej->ij", slope, force, d[:, 1])
+    integral = np.trapezoid(per_time, phi / omega0, axis=0)
+    pitch_time = pitch / omega0
+    return integral / pitch_time * 1e3, (area / width_sum if width_sum > 0 else 0.0)
 
 
 def pass_stability(
@@ -163,14 +213,12 @@ def pass_stability(
     count = math.ceil(omega[-1] * delays.max() / (2 * math.pi)) + 2
     out = []
     previous = setup.pass_centre_distances[0] + setup.passes[0]  # the tip circle just touching
-    done = 0.0
     for k, (a, infeed) in enumerate(zip(setup.pass_centre_distances, setup.passes, strict=True)):
         trials = infeed * np.unique(np.append(np.geomspace(0.1, 4.0, depths), 1.0))
         lims = np.empty((len(trials), len(speeds)))
         freqs = np.empty((len(trials), len(speeds)))
         for i, d in enumerate(trials):
-            area = space_area(setup.gear, setup.full_depth - done - d) - space_area(setup.gear, setup.full_depth - done)
-            dmat, _ = oriented_coefficients(setup, model, previous - d, area * setup.axial_feed)
+            dmat, _ = oriented_coefficients(setup, model, previous - d, None if k == 0 else previous)
             lb = lobes(g, dmat, omega, count)
             lims[i], freqs[i] = lb.limits(delays)
         critical = np.array([_critical(trials, lims[:, j]) for j in range(len(speeds))])
@@ -179,7 +227,7 @@ def pass_stability(
         own = float(np.interp(n0, speeds, critical))
         j0 = int(np.argmin(np.abs(speeds - n0)))
         out.append(PassStability(k, infeed, n0, own, float(freqs[mine, j0]), speeds, critical, lims[mine]))
-        previous, done = a, done + infeed
+        previous = a
     return out
 
 
