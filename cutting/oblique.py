@@ -44,13 +44,18 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
 
 from cutting.errors import InputError, Problem
 from cutting.materials import MATERIALS_PATH, REFERENCE_RAKE_DEG, Material, material
+
+#: the edge radius r_beta [mm] of a tool whose job gives none (the form mills, the face-contour head's elements, the
+#: lathe's tool): the skiving cutter's ``[cutter] edge_radius`` default, a guess (ground and honed carbide or coated
+#: HSS edges have 5-30 um; docs/forces.md)
+DEFAULT_EDGE_RADIUS = 0.010
 
 #: chips thinner than this [mm] take kc of this thickness where no edge radius bounds them (kc1.1 h^-mc grows
 #: without bound; h kc(h) does not, so the force stays finite either way)
@@ -191,6 +196,13 @@ class ObliqueForces:
 def oblique_forces(key: str, edge_radius: float = 0.0, path: Path = MATERIALS_PATH) -> ObliqueForces:
     """The three-component model of the table's material ``key`` for an edge of radius ``edge_radius`` [mm]."""
     return ObliqueForces(material(key, path), load_cutting_model(path), edge_radius)
+
+
+@lru_cache(maxsize=64)
+def material_forces(row: Material, edge_radius: float = DEFAULT_EDGE_RADIUS) -> ObliqueForces:
+    """The three-component model of the material ``row`` for an edge of radius ``edge_radius`` [mm], the table's
+    ``[cutting_model]`` read once (the machines other than the skiving one ask for it at every table and tick)."""
+    return ObliqueForces(row, load_cutting_model(), float(edge_radius))
 
 
 def element_directions(

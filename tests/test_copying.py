@@ -294,8 +294,10 @@ def test_bad_form_jobs_are_refused_with_the_key_and_the_fix(kwargs, key, words):
 
 
 # ---- the mill's cutting force -----------------------------------------------------------------------------------
-def test_the_force_model_removes_each_pass_area_over_the_face_and_follows_kienzle(planned):
-    from cutting.form_milling.forces import RADIAL_RATIO, MillLoad
+def test_the_force_model_removes_each_pass_area_over_the_face_and_follows_the_oblique_model(planned):
+    from checks import oblique_factors
+
+    from cutting.form_milling.forces import MillLoad
     from cutting.materials import material
 
     plan, _, _ = planned
@@ -313,10 +315,50 @@ def test_the_force_model_removes_each_pass_area_over_the_face_and_follows_kienzl
     # move between the passes (crowning and twist, tens of um at the face ends): 4.8 % more with the mill's axis
     # fixed, 5.2 % turned with the path (its sides along the path, the left pass takes no extra width)
     assert res.chips[1][2] == pytest.approx(ml.areas["right"] * GEAR.face_width, rel=0.06)
-    # Kienzle by hand: h_m = f_z sqrt(a_e / D), F_t = kc1.1 h_m^-mc A v_f / v_c, thrust 0.4 F_t
+    # the oblique model by hand (cutting/oblique.py's formulas, beta_a 30 deg): h_m = f_z sqrt(a_e / D) = 0.2 x
+    # sqrt(4.5 / 50) = 0.06 mm, kc(h_m) = 2100 x 0.06^-0.26 = 4364.15 N/mm^2, tau_s = kc / 3.07973 (the table's
+    # 6 deg tool) = 1417.06 N/mm^2; the form-relieved teeth at rake 0 and inclination 0: f_c = 3.46410, f_t = 2,
+    # f_p = 0; the section in cut A v_f / v_c = 13.8096 x 10 / 654.498 = 0.210996 mm^2 (A the model's, checked
+    # above against the removal), b = 0.210996 / 0.06 = 3.51659 mm; a 10 um edge: h_min 3 um, K_ce 10, K_te 17 N/mm.
+    # F_t = tau f_c (h_m - h_min) b + K_ce b = 1019.12 N (Kienzle at the table's tool, kc A v_f / v_c: 920.8 N),
+    # the teeth's thrust tau f_t (h_m - h_min) b + K_te b = 627.87 N, no passive force
     fz = 600.0 / (250.0 * plan.mill.teeth)
     hm = fz * math.sqrt((GEAR.tip_radius - GEAR.root_radius) / 50.0)
-    ft = mat.kc11 * hm ** (-mat.mc) * ml.areas["left"] * (600.0 / 60) / (math.pi * 50.0 * 250.0 / 60)
-    assert ml.main_force("left") == pytest.approx(ft, rel=1e-9)
-    f = ml.force("left", np.array([10.0]), -1.0)[0]
-    assert f[1] == pytest.approx(RADIAL_RATIO * abs(f[2])) and f[2] > 0 < f[1]  # fed down: against the feed is +z
+    tau = mat.kc11 * hm ** (-mat.mc) / oblique_factors(6.0, 0.0)[0]
+    f_c, f_t, f_p = oblique_factors(0.0, 0.0)
+    b = ml.areas["left"] * (600.0 / 60) / (math.pi * 50.0 * 250.0 / 60) / hm
+    load = ml.load("left")
+    assert (ml.main_force("left"), load.thrust, load.passive) == pytest.approx(
+        (tau * f_c * (hm - 0.003) * b + 10 * b, tau * f_t * (hm - 0.003) * b + 17 * b, f_p), rel=0.01, abs=1e-9
+    )
+    assert (ml.main_force("left"), load.thrust) == pytest.approx((1019.12, 627.87), rel=0.01)
+    f = ml.force("left", np.array([10.0]), -1.0)[0]  # entering the face: a share of the full force
+    share = float(ml.engagement("left", np.array([10.0]), -1.0)[0])
+    assert 0 < share < 1 and f[2] == pytest.approx(share * ml.main_force("left"))  # fed down: against it is +z
+
+
+def test_the_disc_mills_thrust_pushes_it_off_the_work_and_off_the_flank_the_right_pass_finishes(planned):
+    """Each column of the section is cut by the edge element over it, its thrust along the cut surface's normal into
+    the mill (:func:`cutting.form_milling.forces.thrust_directions`). The left pass slots the space: its two flanks'
+    thrusts cancel across it (the clearance's 0.1 mm offset aside) and leave a radial thrust off the work, the
+    section's mean normal, a third of the teeth's thrust sum here (the steep flanks cut most of it). The right pass
+    cuts the 0.2 mm strip along the right flank: its thrust is the flank's normal, pushing the mill off that flank
+    (towards -x_s, the flank at +x_s) and off the work, at the angle the involute's normal makes with the space's
+    tangential axis near the pitch circle (alpha = 20 deg there; the strip's removal weights the flank from the form
+    circle, 3.0 deg, to the tip, 31.3 deg: measured 18.4 deg)."""
+    from cutting.form_milling.forces import MillLoad
+    from cutting.form_milling.mill import flank_sign
+    from cutting.materials import material
+
+    plan, _, _ = planned
+    ml = MillLoad(GEAR, plan.mill, material("16MnCr5"), 600.0, 250.0, plan.clearance)
+    (lx, ly), (rx, ry) = ml.directions["left"], ml.directions["right"]
+    assert abs(lx) < 0.01 * ly and 0.2 < ly < 0.5
+    assert flank_sign(GEAR, "right") == 1 and rx < 0 < ry
+    assert math.hypot(rx, ry) > 0.95 and 15.0 < math.degrees(math.atan2(ry, -rx)) < 25.0
+    for side, direction in (("left", -1.0), ("right", 1.0)):
+        tx, ty, fc = ml.components(side)
+        assert math.hypot(tx, ty) == pytest.approx(ml.load(side).thrust * math.hypot(*ml.directions[side]))
+        z = np.array([0.0])
+        f = ml.force(side, z, direction)[0]
+        assert f == pytest.approx(float(ml.engagement(side, z, direction)[0]) * np.array([tx, ty, -direction * fc]))

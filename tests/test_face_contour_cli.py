@@ -9,12 +9,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from checks import oblique_factors
 from click.testing import CliRunner
 from rerun.chunk import RrdReader
 from scipy.optimize import brentq
 
 from cutting.errors import InputError
-from cutting.materials import H_MIN, material
+from cutting.materials import material
 from metrology.face_slots import FLAT_TOLERANCE
 from virtual_machine.cli import main
 from virtual_machine.job import parse_job
@@ -71,10 +72,10 @@ def test_setup_prints_the_setting_sheet():
 def test_cut_and_run_make_flat_slots_with_the_setting_sheets_e(command, tmp_path):
     """The job's eccentric takes the setting sheet's e: the bottoms come out flat within 2 um on the ideal
     kinematics, and on the simulated machine without cutting forces (the run's comparison run); the solid agrees with
-    the exact measure within its sweep error. Under the cut's forces the run reports what they do: Kienzle's force
-    at M, and the head slowing and lagging while an element crosses a slot, so the bottoms come out convex and the
-    spacing moves, less with the slaves on the head's encoder than on its command (measured: -23..-16 um and
-    -1.0 arcsec against -61 um and -5.1 arcsec)."""
+    the exact measure within its sweep error. Under the cut's forces the run reports what they do: the oblique
+    model's force at M, and the head slowing and lagging while an element crosses a slot, so the bottoms come out
+    convex and the spacing moves, less with the slaves on the head's encoder than on its command (measured:
+    -18..-12 um and -1.0 arcsec against -54..-45 um and -4.9 arcsec)."""
     res = CliRunner().invoke(main, [command, str(ASSET), "--out", str(tmp_path)])
     assert res.exit_code == 0, res.output
     doc = json.loads((tmp_path / "measurement.json").read_text())
@@ -90,17 +91,35 @@ def test_cut_and_run_make_flat_slots_with_the_setting_sheets_e(command, tmp_path
     assert all(abs(s["bottom_form_without_forces_um"]) < 2.0 for s in f["slots"])
     assert all(abs(v) < 0.5 for v in f["spacing_without_forces_arcsec"])
     assert f["spacing_with_forces_arcsec"] == pytest.approx(doc["spacing_arcsec"], abs=1e-9)
-    # Kienzle at M by hand (the spark-out's layers 12 S, 11 S, 10 S for slots 0-2, S = 2 um, the tip 3 mm deep, V
-    # horizontal): the tip edge 2 mm x h, each flank h sin 20 deg over (3 - h / 2) / cos 20 deg, k_c = 2100 h^-0.26
-    # (the flanks' chips below 10 um at 10 um's k_c): 629, 583, 536 N; the bottom is flat, so within 1 % along it
+    # the oblique model at M by hand (the spark-out's layers: the plunge reaches the depth at turn 3 / 0.0017 =
+    # 1764.7, slots 0-2 are finished at turns 1776-1778 over what turns 1752-1754 left, h = 3 - 0.0017 (turn - 24) =
+    # 21.6, 19.9, 18.2 um; the tip 3 mm deep, V horizontal and radial, the tool plane at the setting angle lambda =
+    # 1.3406 deg to it): the tip edge, 2 cos(lambda) mm wide, at rake 0 and inclination lambda; each flank, h sin 20
+    # deg thick over (3 - h / 2) / cos 20 deg x cos(lambda_f), at rake +-atan(tan(lambda) cos 20) = +-1.2598 deg
+    # and inclination lambda_f = +-asin(sin 20 sin(lambda)) = +-0.4585 deg; F = f_c tau_s(h) (h - 3 um) b + 10 N/mm
+    # b (cutting/oblique.py's formulas, beta_a 30 deg, tau_s = 2100 h^-0.26 / 3.07973): 558.02, 514.09, 468.77 N.
+    # Their mean over the cut within 1 %: the eccentric keeps the tip's path flat while the plate turns with the
+    # head, so the tip edge's working rake runs from -4 to +4 deg across the slot and F_c by -+5 % about M's.
     steel = material("16MnCr5")
     assert (steel.kc11, steel.mc) == (2100.0, 0.26)
-    kappa = math.radians(20.0)
+    kappa, lam = math.radians(20.0), math.asin(52.5 / ((125.0 - 4 * flat_bottom_e(_job_coupling())) * 24))
+    lam_f = math.asin(math.sin(kappa) * math.sin(lam))
+    gam_f = math.degrees(math.atan(math.tan(lam) * math.cos(kappa)))
+
+    def segment(h: float, b: float, gamma: float, incl: float) -> float:
+        tau = 2100 * h**-0.26 / oblique_factors(6.0, 0.0)[0]
+        return oblique_factors(gamma, math.degrees(incl))[0] * tau * (h - 0.003) * b + 10 * b
+
+    hands = []
     for k, s in enumerate(f["slots"]):
-        h = (12 - k) * 0.002
-        h_flank, b_flank = h * math.sin(kappa), (3.0 - h / 2) / math.cos(kappa)
-        hand = 2100 * (h**0.74 * 2.0 + 2 * max(h_flank, H_MIN) ** -0.26 * b_flank * h_flank)
-        assert s["layer_um"] == pytest.approx(h * 1e3, abs=1e-6) and s["F_c_peak_N"] == pytest.approx(hand, rel=0.01)
+        h = 3.0 - 0.0017 * (1752 + k)
+        h_flank, b_flank = h * math.sin(kappa), (3.0 - h / 2) / math.cos(kappa) * math.cos(lam_f)
+        hand = segment(h, 2 * math.cos(lam), 0.0, lam) + sum(segment(h_flank, b_flank, g, i * lam_f) for g, i in
+                                                             ((gam_f, 1), (-gam_f, -1)))  # fmt: skip
+        assert s["layer_um"] == pytest.approx(h * 1e3, abs=1e-6) and s["F_c_mean_N"] == pytest.approx(hand, rel=0.01)
+        assert hand < s["F_c_peak_N"] < 1.1 * hand
+        hands.append(hand)
+    assert hands == pytest.approx([558.02, 514.09, 468.77], abs=0.01)
     # under the forces the head lags while an element crosses a slot, less slot by slot as the layer thins: the
     # spacing moves back and the bottoms come out convex (beyond the flat tolerance); slaves that follow the head's
     # encoder copy what the head does, so they cut closer to the ideal slot than slaves on its command (the same

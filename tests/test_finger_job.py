@@ -17,9 +17,9 @@ from scipy.integrate import quad
 from cutting.errors import InputError
 from cutting.flank import SIDES
 from cutting.form_milling.finger import finger_pass, fit_finger_mill
-from cutting.form_milling.forces import RADIAL_RATIO, FingerLoad
+from cutting.form_milling.forces import FingerLoad
 from cutting.form_milling.mill import flank_sign
-from cutting.materials import H_MIN, material
+from cutting.materials import material
 from machine_models.form_mill import FormMillParams
 from virtual_machine.cli import main
 from virtual_machine.job import load_job, parse_job
@@ -219,13 +219,26 @@ def test_a_job_whose_spindle_cannot_take_the_cut_is_refused_before_the_run(tmp_p
 
 # ---- the force -----------------------------------------------------------------------------------------------------
 def test_the_finger_force_against_a_case_worked_by_hand():
-    """The shipped job: the issue's ring (z 60, m 2, b 20), 16MnCr5, 600 mm/min at 8000 rpm, 4 teeth. By hand:
-    the space between the tip and root circles A = int (2 pi / z - 2 psi(r)) r dr = 12.93 mm^2; the right pass takes
-    the clearance's strip c x depth = 0.9 mm^2, the left the rest. Left pass slots: h_m = 2 f_z / pi, F_T = k_c(h_m)
-    A v_f / (pi D_m n), against the feed K_r pi / 4 F_T, normal pi / 4 F_T (Altintas's slotting means); right
-    pass: immersion phi_e = acos(1 - c / R_m), h_m = f_z (1 - cos phi_e) / phi_e (below Kienzle's floor H_MIN here).
-    Within 1 % (the finger's flat
-    tip leaves its corners: -0.4 % of the area)."""
+    """The shipped job: the issue's ring (z 60, m 2, b 20), 16MnCr5, 600 mm/min at 8000 rpm, 4 teeth (f_z = 18.75
+    um), the finger's mean radius R_m = 1.3299 mm over the 4.5 mm tooth depth (v_c = 1114.15 mm/s). By hand: the
+    space between the tip and root circles A = int (2 pi / z - 2 psi(r)) r dr = 12.927 mm^2; the right pass takes
+    the clearance's strip c x depth = 0.9 mm^2, the left the rest (the finger's flat tip leaves its corners: -0.4 %).
+    The oblique model (cutting/oblique.py's formulas, beta_a 30 deg) on the form-relieved straight teeth: rake 0,
+    inclination 0, f_c = 3.46410, f_t = 2, tau_s = kc(h) / 3.07973 (the table's 6 deg tool); a 10 um edge: h_min =
+    3 um, K_ce = 10, K_te = 17 N/mm. The finger taken straight-sided from its radius at the tip (0.4561 mm) to the
+    tip circle (2.0118 mm): slope 0.34570, its surface normal 0.94512 normal to the axis, 0.32673 along it.
+
+    Left pass, slotting (phi 0..pi): h_m = 2 f_z / pi = 11.937 um, tau_s = 2156.34 N/mm^2, the section in cut
+    A v_f / v_c = 12.027 x 10 / 1114.15 = 0.10795 mm^2, b = 9.0433 mm: F_T = tau f_c (h_m - h_min) b + K_ce b =
+    603.68 + 90.43 = 694.12 N, the teeth's thrust tau f_t (h_m - h_min) b + K_te b = 502.27 N. Altintas' slotting
+    means with the teeth's radial force K_r = 0.94512 f_t / f_c = 0.54567 (the chip) and 0.94512 K_te / K_ce =
+    1.60670 (the edge): against the feed 603.68 K_r pi / 4 + 90.43 x 2 x 1.60670 / pi = 351.22 N, normal 603.68 pi /
+    4 + 90.43 x 2 / pi = 531.70 N; along the axis 0.32673 x 502.27 = 164.11 N (away from the root); the spindle
+    torque F_T R_m = 0.923 N m. Right pass, the strip in down milling (phi pi - 31.83 deg..pi): h_m = f_z (1 - cos
+    phi_e) / phi_e = 5.076 um, F_T = 46.73 N, against the feed -30.68 N (down milling pulls the mill along it),
+    normal 55.15 N (off the flank it finishes). Within 1 %."""
+    from checks import oblique_factors
+
     job = load_job(ASSET)
     gear = job.gear
     plan = stages.plan_job(job, checks=0)
@@ -239,19 +252,63 @@ def test_the_finger_force_against_a_case_worked_by_hand():
     mat = material(job.process.material)
     rm = float(np.mean(plan.mill.rho(np.linspace(0.0, gear.tooth_depth, 201))))
     vc, vf = math.pi * 2 * rm * rpm / 60, feed / 60  # mm/s
-    h_left = 2 * fz / math.pi
-    f_left = mat.kc11 * h_left ** (-mat.mc) * (area - strip) * vf / vc
+    slope = (float(plan.mill.rho(gear.tooth_depth)) - float(plan.mill.rho(0.0))) / gear.tooth_depth
+    radial, axial = 1 / math.hypot(1, slope), slope / math.hypot(1, slope)
+    assert ml.shares == pytest.approx((radial, axial), rel=0.01)
+    f_c, f_t, _ = oblique_factors(0.0, 0.0)
+    k_r, k_re = radial * f_t / f_c, radial * 17 / 10
+
+    def by_hand(a: float, h: float, phi_st: float, phi_ex: float) -> tuple[float, float, float, float]:
+        """(F_T, thrust, against the feed, normal) [N]: the oblique model and Altintas' means, chip and edge."""
+        tau = mat.kc11 * h ** (-mat.mc) / oblique_factors(6.0, 0.0)[0]
+        b = a * vf / vc / h
+        shear, edge = tau * f_c * (h - 0.003) * b, 10 * b
+        s1 = (math.sin(phi_ex) ** 2 - math.sin(phi_st) ** 2) / 2
+        s2 = (phi_ex - phi_st) / 2 - (math.sin(2 * phi_ex) - math.sin(2 * phi_st)) / 4
+        dc, ds, t = math.cos(phi_st) - math.cos(phi_ex), math.sin(phi_ex) - math.sin(phi_st), phi_ex - phi_st
+        return (
+            shear + edge,
+            tau * f_t * (h - 0.003) * b + 17 * b,
+            shear * (s1 + k_r * s2) / dc + edge * (ds + k_re * dc) / t,
+            shear * (s2 - k_r * s1) / dc + edge * (dc - k_re * ds) / t,
+        )
+
+    left = by_hand(area - strip, 2 * fz / math.pi, 0.0, math.pi)
     phi = math.acos(1 - c / rm)
-    h_right = fz * (1 - math.cos(phi)) / phi
-    f_right = mat.kc11 * max(h_right, H_MIN) ** (-mat.mc) * strip * vf / vc  # Kienzle's floor: 0.0068 < H_MIN
-    assert ml.main_force("left") == pytest.approx(f_left, rel=0.01)
-    assert ml.main_force("right") == pytest.approx(f_right, rel=0.01)
-    feed, normal = ml.components("left")
-    assert feed == pytest.approx(RADIAL_RATIO * math.pi / 4 * f_left, rel=0.01)
-    assert normal == pytest.approx(math.pi / 4 * f_left, rel=0.01)
-    assert ml.torque("left") == pytest.approx(f_left * rm * 1e-3, rel=0.01)
+    right = by_hand(strip, fz * (1 - math.cos(phi)) / phi, math.pi - phi, math.pi)
+    assert left == pytest.approx((694.12, 502.27, 351.22, 531.70), abs=0.01)  # the figures worked above
+    assert right[0] == pytest.approx(46.73, abs=0.01) and right[2:] == pytest.approx((-30.68, 55.15), abs=0.01)
+    for side, hand in (("left", left), ("right", right)):
+        assert ml.main_force(side) == pytest.approx(hand[0], rel=0.01)
+        assert ml.load(side).thrust == pytest.approx(hand[1], rel=0.01)
+        assert ml.components(side) == pytest.approx(hand[2:], rel=0.01)
+        assert ml.axial(side) == pytest.approx(ml.shares[1] * hand[1], rel=0.01)
+    assert ml.torque("left") == pytest.approx(left[0] * rm * 1e-3, rel=0.01)
     # in full engagement mid-face, nothing beyond the faces; the left pass pushed off its flank, against the feed
+    feed, normal = ml.components("left")
     f = ml.force("left", np.array([0.0, -gear.face_width / 2 - rm - 0.01]), -1.0)
     assert f[0, 2] == pytest.approx(feed) and np.abs(f[1]).max() == 0.0
     assert f[0, 0] == pytest.approx(-flank_sign(gear, "left") * normal)
     assert f[0, 4] == pytest.approx(-gear.sense * ml.torque("left"))  # against the spindle's turn about its axis
+
+
+def test_the_finger_is_pushed_off_the_flank_each_pass_finishes_and_back_from_the_root():
+    """The thrust's directions on the shipped ring (internal: the finger comes from inside, its axis from the tip
+    into it along -y_s, sense -1; the right flank at -x_s). Both passes: the tapered finger pushed back along its
+    axis, away from the root (the y_s component of sign sense); the normal force off the flank the pass finishes
+    (x_s against flank_sign). The right pass's strip is cut in down milling: its teeth pull the mill along the feed
+    (the force on the mill along +z, the right pass fed towards +z), where the slotting left pass pushes against it.
+    The passive force is zero (straight teeth, no inclination)."""
+    from cutting.form_milling.mill import flank_sign
+
+    job = load_job(ASSET)
+    ml = stages.mill_load(job, stages.plan_job(job, checks=0))
+    gear = job.gear
+    assert gear.sense == -1 and flank_sign(gear, "right") == -1
+    for side, direction in (("left", -1.0), ("right", 1.0)):
+        f = ml.force(side, np.array([0.0]), direction)[0]
+        assert ml.load(side).passive == 0.0 and ml.load(side).thrust > 0
+        assert f[1] * gear.sense > 0  # back along the axis, away from the root
+        assert f[0] * flank_sign(gear, side) < 0  # off the flank the pass finishes
+    assert ml.force("left", np.array([0.0]), -1.0)[0, 2] > 0  # against the feed (fed towards -z)
+    assert ml.force("right", np.array([0.0]), 1.0)[0, 2] > 0  # along the feed (fed towards +z): down milling

@@ -1,5 +1,7 @@
 """The cutting force of the face-contour machine's elements (seed 004, continuous indexing): the chip each element
-takes at each head angle, Kienzle's main force along the cutting speed V and a thrust normal to the face.
+takes at each head angle and, per edge segment (the tip edge, the two flanks), the oblique model's cutting, thrust
+and passive components at the segment's working rake and inclination (:mod:`cutting.oblique`, the skiving machine's
+model; how the element maps onto it: docs/forces.md, "The other machines").
 
 These forces are how the machine's drives feel the cut: :func:`chip` is the layer and the section an element takes
 (their derivation there), :func:`element_forces` the forces and the torques they put on the head and the work,
@@ -18,27 +20,21 @@ import numpy as np
 from scipy.optimize import brentq
 
 from cutting.face_contour.slots import FaceCoupling, bisect_roots, element_path, path_velocity, tip_position, tool_frame
-from cutting.materials import H_MIN, Material
+from cutting.materials import Material
+from cutting.oblique import DEFAULT_EDGE_RADIUS, element_directions, material_forces
 
 __all__ = [
-    "THRUST_RATIO",
     "Chip",
     "ElementForce",
     "FaceLoad",
+    "Segment",
     "chip",
     "element_forces",
     "infeed",
-    "kienzle",
     "previous_offset",
+    "segments",
     "sizing",
 ]
-
-#: thrust (feed / passive force normal to the machined surface) over the main cutting force of an edge plunging into
-#: steel: Kienzle-type tables of the feed force (the kf1.1 / kc1.1 values after Koenig/Essel 1973, the source of
-#: assets/materials.toml, as reproduced in W. Koenig, F. Klocke: Fertigungsverfahren 1, Springer) put F_f / F_c at
-#: about 0.3 to 0.5 on steel for chips of 0.05..0.5 mm; 0.4, the value form milling's RADIAL_RATIO takes. The range
-#: is quoted from that handbook, not re-checked here nor measured: it scales the depth error, not the spacing.
-THRUST_RATIO = 0.4
 
 
 def infeed(c: FaceCoupling, phi: np.ndarray | float) -> np.ndarray:
@@ -125,21 +121,67 @@ def chip(c: FaceCoupling, phi: np.ndarray | float, element: int = 0) -> Chip:
     return Chip(d, layer, removed, theta, h_tip, h_tip * math.sin(k), b_flank, area, c.edge_width)
 
 
-def kienzle(material: Material, h: np.ndarray, b: np.ndarray | float) -> np.ndarray:
-    """F = k_c(h) b h [N] per segment, k_c = k_c1.1 max(h, H_MIN)^-m_c (cutting/materials.py), 0 where h = 0."""
-    h = np.asarray(h, dtype=float)
-    kc = material.kc11 * np.maximum(h, H_MIN) ** (-material.mc)
-    return kc * b * h
+@dataclass(frozen=True)
+class Segment:
+    """One edge segment of an element at head angles phi (arrays of phi's shape, (..., 3) for directions, in the
+    workpiece frame): the unit cutting direction ``v`` (V's), the cut surface's normal ``n`` towards the element, the
+    passive direction ``p`` (the edge's part normal to V), the working normal ``rake`` and ``inclination`` [rad]."""
+
+    v: np.ndarray
+    n: np.ndarray
+    p: np.ndarray
+    rake: np.ndarray
+    inclination: np.ndarray
+
+
+def segments(c: FaceCoupling, phi: np.ndarray | float, element: int = 0) -> tuple[Segment, Segment, Segment]:
+    """The tip edge and the flanks on the tool axis's +n and -n sides of element ``element`` at head angles phi:
+    their directions and working angles (ISO 3002, as the skiving edge's: :func:`cutting.oblique.element_directions`,
+    rake gamma_n = atan2(g . n, g . e1), e1 V's part normal to the edge).
+
+    The element is a plate in the plane of the tool axis n and the head's radius rho
+    (:func:`~cutting.face_contour.slots.plate_corners`); the job gives it no rake, so its face, the rake face, is the
+    plate: normal to the tip's motion on the tool circle, g = cos psi u + sin psi z (0 deg rake to the head's turning).
+    The tip edge runs along n, the flanks up from its corners along -rho cos kappa +- n sin kappa (kappa the flank
+    angle). The relative velocity V (:func:`~cutting.face_contour.slots.path_velocity`, the tip's for all three: the
+    flanks' points turn on radii within 2.5 % of R) adds the work's turning to the head's, so the segments cut at a
+    small working rake and inclination: at M (V radial, the tool plane at the setting angle lambda to it) the tip edge
+    at rake 0 and inclination lambda, the flanks at rake +-atan(tan lambda cos kappa) and inclination
+    +-asin(sin kappa sin lambda)."""
+    phi = np.asarray(phi, dtype=float)
+    u2, n2 = tool_frame(c, phi)[:2]
+    pad = np.zeros((*u2.shape[:-1], 1))
+    u, n = np.concatenate([u2, pad], axis=-1), np.concatenate([n2, pad], axis=-1)
+    psi = (phi + float(c.phases[element]))[..., None]
+    up = np.array([0.0, 0.0, 1.0])
+    rho = np.sin(psi) * u - np.cos(psi) * up  # from the head's centre to the tip
+    g = np.cos(psi) * u + np.sin(psi) * up  # the plate's normal towards the chip
+    velocity = path_velocity(c, phi, element)
+    ck, sk = math.cos(c.flank_angle), math.sin(c.flank_angle)
+    edges = (  # (tangent, a direction into the plate from the segment)
+        (n, -rho),
+        (-ck * rho + sk * n, -sk * rho - ck * n),
+        (-ck * rho - sk * n, -sk * rho + ck * n),
+    )
+    out = []
+    for tangent, body in edges:
+        v, normal, passive, lam = element_directions(tangent, velocity, body)
+        t = tangent / np.linalg.norm(tangent, axis=-1, keepdims=True)
+        e1 = v - np.sum(t * v, axis=-1, keepdims=True) * t
+        rake = np.arctan2(np.sum(g * normal, axis=-1), np.sum(g * e1, axis=-1) / np.linalg.norm(e1, axis=-1))
+        out.append(Segment(v, normal, passive, rake, lam))
+    return out[0], out[1], out[2]
 
 
 @dataclass(frozen=True)
 class ElementForce:
-    """Element j's forces at head angles phi: ``F_c`` and ``F_p`` [N] (magnitudes), ``force`` on the tool in the
-    workpiece frame (..., 3) [N], the ``tip`` there (..., 3) [mm], the torque ``head_torque`` the cut puts on the
-    head about its axis against its turning [N m] and ``work_torque`` on the workpiece about its axis z [N m], and
-    the ``chip``."""
+    """Element j's forces at head angles phi: the sums over its segments of the cutting ``F_c``, thrust ``F_t`` and
+    passive ``F_p`` components [N], the ``force`` on the tool in the workpiece frame (..., 3) [N], the ``tip`` there
+    (..., 3) [mm], the torque ``head_torque`` the cut puts on the head about its axis against its turning [N m] and
+    ``work_torque`` on the workpiece about its axis z [N m], and the ``chip``."""
 
     F_c: np.ndarray
+    F_t: np.ndarray
     F_p: np.ndarray
     force: np.ndarray
     tip: np.ndarray
@@ -147,26 +189,43 @@ class ElementForce:
     work_torque: np.ndarray
     chip: Chip
 
+    @property
+    def lift(self) -> np.ndarray:
+        """The force on the tool out of the face (+z, along the infeed: what the infeed nut and MZ carry) [N]."""
+        return self.force[..., 2]
 
-def element_forces(c: FaceCoupling, material: Material, phi: np.ndarray | float, element: int = 0) -> ElementForce:
-    """Kienzle's F_c along -V on the tool, the thrust THRUST_RATIO F_c along +z, with the torques they put on the
-    head (R times F's component along the tip's circle, opposing the head's turning) and on the workpiece
-    (tip x (-F), about z).
 
-    Kienzle (cutting/materials.py) per edge segment of :func:`chip`: F_c = sum k_c(h) b h with k_c = k_c1.1 h^-m_c,
-    the table's reference rake (+6 deg; the elements' rake is not modelled). It acts on the tool against V (the
-    direction of :func:`~cutting.face_contour.slots.path_velocity`); the thrust F_p = THRUST_RATIO F_c pushes the
-    tool out of the face (+z), and both act reversed on the workpiece, at the tip. The chip is the nominal one at the
-    head angle (the machine's deflections do not change it: no regeneration).
+def element_forces(
+    c: FaceCoupling,
+    material: Material,
+    phi: np.ndarray | float,
+    element: int = 0,
+    edge_radius: float = DEFAULT_EDGE_RADIUS,
+) -> ElementForce:
+    """The oblique model's forces on element ``element``'s segments (:func:`segments`) at head angles phi, with the
+    torques they put on the head (R times the force's component along the tip's circle, opposing the head's
+    turning) and on the workpiece (tip x (-F), about z).
+
+    Per segment of :func:`chip`: the tip edge takes h_tip over its width, each flank h_flank over b_flank; the chip
+    width normal to V is the segment's length x cos(inclination) (the skiving element's); the model
+    (:meth:`cutting.oblique.ObliqueForces.element`, the material's Kienzle row, edge radius ``edge_radius``: the job
+    gives none, so the model's default) gives F_c, F_t, F_p at the segment's rake and inclination. On the tool
+    (reversed on the workpiece, both at the tip): -F_c v + F_t n - F_p p, i.e. the cutting force against V, the
+    thrust pushing the element off each surface it cuts (out of the face at the tip edge, off the slot's sides and
+    up at the flanks) and the passive force along the edges. The chip is the nominal one at the head angle (the
+    machine's deflections do not change it: no regeneration).
     """
     phi = np.asarray(phi, dtype=float)
     ch = chip(c, phi, element)
-    fc = kienzle(material, ch.h_tip, c.edge_width) + 2 * kienzle(material, ch.h_flank, ch.b_flank)
-    fp = THRUST_RATIO * fc
-    v = path_velocity(c, phi, element)
-    vhat = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    force = -fc[..., None] * vhat
-    force[..., 2] += fp
+    model = material_forces(material, edge_radius)
+    force = np.zeros((*phi.shape, 3))
+    sums = [np.zeros(phi.shape) for _ in range(3)]
+    cuts = ((ch.h_tip, c.edge_width), (ch.h_flank, ch.b_flank), (ch.h_flank, ch.b_flank))
+    for seg, (h, length) in zip(segments(c, phi, element), cuts, strict=True):
+        fc, ft, fp = model.element(h, length * np.cos(seg.inclination), seg.rake, seg.inclination)
+        force += -fc[..., None] * seg.v + ft[..., None] * seg.n - fp[..., None] * seg.p
+        for total, part in zip(sums, (fc, ft, fp), strict=True):
+            total += part
     tip = element_path(c, phi, element, final=True)
     tip[..., 2] += c.depth - infeed(c, phi)
     u = tool_frame(c, phi)[0]
@@ -175,7 +234,7 @@ def element_forces(c: FaceCoupling, material: Material, phi: np.ndarray | float,
     tangent = np.concatenate([np.cos(psi)[..., None] * u, np.sin(psi)[..., None]], axis=-1)
     head = -c.R * 1e-3 * np.einsum("...k,...k->...", force, tangent)
     work = -1e-3 * (tip[..., 0] * force[..., 1] - tip[..., 1] * force[..., 0])
-    return ElementForce(fc, fp, force, tip, head, work, ch)
+    return ElementForce(*sums, force, tip, head, work, ch)
 
 
 @dataclass(eq=False)
@@ -190,6 +249,7 @@ class FaceLoad:
     material: Material
     window: tuple[float, float]
     samples: int = 1201
+    edge_radius: float = DEFAULT_EDGE_RADIUS
     _tables: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
     _integrals: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
 
@@ -221,7 +281,10 @@ class FaceLoad:
         if turn not in self._tables:
             phi = 2 * math.pi * turn + self.local
             self._tables[turn] = np.stack(
-                [element_forces(self.coupling, self.material, phi, j).force for j in range(self.coupling.elements)]
+                [
+                    element_forces(self.coupling, self.material, phi, j, self.edge_radius).force
+                    for j in range(self.coupling.elements)
+                ]
             )
         return self._tables[turn]
 
@@ -267,23 +330,26 @@ class FaceLoad:
     def passes(self, turn: int) -> list[ElementForce]:
         """Every element's :class:`ElementForce` over turn ``turn``'s window."""
         phi = 2 * math.pi * turn + self.local
-        return [element_forces(self.coupling, self.material, phi, j) for j in range(self.coupling.elements)]
+        c = self.coupling
+        return [element_forces(c, self.material, phi, j, self.edge_radius) for j in range(c.elements)]
 
 
-def _peak(c: FaceCoupling, material: Material, window: tuple[float, float]) -> dict[str, float]:
-    """The largest head torque, work torque, thrust and F_c [N m, N m, N, N] of the cycle's deepest full passes (the
-    turns around the plunge's end at depth / S, where the layer is still m S and the tip deepest), the elements'
-    loads at each head angle added (they cut together)."""
+def _peak(
+    c: FaceCoupling, material: Material, window: tuple[float, float], edge_radius: float = DEFAULT_EDGE_RADIUS
+) -> dict[str, float]:
+    """The largest head torque, work torque, thrust (the force out of the face, :attr:`ElementForce.lift`) and F_c
+    [N m, N m, N, N] of the cycle's deepest full passes (the turns around the plunge's end at depth / S, where the
+    layer is still m S and the tip deepest), the elements' loads at each head angle added (they cut together)."""
     end = c.depth / c.S
     turns = {max(math.floor(end) + k, 0) for k in (-1, 0, 1)}
     local = np.linspace(window[0], window[1], 801)
     out = {"head": 0.0, "work": 0.0, "thrust": 0.0, "F_c": 0.0}
     for turn in turns:
-        f = [element_forces(c, material, 2 * math.pi * turn + local, j) for j in range(c.elements)]
+        f = [element_forces(c, material, 2 * math.pi * turn + local, j, edge_radius) for j in range(c.elements)]
         for key, values in (
             ("head", [x.head_torque for x in f]),
             ("work", [x.work_torque for x in f]),
-            ("thrust", [x.F_p for x in f]),
+            ("thrust", [x.lift for x in f]),
             ("F_c", [x.F_c for x in f]),
         ):
             out[key] = max(out[key], float(np.max(np.abs(np.sum(values, axis=0)))))
@@ -296,13 +362,15 @@ def sizing(
     window: tuple[float, float],
     motors: dict[str, tuple[float, float]],
     share: float,
+    edge_radius: float = DEFAULT_EDGE_RADIUS,
 ) -> dict[str, dict[str, float]]:
     """The motors' torques the cycle's heaviest pass needs: per motor (``"MH"``, ``"MA"``, ``"MZ"``, each (torque
     per unit of its joint's load [N m per N m, or N m per N], peak torque [N m])) the torque needed, the peak,
     and, where it exceeds ``share`` of the peak, the largest feed S [mm/rev] that keeps it within (brentq on the
-    model, 1e-6 mm); the peak F_c and thrust. Loads: the head torque (MH), the work torque (MA), the thrust (MZ)."""
+    model, 1e-6 mm); the peak F_c and thrust. Loads: the head torque (MH), the work torque (MA), the thrust (MZ).
+    ``edge_radius`` [mm]: the elements' (:func:`element_forces`)."""
     loads = {"MH": "head", "MA": "work", "MZ": "thrust"}
-    peak = _peak(c, material, window)
+    peak = _peak(c, material, window, edge_radius)
     out: dict[str, dict[str, float]] = {}
     for name, (per, limit) in motors.items():
         need = peak[loads[name]] * per
@@ -310,7 +378,7 @@ def sizing(
         if need > share * limit:
 
             def excess(s: float, name: str = name, per: float = per, limit: float = limit) -> float:
-                return _peak(replace(c, S=s), material, window)[loads[name]] * per - share * limit
+                return _peak(replace(c, S=s), material, window, edge_radius)[loads[name]] * per - share * limit
 
             lo = 1e-6
             row["feed_mm"] = brentq(excess, lo, c.S, xtol=1e-6) if excess(lo) < 0 else 0.0

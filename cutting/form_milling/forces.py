@@ -1,4 +1,4 @@
-"""The cutting force of the profiled disc mill (copying method), from the section each pass removes.
+"""The cutting force of the profiled disc and finger mills (copying method), from the section each pass removes.
 
 A pass removes per millimetre of feed the area A of its tooth-space section that is still material: for the left
 pass the mill's section below the tip circle, for the right pass the strip the clearance left beside the right
@@ -6,15 +6,26 @@ flank. A plane of the face a distance s ahead of the mill's centre is cut down t
 - sqrt(R^2 - s^2), so as the mill advances the planes ahead of it within the face deepen their cut from lift(s_max)
 to lift(s_min): the removal rate is Q = v_f [A(lift(s_min)) - A(lift(s_max))], s_min and s_max the face's nearest
 and farthest planes ahead of the centre (within the arc of contact). It rises as the mill enters, never reaches v_f
-A on a face shorter than the arc, and falls to 0 as the centre leaves the face. With Kienzle's law at the mean chip
-thickness h_m = f_z sqrt(a_e / D) of a disc mill (f_z the feed per tooth, a_e the tooth depth) the cutting power is
-P = k_c(h_m) Q and the main (tangential) cutting force at the cutting speed v_c is F_t = P / v_c; the thrust pushing
-the mill off the work F_r = RADIAL_RATIO F_t. The forces act at the mill's lowest point on the mill and, reversed,
-on the gear. This is the steady force of the pass, not the pulsation of the single teeth (12 per revolution at ~4
-Hz, far below the machine's modes).
+A on a face shorter than the arc, and falls to 0 as the centre leaves the face.
 
-The finger (end) mill's force (:class:`FingerLoad`): Q = v_f x the section it removes, Kienzle at the end mill's mean
-chip thickness and the teeth's radial force as a stated ratio of their tangential one (Altintas 2012).
+The forces are the oblique model's (:mod:`cutting.oblique`, the skiving machine's; docs/forces.md, "The other
+machines"). The teeth of both mills are form-relieved with a radial rake face and straight (:data:`MILL_RAKE`,
+:data:`MILL_INCLINATION`): every element of the engaged edge cuts at normal rake 0 and inclination 0, so it takes a
+cutting force along its velocity and a thrust normal to the surface it cuts, and no passive force. Each takes the
+pass's mean chip thickness h_m (the disc mill's f_z sqrt(a_e / D), f_z the feed per tooth, a_e the tooth depth);
+the teeth in cut at once have the chip width b = Q / (v_c h_m) (the mean section in cut over h_m, v_c the cutting
+speed), so that they take F = f tau_s(h_m) (h_m - h_min) b + K_e b (:func:`tooth_load`): the cutting force F_t
+(Kienzle's Q k_c(h_m) / v_c where the tooth is the table's sharp +6 deg tool) and the thrust. The cutting force
+acts along the teeth's velocity at the mill's lowest point, against the feed (up milling); the thrust off the work
+along the removal's mean cut-surface normal in the transverse plane (:func:`thrust_directions`): the left pass's
+two flanks push the mill sideways against each other, so its thrust is mostly radial; the right pass cuts the strip
+along the right flank, whose thrust pushes the mill off that flank, along its axis. Both act at the mill's lowest
+point on the mill and, reversed, on the gear. This is the steady force of the pass, not the pulsation of the single
+teeth (12 per revolution at ~4 Hz, far below the machine's modes). The form-milling job gives no edge radius: the
+model's default (:data:`cutting.oblique.DEFAULT_EDGE_RADIUS`).
+
+The finger (end) mill's force (:class:`FingerLoad`): Q = v_f x the section it removes, the same model at the end
+mill's mean chip thickness, Altintas' mean forces of the teeth over their immersion (2012).
 """
 
 from __future__ import annotations
@@ -22,6 +33,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -29,17 +41,62 @@ from cutting.form_milling.finger import FingerMill, fit_finger_mill
 from cutting.form_milling.mill import DiscMill
 from cutting.gear import Gear
 from cutting.materials import Material
+from cutting.oblique import DEFAULT_EDGE_RADIUS, ObliqueForces, material_forces
 
-#: thrust over main cutting force of a milling tooth (the classic 0.3-0.5 of steel milling)
-RADIAL_RATIO = 0.4
+#: the normal rake [rad] of the mills' teeth: the job gives none; a form-relieved gear cutter (disc or finger) is
+#: ground on a radial rake face, so that regrinding the face keeps its profile: 0 deg
+MILL_RAKE = 0.0
+#: the teeth's inclination [rad]: straight teeth, their edge in an axial plane of the mill and so normal to its
+#: velocity about the axis (the feed's 1-2 % of the cutting speed aside): 0 deg
+MILL_INCLINATION = 0.0
 
 
-def removed_areas(gear: Gear, mill: DiscMill, clearance: float, lift: float = 0.0, samples: int = 4001) -> dict:
-    """Area [mm^2] of the transverse space section each pass removes (nominal path points, left pass first), the
-    mill raised by ``lift`` [mm] (its lowest point above the root circle: the section it cuts entering the face).
-    On a helical space the mill's axis is set over by the helix angle (:func:`cutting.form_milling.helical.set_over`),
-    so the transverse plane cuts its profile stretched by 1 / cos(set-over): the transverse u is u cos(set-over) along
-    the mill's axis (the removal per millimetre of feed along the gear axis is the transverse section's)."""
+class ToothLoad(NamedTuple):
+    """The mean forces [N] of a mill's teeth in cut (:func:`tooth_load`): ``shear`` the chip's (cutting, thrust,
+    passive), ``edge`` the rounded edge's ploughing (cutting, thrust), and the chip width ``width`` b [mm]."""
+
+    shear: tuple[float, float, float]
+    edge: tuple[float, float]
+    width: float
+
+    @property
+    def cutting(self) -> float:
+        """Along the teeth's velocity [N]: the tangential forces' sum."""
+        return self.shear[0] + self.edge[0]
+
+    @property
+    def thrust(self) -> float:
+        """Normal to the cut surfaces [N], the elements' magnitudes summed (their directions: the caller's)."""
+        return self.shear[1] + self.edge[1]
+
+    @property
+    def passive(self) -> float:
+        """Along the edges [N]: zero for the straight teeth."""
+        return self.shear[2]
+
+
+def tooth_load(model: ObliqueForces, thickness: float, section: float) -> ToothLoad:
+    """The teeth in cut taking chips ``thickness`` h [mm] thick, ``section`` [mm^2] the mean chip section in cut
+    (Q / v_c): the chip width b = section / h, every element at the mills' rake and inclination, the shear
+    f tau_s(h) (h - h_min)+ b and the edge's K_e b (:class:`cutting.oblique.ObliqueForces`)."""
+    if thickness <= 0 or section <= 0:
+        return ToothLoad((0.0, 0.0, 0.0), (0.0, 0.0), 0.0)
+    b = section / thickness
+    sheared = float(model.shear_stress(thickness)) * max(thickness - model.min_chip, 0.0) * b
+    f = model.factors(MILL_RAKE, MILL_INCLINATION)
+    ce, te = model.edge_coefficients
+    return ToothLoad((float(f[0]) * sheared, float(f[1]) * sheared, float(f[2]) * sheared), (ce * b, te * b), b)
+
+
+def removal_columns(
+    gear: Gear, mill: DiscMill, clearance: float, lift: float = 0.0, samples: int = 4001
+) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The transverse space section cut into columns: their positions u [mm] (x_s, across the space), per pass the
+    depth of material each column loses (nominal path points, the mill raised by ``lift`` [mm], its lowest point above
+    the root circle) and the slope dy/du of the surface the pass leaves there (the mill's edge). On a helical space
+    the mill's axis is set over by the helix angle (:func:`cutting.form_milling.helical.set_over`), so the
+    transverse plane cuts its profile stretched by 1 / cos(set-over): the transverse u is u cos(set-over) along the
+    mill's axis (the removal per millimetre of feed along the gear axis is the transverse section's)."""
     from cutting.form_milling.helical import set_over
 
     u0, u1 = -gear.tip_radius * math.sin(math.pi / gear.teeth), gear.tip_radius * math.sin(math.pi / gear.teeth)
@@ -50,13 +107,40 @@ def removed_areas(gear: Gear, mill: DiscMill, clearance: float, lift: float = 0.
     h_right = np.nan_to_num(mill.height(k * u - clearance / 2), nan=np.inf) + lift
     left = np.clip(tip - h_left, 0.0, None)
     both = np.clip(tip - np.minimum(h_left, h_right), 0.0, None)
+    uu, hh = mill.profile
+    slope = np.gradient(hh, uu)
+    slopes = {
+        "left": k * np.interp(k * u + clearance / 2, uu, slope),
+        "right": k * np.interp(k * u - clearance / 2, uu, slope),
+    }
+    return u, {"left": left, "right": both - left}, slopes
+
+
+def removed_areas(gear: Gear, mill: DiscMill, clearance: float, lift: float = 0.0, samples: int = 4001) -> dict:
+    """Area [mm^2] of the transverse space section each pass removes (:func:`removal_columns`, left pass first)."""
+    u, depths, _ = removal_columns(gear, mill, clearance, lift, samples)
     du = u[1] - u[0]
-    return {"left": float(left.sum() * du), "right": float((both - left).sum() * du)}
+    return {side: float(d.sum() * du) for side, d in depths.items()}
+
+
+def thrust_directions(gear: Gear, mill: DiscMill, clearance: float, samples: int = 4001) -> dict[str, np.ndarray]:
+    """Per pass the direction (x_s, y_s) of its teeth's thrust on the mill in the transverse plane: the mean of the
+    cut surface's unit normal into the mill, (-y', 1) / sqrt(1 + y'^2) (y' the edge's slope, :func:`removal_columns`),
+    over the columns weighted by their removal (a column's force is its share of Q at the pass's chip thickness).
+    Its length is below 1 where the columns' normals oppose each other (the slotting pass's two flanks)."""
+    _, depths, slopes = removal_columns(gear, mill, clearance, 0.0, samples)
+    out = {}
+    for side, depth in depths.items():
+        w = depth / max(float(depth.sum()), 1e-300)
+        norm = np.sqrt(1.0 + slopes[side] ** 2)
+        out[side] = np.array([float(np.sum(w * -slopes[side] / norm)), float(np.sum(w / norm))])
+    return out
 
 
 @dataclass(frozen=True, eq=False)
 class MillLoad:
-    """The pass's cutting force [N] as a function of the mill centre's face position (see the module text)."""
+    """The pass's cutting force [N] as a function of the mill centre's face position (see the module text); the
+    teeth's edge radius ``edge_radius`` [mm] (the job gives none: the model's default)."""
 
     gear: Gear
     mill: DiscMill
@@ -64,6 +148,7 @@ class MillLoad:
     feed: float  # mm/min
     speed: float  # rpm
     clearance: float  # mm
+    edge_radius: float = DEFAULT_EDGE_RADIUS
 
     @cached_property
     def _areas(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -86,11 +171,37 @@ class MillLoad:
         fz = self.feed / (self.speed * self.mill.teeth)
         return fz * math.sqrt(self.depth / (2 * self.mill.radius))
 
-    def main_force(self, side: str) -> float:
-        """F_t [N] of the ``side`` pass in full engagement: k_c(h_m) A v_f / v_c."""
+    @property
+    def model(self) -> ObliqueForces:
+        """The material's oblique model for the teeth's edge radius."""
+        return material_forces(self.material, self.edge_radius)
+
+    def section(self, side: str) -> float:
+        """The mean chip section in cut [mm^2] of the ``side`` pass in full engagement: Q / v_c = A v_f / v_c."""
         vf = self.feed / 60.0  # mm/s
         vc = math.pi * 2 * self.mill.radius * self.speed / 60.0  # mm/s
-        return self.material.kc(self.chip_thickness) * self.areas[side] * vf / vc
+        return self.areas[side] * vf / vc
+
+    def load(self, side: str) -> ToothLoad:
+        """The teeth's mean forces [N] of the ``side`` pass in full engagement (:func:`tooth_load` at h_m)."""
+        return tooth_load(self.model, self.chip_thickness, self.section(side))
+
+    def main_force(self, side: str) -> float:
+        """F_t [N] of the ``side`` pass in full engagement: the teeth's cutting force (against the feed)."""
+        return self.load(side).cutting
+
+    @cached_property
+    def directions(self) -> dict[str, np.ndarray]:
+        """Per pass the thrust's direction (x_s, y_s) on the mill (:func:`thrust_directions`)."""
+        return thrust_directions(self.gear, self.mill, self.clearance)
+
+    def components(self, side: str) -> tuple[float, float, float]:
+        """(along x_s, along y_s, against the feed) [N] on the mill in full engagement: the thrust along its
+        direction (x_s: the mill's axis, off the flank the right pass finishes; y_s: radial, off the work) and the
+        cutting force."""
+        ld = self.load(side)
+        d = self.directions[side]
+        return ld.thrust * float(d[0]), ld.thrust * float(d[1]), ld.cutting
 
     def engagement(self, side: str, z: np.ndarray, direction: float) -> np.ndarray:
         """Removal rate over v_f A at mill-centre face positions ``z`` for a feed towards sign(direction) z:
@@ -107,13 +218,15 @@ class MillLoad:
         return np.clip((area(near) - area(far)) / max(areas[side][0], 1e-12), 0.0, 1.0)
 
     def force(self, side: str, z: np.ndarray, direction: float) -> np.ndarray:
-        """(n, 3) force on the mill [N] in the space frame (x tangential, y radial out, z): the thrust along +y
-        (off the work) and the main force against the feed (up milling: the spindle turns so that the teeth at the
-        bottom move against the feed, in both passes)."""
-        ft = self.main_force(side) * self.engagement(side, z, direction)
-        out = np.zeros((len(ft), 3))
-        out[:, 1] = RADIAL_RATIO * ft
-        out[:, 2] = -np.sign(direction) * ft
+        """(n, 3) force on the mill [N] in the space frame (x tangential, y radial out, z): the thrust in the
+        transverse plane (:meth:`components`) and the cutting force against the feed (up milling: the spindle turns
+        so that the teeth at the bottom move against the feed, in both passes)."""
+        e = self.engagement(side, z, direction)
+        tx, ty, fc = self.components(side)
+        out = np.zeros((len(e), 3))
+        out[:, 0] = tx * e
+        out[:, 1] = ty * e
+        out[:, 2] = -np.sign(direction) * fc * e
         return out
 
 
@@ -164,7 +277,7 @@ def finger_path_x(gear: Gear, side: str, clearance: float) -> float:
     return float(path_point(gear, side, clearance)[0])  # type: ignore[arg-type]
 
 
-def mean_forces(phi_start: float, phi_exit: float, radial_ratio: float = RADIAL_RATIO) -> tuple[float, float, float]:
+def mean_forces(phi_start: float, phi_exit: float, radial_ratio: float) -> tuple[float, float, float]:
     """Mean force of an end mill's teeth over a revolution, against the feed and normal to it, and the mean chip
     thickness, each over (resp. per) the mean tangential force sum F_T = T / R and the feed per tooth.
 
@@ -181,21 +294,37 @@ def mean_forces(phi_start: float, phi_exit: float, radial_ratio: float = RADIAL_
     return (s1 + radial_ratio * s2) / t, (s2 - radial_ratio * s1) / t, t / (b - a)
 
 
+def edge_means(phi_start: float, phi_exit: float, radial_ratio: float) -> tuple[float, float]:
+    """:func:`mean_forces` of the teeth's edge (ploughing) forces, which do not grow with the chip: a tooth in the cut
+    takes K_te a tangentially and K_re a radially whatever its immersion (Altintas 2012, eq. 2.41's edge terms); over
+    the engagement their means are (N a K_te / 2 pi) times feed: (sin phi_ex - sin phi_st) + K_re / K_te (cos phi_st
+    - cos phi_ex), normal: (cos phi_st - cos phi_ex) - K_re / K_te (sin phi_ex - sin phi_st), tangential sum:
+    phi_ex - phi_st. Returns (feed, normal) over the tangential sum; slotting (0, pi): (2 K_re / (pi K_te), 2 / pi)."""
+    a, b = phi_start, phi_exit
+    c, s = math.cos(a) - math.cos(b), math.sin(b) - math.sin(a)
+    return (s + radial_ratio * c) / (b - a), (c - radial_ratio * s) / (b - a)
+
+
 @dataclass(frozen=True, eq=False)
 class FingerLoad:
     """The finger pass's cutting force [N] and torque [N m] as functions of the tip centre's face position.
 
     An end mill side-milling the space (its axis along the space's symmetry line, fed along the face): the removal
-    rate is Q = v_f A, A the section the pass removes (:func:`finger_removed_areas`); Kienzle's k_c at the mean
-    chip thickness h_m of the pass's immersion (:func:`mean_forces`; the left pass slots the space, phi 0..pi, the
-    right pass takes the clearance's strip a_e = c at the flank it finishes, phi 0..acos(1 - 2 c / D_m)) gives the
-    cutting power P = k_c(h_m) Q and the mean tangential force sum F_T = P / v_c at the mean diameter D_m over the
-    tooth depth (v_c = pi D_m n), the spindle torque F_T D_m / 2; the resultant in the plane normal to the axis
-    follows from the teeth's radial force, the thrust RADIAL_RATIO F_t of each tooth (as the disc mill's): against
-    the feed (S1 + K_r S2) / (cos phi_st - cos phi_ex) F_T and normal to it, pushing the mill off the flank the pass
-    finishes, (S2 - K_r S1) / (...) F_T. Straight flutes: no force along the axis. Engagement: the share of the
-    mill's front arc (x uniform across its mean diameter) within the face, so the force rises as the mill enters
-    and falls as it leaves. The steady force of the pass, not the teeth's pulsation (4 teeth at 100 Hz)."""
+    rate is Q = v_f A, A the section the pass removes (:func:`finger_removed_areas`), at the mean chip thickness h_m
+    of the pass's immersion (:func:`mean_forces`; the left pass slots the space, phi 0..pi, the right pass takes the
+    clearance's strip a_e = c at the flank it finishes in down milling, phi pi - acos(1 - 2 c / D_m)..pi) and the
+    cutting speed v_c = pi D_m n at the mean diameter D_m over the tooth depth. The oblique model on the teeth in
+    cut (straight flutes with a radial face: rake and inclination 0; :func:`tooth_load`, the chip width
+    Q / (v_c h_m)) gives the mean tangential force sum F_T (the teeth's cutting forces; the spindle torque
+    F_T D_m / 2) and the teeth's thrust, normal to the finger's surface of revolution: its part normal to the axis is
+    the teeth's radial force, its part along the axis pushes the tapered finger back from the root (:attr:`shares`).
+    The resultant in the plane normal to the axis: Altintas' means over the immersion with each tooth's radial force
+    K_r, the chip's (:func:`mean_forces`, K_r = f_t / f_c x the radial share) and the edge's (:func:`edge_means`):
+    against the feed and normal to it, pushing the mill off the flank the pass finishes. The chip's part is taken at
+    h_m (its share above h_min at the mean chip). Engagement: the share of the mill's front arc (x uniform across
+    its mean diameter) within the face, so the force rises as the mill enters and falls as it leaves. The steady
+    force of the pass, not the teeth's pulsation (4 teeth at 100 Hz). The job gives no edge radius: ``edge_radius``
+    is the model's default."""
 
     gear: Gear
     mill: FingerMill
@@ -203,6 +332,7 @@ class FingerLoad:
     feed: float  # mm/min
     speed: float  # rpm
     clearance: float  # mm
+    edge_radius: float = DEFAULT_EDGE_RADIUS
 
     @cached_property
     def areas(self) -> dict[str, float]:
@@ -230,29 +360,70 @@ class FingerLoad:
         return self.feed / (self.speed * self.mill.teeth)
 
     def immersion(self, side: str) -> tuple[float, float]:
-        """[phi_st, phi_ex] [rad] of the ``side`` pass: slotting for the left, the clearance's strip for the right."""
+        """[phi_st, phi_ex] [rad] of the ``side`` pass (Altintas' immersion, phi = 0 where a tooth enters in up
+        milling): slotting for the left; for the right the clearance's strip, which lies on the down-milling side
+        (the spindle turns the same way in both passes and the feed reverses: the side :meth:`force` pushes the mill
+        off with a positive normal force), pi - acos(1 - c / R_m)..pi."""
         if side == "left":
             return 0.0, math.pi
-        return 0.0, math.acos(max(1.0 - self.clearance / self.mean_radius, -1.0))
+        return math.pi - math.acos(max(1.0 - self.clearance / self.mean_radius, -1.0)), math.pi
 
     def chip_thickness(self, side: str) -> float:
         """Mean chip thickness h_m [mm] of the ``side`` pass."""
-        return mean_forces(*self.immersion(side))[2] * self.feed_per_tooth
+        return mean_forces(*self.immersion(side), 0.0)[2] * self.feed_per_tooth
 
-    def main_force(self, side: str) -> float:
-        """F_T [N] of the ``side`` pass in full engagement: k_c(h_m) A v_f / v_c (the tangential forces' sum)."""
+    @property
+    def model(self) -> ObliqueForces:
+        """The material's oblique model for the teeth's edge radius."""
+        return material_forces(self.material, self.edge_radius)
+
+    def section(self, side: str) -> float:
+        """The mean chip section in cut [mm^2] of the ``side`` pass in full engagement: Q / v_c = A v_f / v_c."""
         vf = self.feed / 60.0  # mm/s
         vc = math.pi * 2 * self.mean_radius * self.speed / 60.0  # mm/s
-        return self.material.kc(self.chip_thickness(side)) * self.areas[side] * vf / vc
+        return self.areas[side] * vf / vc
+
+    def load(self, side: str) -> ToothLoad:
+        """The teeth's mean forces [N] of the ``side`` pass in full engagement (:func:`tooth_load` at h_m)."""
+        return tooth_load(self.model, self.chip_thickness(side), self.section(side))
+
+    def main_force(self, side: str) -> float:
+        """F_T [N] of the ``side`` pass in full engagement: the teeth's cutting forces' sum (tangential)."""
+        return self.load(side).cutting
+
+    @cached_property
+    def shares(self) -> tuple[float, float]:
+        """(normal to the axis, along it): the mean over the tooth depth (each row v from the tip to the tip circle
+        takes the same chip) of the finger surface's unit normal, 1 / sqrt(1 + rho'^2) and rho' / sqrt(1 + rho'^2):
+        how the teeth's thrust splits into their radial force and a force along the axis, away from the root."""
+        v = np.linspace(0.0, self.depth, 201)
+        slope = np.gradient(self.mill.rho(v), v)
+        norm = np.sqrt(1.0 + slope**2)
+        return float(np.mean(1.0 / norm)), float(np.mean(slope / norm))
+
+    def axial(self, side: str) -> float:
+        """The mean force [N] on the mill along its axis, away from the root (from its tip into it), in full
+        engagement: the teeth's thrust x its share along the axis."""
+        return self.load(side).thrust * self.shares[1]
 
     def torque(self, side: str) -> float:
         """Spindle torque [N m] of the ``side`` pass in full engagement: F_T D_m / 2."""
         return self.main_force(side) * self.mean_radius * 1e-3
 
     def components(self, side: str) -> tuple[float, float]:
-        """(against the feed, normal to it) [N] in full engagement."""
-        f, n, _ = mean_forces(*self.immersion(side))
-        return f * self.main_force(side), n * self.main_force(side)
+        """(against the feed, normal to it) [N] in the plane normal to the axis in full engagement: the chip's and
+        the edge's parts of the tangential sum, each with its radial force K_r (:func:`mean_forces`,
+        :func:`edge_means`)."""
+        ld, model = self.load(side), self.model
+        fc, ft, _ = model.factors(MILL_RAKE, MILL_INCLINATION)
+        ce, te = model.edge_coefficients
+        radial = self.shares[0]
+        chip_feed, chip_normal, _ = mean_forces(*self.immersion(side), radial * float(ft / fc))
+        edge_feed, edge_normal = edge_means(*self.immersion(side), radial * te / ce if ce > 0 else 0.0)
+        return (
+            ld.shear[0] * chip_feed + ld.edge[0] * edge_feed,
+            ld.shear[0] * chip_normal + ld.edge[0] * edge_normal,
+        )
 
     def engagement(self, z: np.ndarray, direction: float) -> np.ndarray:
         """Share of the front arc within the face at tip-centre face positions ``z`` fed towards sign(direction) z."""
@@ -264,14 +435,16 @@ class FingerLoad:
 
     def force(self, side: str, z: np.ndarray, direction: float) -> np.ndarray:
         """(n, 6) force on the mill [N] in the space frame (x tangential, y radial out, z) and the torque on it
-        [N m] about the same axes: against the feed, normal pushing off the ``side`` flank, the cutting torque
-        against the spindle's turn about the mill's axis (from its tip into it, (0, sense, 0))."""
+        [N m] about the same axes: against the feed, normal pushing off the ``side`` flank, along the axis away from
+        the root (:meth:`axial`), the cutting torque against the spindle's turn about the mill's axis (from its tip
+        into it, (0, sense, 0))."""
         from cutting.form_milling.mill import flank_sign
 
         e = self.engagement(z, direction)
         feed, normal = self.components(side)
         out = np.zeros((len(e), 6))
         out[:, 0] = -flank_sign(self.gear, side) * normal * e  # type: ignore[arg-type]
+        out[:, 1] = self.gear.sense * self.axial(side) * e
         out[:, 2] = -np.sign(direction) * feed * e
         out[:, 4] = -self.gear.sense * self.torque(side) * e
         return out

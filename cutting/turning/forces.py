@@ -1,10 +1,11 @@
-"""Cutting forces of vibration turning (seed 004) with a round-nosed tool: the uncut chip at each spindle angle,
-Kienzle's main force on it, the feed and passive forces by fixed ratios.
+"""Cutting forces of vibration turning (seed 004) with a round-nosed tool: the uncut chip at each spindle angle and
+the oblique model's cutting force and thrust on it (:mod:`cutting.oblique`, the skiving machine's model).
 
 The lathe's carriage and spindle feel the cut through these forces, and a vibration that breaks the chip drops them
-to zero at every break. :func:`chip_section` (and its scalar :func:`chip_area`) is the uncut chip in closed form
+to zero at every break. :func:`chip_section` (and its scalar :func:`chip_arc`) is the uncut chip in closed form
 (its derivation there), :class:`TurningForces` the forces on it and the spindle torque. The measured forces and what
-they do to the crests: docs/face-contours-and-turning.md, "Cutting forces on the lathe".
+they do to the crests: docs/face-contours-and-turning.md, "Cutting forces on the lathe"; how the nose maps onto the
+model: docs/forces.md, "The other machines".
 """
 
 from __future__ import annotations
@@ -16,27 +17,31 @@ from functools import cached_property
 
 import numpy as np
 
-from cutting.materials import H_MIN, Material
+from cutting.materials import Material
+from cutting.oblique import DEFAULT_EDGE_RADIUS, ObliqueForces, material_forces
 from cutting.turning.vibration import TWO_PI, TurningSetup
 
-#: F_f / F_c and F_p / F_c: the classic rule of thumb for longitudinal turning of steel with a carbide tool of
-#: positive rake and a 0.8 mm nose, F_f ~ 0.3-0.5 F_c and F_p ~ 0.2-0.4 F_c (the ranges usually quoted; the
-#: German handbooks, e.g. Klocke/Koenig "Fertigungsverfahren 1" and Degner/Lutze/Smejkal "Spanende Formung",
-#: give Kienzle constants for F_f and F_p of that order: not checked against an edition here); the middle of each
-#: range. Not measured: the ratios change with the edge's inclination over the chip (a_p against r_eps), wear and
-#: speed (Colwell's chip-flow direction, 1954, would turn the thrust with the chip's shape; not modelled).
-FEED_RATIO = 0.4
-PASSIVE_RATIO = 0.3
+#: the normal rake [rad] of the lathe's tool along its nose: the turning job gives none, so the tool is taken
+#: flat-faced, its face normal to the cutting speed on centre height, as the lathe's threading tool is (0 deg; a
+#: guess: a positive-rake insert cuts with less force, the model's -1.95 % per degree of rake about +6 deg)
+NOSE_RAKE = 0.0
+#: [mm] a chip thinner than this is the closed form's rounding (~1e-15 mm where the vibration breaks the chip and
+#: the nose runs on an earlier pass's circle), not a chip: no force, the edge only touches that surface
+CHIP_ZERO = 1e-9
 
 
 @dataclass(frozen=True)
 class ChipSection:
-    """The uncut chip in the axial half plane: ``area`` A [mm^2], engaged edge length ``edge`` b [mm] and
-    equivalent thickness ``thickness`` h = A / b [mm] (0 where there is no chip)."""
+    """The uncut chip in the axial half plane: ``area`` A [mm^2], engaged edge length ``edge`` b [mm],
+    equivalent thickness ``thickness`` h = A / b [mm] and the engaged nose arc's ends ``start`` and ``end``, their
+    axial offsets u from the nose's centre along the feed [mm] (the arc angle from the tip is asin(u / r_eps));
+    0 where there is no chip."""
 
     area: np.ndarray
     edge: np.ndarray
     thickness: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -130,7 +135,7 @@ def chip_section(nose: NoseGeometry, z: np.ndarray, previous: np.ndarray) -> Chi
         cut, re * (np.arcsin(np.clip((hi - z) / re, -1, 1)) - np.arcsin(np.clip((lo - z) / re, -1, 1))), 0.0
     )
     thickness = np.divide(area, edge, out=np.zeros_like(area), where=edge > 0)
-    return ChipSection(area, edge, thickness)
+    return ChipSection(area, edge, thickness, np.where(cut, lo - z, 0.0), np.where(cut, hi - z, 0.0))
 
 
 def _f(u: float, re: float, _sqrt=math.sqrt, _asin=math.asin) -> float:
@@ -139,15 +144,23 @@ def _f(u: float, re: float, _sqrt=math.sqrt, _asin=math.asin) -> float:
 
 
 def chip_area(nose: NoseGeometry, z: float, behind: float, ahead: float) -> tuple[float, float]:
+    """(A [mm^2], b [mm]) of :func:`chip_arc`: the chip's area and the engaged nose arc's length."""
+    area, start, end = chip_arc(nose, z, behind, ahead)
+    re = nose.nose_radius
+    return area, (re * (math.asin(end / re) - math.asin(start / re)) if end > start else 0.0)
+
+
+def chip_arc(nose: NoseGeometry, z: float, behind: float, ahead: float) -> tuple[float, float, float]:
     """Scalar :func:`chip_section` for the simulation's loop (math, no arrays): the nose at ``z``, its nearest
-    earlier passes ``behind`` (<= z) and ``ahead`` (> z) [mm] (+-inf for none); returns (A [mm^2], b [mm])."""
+    earlier passes ``behind`` (<= z) and ``ahead`` (> z) [mm] (+-inf for none); returns (A [mm^2], the engaged
+    arc's ends u_1, u_2 [mm] from the nose's centre along the feed), (0, 0, 0) for no chip."""
     re, u0 = nose.nose_radius, nose.reach
     far = 4 * re
     left = behind if behind > z - far else z - far
     right = ahead if ahead < z + far else z + far
     lo, hi = max(z - u0, 0.5 * (z + left)), min(z + u0, 0.5 * (z + right))
     if hi <= lo:
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     mid = 0.5 * (left + right)
     area = (nose.depth - re) * (hi - lo) + _f(hi - z, re) - _f(lo - z, re)  # G(z; lo, hi): all within u0 of z
     b = min(hi, mid, left + u0)  # the part whose nearest earlier pass is ``left`` and lies below r0
@@ -156,47 +169,82 @@ def chip_area(nose: NoseGeometry, z: float, behind: float, ahead: float) -> tupl
     a = max(lo, mid, right - u0)
     if hi > a:
         area -= (nose.depth - re) * (hi - a) + _f(hi - right, re) - _f(a - right, re)
-    edge = re * (math.asin((hi - z) / re) - math.asin((lo - z) / re))
-    return max(area, 0.0), edge
+    return max(area, 0.0), lo - z, hi - z
 
 
 @dataclass(frozen=True)
 class TurningForces:
-    """Kienzle's law on the chip section and the force ratios.
+    """The oblique model (:mod:`cutting.oblique`) on the round nose's chip.
 
-    Forces on the tool (reversed on the workpiece): Kienzle's main (tangential) force F_c = kc(h) A, kc = kc1.1
-    h^-mc of the job's material (:mod:`cutting.materials`, h no less than its H_MIN); the feed (axial, against the
-    feed) force F_f = FEED_RATIO F_c and the passive (radial, pushing the tool off the work) force
-    F_p = PASSIVE_RATIO F_c; the spindle torque M_c = F_c (r0 - a_p / 2) (the chip's mean radius)."""
+    Every element of the engaged nose arc has the tool's normal rake ``rake`` and no inclination (the nose lies in
+    the plane normal to the cutting speed), and takes Woxen's equivalent thickness h = A / b, b the engaged arc
+    (:func:`chip_section`): the chip spread evenly along the arc. With the model's factors f at (rake, 0), the edge
+    forces K_ce, K_te and the minimum chip h_min of the edge radius ``edge_radius`` (the turning job gives none:
+    the model's default), on the tool (reversed on the workpiece):
+
+    * the cutting force F_c = (tau_s(h) f_c (h - h_min)+ + K_ce) b along the cutting speed (tangential);
+    * the thrust q = tau_s(h) f_t (h - h_min)+ + K_te per unit arc, normal to the arc towards the nose's centre (off
+      the work); summed over the arc from u_1 to u_2 (:class:`ChipSection`'s ``start``, ``end``) it is the feed
+      force F_f = q (sqrt(r_eps^2 - u_1^2) - sqrt(r_eps^2 - u_2^2)) (axial, against the feed) and the passive force
+      F_p = q (u_2 - u_1) (radial, off the work: turning's name for the thrust's radial part). The resultant of an
+      even load on an arc is normal to its chord, the direction Colwell's chip-flow rule (1954) gives a round nose;
+    * the model's own passive component (along the edge) is zero without inclination; a chip thinner than
+      :data:`CHIP_ZERO` takes no force;
+    * the spindle torque M_c = F_c (r0 - a_p / 2) (the chip's mean radius).
+    """
 
     nose: NoseGeometry
     material: Material
-    feed_ratio: float = FEED_RATIO
-    passive_ratio: float = PASSIVE_RATIO
+    rake: float = NOSE_RAKE
+    edge_radius: float = DEFAULT_EDGE_RADIUS
 
     def __post_init__(self) -> None:
-        for name in ("feed_ratio", "passive_ratio"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and 0 <= v <= 2):
-                raise ValueError(f"{name} must lie in [0, 2] (a force over F_c), got {v!r}")
+        if not (math.isfinite(self.rake) and abs(self.rake) < math.pi / 2):
+            raise ValueError(f"rake must be a normal rake angle in (-90, 90) deg [rad], got {self.rake!r}")
+        if not (math.isfinite(self.edge_radius) and self.edge_radius >= 0):
+            raise ValueError(f"edge_radius must be a finite number >= 0 [mm], got {self.edge_radius!r}")
 
-    def main_force(self, area: np.ndarray, thickness: np.ndarray) -> np.ndarray:
-        """F_c = kc1.1 max(h, H_MIN)^-mc A [N] (A [mm^2], h [mm])."""
-        m = self.material
-        return m.kc11 * np.maximum(np.asarray(thickness, dtype=float), H_MIN) ** (-m.mc) * np.asarray(area)
+    @cached_property
+    def model(self) -> ObliqueForces:
+        """The material's oblique model for the tool's edge radius."""
+        return material_forces(self.material, self.edge_radius)
+
+    @cached_property
+    def factors(self) -> tuple[float, float]:
+        """(f_c, f_t): K_c / tau_s and K_t / tau_s of the nose's elements (rake ``rake``, no inclination)."""
+        fc, ft, _ = self.model.factors(self.rake, 0.0)
+        return float(fc), float(ft)
 
     def forces(self, section: ChipSection) -> np.ndarray:
         """(n, 3) [N]: F_c (tangential), F_f (axial, against the feed), F_p (radial, off the work)."""
-        fc = self.main_force(section.area, section.thickness)
-        return np.column_stack([fc, self.feed_ratio * fc, self.passive_ratio * fc])
+        b, re = np.asarray(section.edge, dtype=float), self.nose.nose_radius
+        engaged = np.asarray(section.thickness) > CHIP_ZERO
+        tau = self.model.shear_stress(np.where(engaged, section.thickness, 1.0))
+        sheared = np.maximum(np.asarray(section.thickness) - self.model.min_chip, 0.0)
+        (fc, ft), (ce, te) = self.factors, self.model.edge_coefficients
+        cutting = np.where(engaged, (tau * fc * sheared + ce) * b, 0.0)
+        q = np.where(engaged, tau * ft * sheared + te, 0.0)
+        u1, u2 = np.asarray(section.start, dtype=float), np.asarray(section.end, dtype=float)
+        feed = q * (np.sqrt(re * re - u1 * u1) - np.sqrt(re * re - u2 * u2))
+        return np.column_stack([cutting, feed, q * (u2 - u1)])
 
-    def scalar(self, area: float, edge: float) -> tuple[float, float, float]:
-        """(F_c, F_f, F_p) [N] of one chip (A [mm^2], b [mm]), as :meth:`forces`."""
-        if area <= 0.0:
+    def scalar(self, area: float, start: float, end: float) -> tuple[float, float, float]:
+        """(F_c, F_f, F_p) [N] of one chip (A [mm^2], the arc's ends u_1, u_2 [mm]: :func:`chip_arc`), as
+        :meth:`forces`."""
+        if end <= start:
             return 0.0, 0.0, 0.0
-        m = self.material
-        fc = m.kc11 * max(area / edge, H_MIN) ** (-m.mc) * area
-        return fc, self.feed_ratio * fc, self.passive_ratio * fc
+        re = self.nose.nose_radius
+        b = re * (math.asin(end / re) - math.asin(start / re))
+        h = area / b
+        if h <= CHIP_ZERO:
+            return 0.0, 0.0, 0.0
+        model = self.model
+        tau = model.shear_stress(h)
+        sheared = h - model.min_chip if h > model.min_chip else 0.0
+        (fc, ft), (ce, te) = self.factors, model.edge_coefficients
+        q = tau * ft * sheared + te
+        feed = q * (math.sqrt(re * re - start * start) - math.sqrt(re * re - end * end))
+        return (tau * fc * sheared + ce) * b, feed, q * (end - start)
 
     def spindle_torque(self, fc: np.ndarray | float) -> np.ndarray | float:
         """M_c = F_c (r0 - a_p / 2) [N m] (F_c [N])."""
@@ -279,5 +327,4 @@ class ChipTracker:
                 behind = p if p > behind else behind
             elif p < ahead:
                 ahead = p
-        area, edge = chip_area(self.forces.nose, z, behind, ahead)
-        return self.forces.scalar(area, edge)
+        return self.forces.scalar(*chip_arc(self.forces.nose, z, behind, ahead))

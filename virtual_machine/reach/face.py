@@ -62,7 +62,7 @@ def check_cutting_load(c: FaceCoupling, load: FaceLoad, params: FaceMachineParam
         "MA": (abs(params.work_drive.ratio), params.a_motor_torque),
         "MZ": (abs(params.z_drive.ratio) * lead, params.z_motor_torque),
     }
-    size = sizing(c, load.material, load.window, motors, CUT_TORQUE_SHARE)
+    size = sizing(c, load.material, load.window, motors, CUT_TORQUE_SHARE, load.edge_radius)
     problems = [
         Problem(
             "coupling.feed",

@@ -193,7 +193,7 @@ def forces_report(job: Job, record, load, slots: tuple[int, ...]) -> dict[str, A
         mid = 2 * math.pi * p.turn
         f = load.passes(p.turn)
         fc = np.sum([x.F_c for x in f], axis=0)
-        fp = np.sum([x.F_p for x in f], axis=0)
+        fp = np.sum([x.lift for x in f], axis=0)  # the thrust out of the face: what the infeed carries
         cut = fc > 0
         i = int(np.argmin(np.abs(p.phi - mid)))
         work, head = p.twist[i]
@@ -231,8 +231,9 @@ def forces_report(job: Job, record, load, slots: tuple[int, ...]) -> dict[str, A
         row["bottom_depth_change_um_at_M"] = float(deeper) * UM  # the bottom at radius L, + deeper with the forces
         row["bottom_form_without_forces_um"] = b.form * UM
     return {
-        "model": "Kienzle F_c = k_c(h) b h along -V on the element's tip edge and flanks, thrust "
-        "normal to the face (cutting/face_contour/forces.py)",
+        "model": "the oblique model per edge segment (tip edge, flanks) at its working rake and inclination: F_c "
+        "along -V, the thrust off each cut surface, the passive force along the edges; thrust: the force out of the "
+        "face (cutting/face_contour/forces.py, docs/forces.md)",
         "material": load.material.key,
         "slots": rows,
         "spacing_with_forces_arcsec": (loaded / ARCSEC).tolist(),
@@ -336,7 +337,7 @@ def format_result(doc: dict[str, Any]) -> str:
         lines.append(f"  the ideal kinematics' bottom form: {doc['ideal_bottom_form_um']:+.2f} um")
     if "forces" in doc:
         f = doc["forces"]
-        lines.append(f"  cutting forces ({f['material']}, Kienzle):")
+        lines.append(f"  cutting forces ({f['material']}, oblique model):")
         for s in f["slots"]:
             lines.append(
                 f"    slot {s['slot']}: layer {s['layer_um']:.1f} um, F_c mean {s['F_c_mean_N']:.0f} / peak "

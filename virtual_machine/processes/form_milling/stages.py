@@ -34,7 +34,7 @@ from cutting.form_milling.copying_path import (
     plan_copying,
 )
 from cutting.form_milling.finger import FingerPlan, finger_check, pass_length, path_point, plan_finger
-from cutting.form_milling.forces import RADIAL_RATIO, FingerLoad, MillLoad
+from cutting.form_milling.forces import FingerLoad, MillLoad
 from cutting.form_milling.helical import set_over
 from cutting.form_milling.mill import to_space
 from cutting.form_milling.removal import cut_gear
@@ -475,36 +475,43 @@ def forces_doc(ml: MillLoad | FingerLoad) -> dict[str, Any]:
         "material": ml.material.key,
         "kc11": ml.material.kc11,
         "mc": ml.material.mc,
-        "model": "steady force of each pass from the section it removes (cutting/form_milling/forces.py)",
+        "model": "steady force of each pass from the section it removes, the oblique model on its teeth "
+        "(cutting/form_milling/forces.py, docs/forces.md)",
+        "edge_radius_mm": ml.edge_radius,
         "removed_area_mm2": ml.areas,
         "main_force_N": {s: ml.main_force(s) for s in SIDES},
+        "thrust_sum_N": {s: ml.load(s).thrust for s in SIDES},
     }
     if isinstance(ml, FingerLoad):
         out["mean_chip_thickness_mm"] = {s: ml.chip_thickness(s) for s in SIDES}
         out["against_feed_N"] = {s: ml.components(s)[0] for s in SIDES}
         out["normal_N"] = {s: ml.components(s)[1] for s in SIDES}
+        out["axial_N"] = {s: ml.axial(s) for s in SIDES}
         out["spindle_torque_Nm"] = {s: ml.torque(s) for s in SIDES}
         return out
     return {
         **out,
         "mean_chip_thickness_mm": ml.chip_thickness,
-        "thrust_N": {s: RADIAL_RATIO * ml.main_force(s) for s in SIDES},
+        "thrust_N": {s: ml.components(s)[1] for s in SIDES},
+        "axial_thrust_N": {s: ml.components(s)[0] for s in SIDES},
     }
 
 
 def motor_loads(layout, params, ml: MillLoad | FingerLoad) -> dict[str, float]:
     """The largest steady torque [N m] each motor needs against the cutting force of a pass in full engagement
     (friction and weight aside): a slide's F t / 2 pi through its coupling, the spindle's cutting torque through
-    its belt, the table's moment of the tangential force at the root radius through its worm."""
+    its belt, the table's moment of the tangential force at the root radius through its worm. The disc's thrust
+    along its axis and the finger's normal force are tangential (x_s), the disc's radial thrust and the finger's
+    axial force radial (y_s)."""
     lead = layout.screw_pitch / (2 * math.pi)
     out = dict.fromkeys(("a", "x", "y", "z", "s"), 0.0)
     for side in SIDES:
         if isinstance(ml, FingerLoad):
-            feed, tangential = ml.components(side)
-            radial, torque = 0.0, ml.torque(side)
+            feed, tangential = (abs(f) for f in ml.components(side))  # down milling pulls along the feed
+            radial, torque = abs(ml.axial(side)), ml.torque(side)
         else:
-            feed, tangential = ml.main_force(side), 0.0
-            radial, torque = RADIAL_RATIO * feed, feed * ml.mill.radius * 1e-3
+            along, radial, feed = ml.components(side)
+            tangential, torque = abs(along), feed * ml.mill.radius * 1e-3
         r = ml.gear.root_radius * 1e-3
         need = {
             "x": radial * lead * params.x_drive.ratio,

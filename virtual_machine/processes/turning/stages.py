@@ -9,10 +9,11 @@ command. The surface and the chip breaks come from :mod:`cutting.turning.vibrati
 `skive run` also cuts it with manifold3d and measures the solid's crests beside the exact envelope.
 
 The lathe cuts under its cutting forces (:mod:`cutting.turning.forces`): at every physics step the chip at
-the spindle's angle, from the path the simulated carriage has made, gives F_c (a torque braking the spindle), F_f
-(pushing the carriage back against the feed through the nut stage) and F_p (radial, which no joint of the model
-takes); the run without them is the comparison (:func:`forces_section`). A spindle motor too weak for the cut
-refuses the job before the run (:func:`check_spindle_holds`).
+the spindle's angle, from the path the simulated carriage has made, gives by the oblique model F_c (a torque braking
+the spindle), the thrust's axial part F_f (pushing the carriage back against the feed through the nut stage) and its
+radial part F_p (which no joint of the model takes); the run without them is the comparison
+(:func:`forces_section`). A spindle motor too weak for the cut refuses the job before the run
+(:func:`check_spindle_holds`).
 """
 
 from __future__ import annotations
@@ -74,9 +75,9 @@ def format_prediction(job: Job) -> str:
     else:
         torque = model.spindle_torque(f[:, 0])
         lines.append(
-            f"  cutting forces along the command ({model.material.key}): F_c mean {f[:, 0].mean():.0f} / peak "
-            f"{f[:, 0].max():.0f} N, F_f = {model.feed_ratio:g} F_c, F_p = {model.passive_ratio:g} F_c; spindle torque "
-            f"peak {torque.max():.2f} N m"
+            f"  cutting forces along the command ({model.material.key}, oblique model, rake "
+            f"{math.degrees(model.rake):g} deg): F_c mean {f[:, 0].mean():.0f} / peak {f[:, 0].max():.0f} N, F_f mean "
+            f"{f[:, 1].mean():.0f} N, F_p mean {f[:, 2].mean():.0f} N; spindle torque peak {torque.max():.2f} N m"
         )
     return "\n".join(lines)
 
@@ -271,7 +272,11 @@ def forces_section(job: Job, loaded: tuple[Any, SampledTurning], free: tuple[Any
     motor_peak = params.spindle_motor_torque
     return {
         "material": {"key": model.material.key, "kc11_N_mm2": model.material.kc11, "mc": model.material.mc},
-        "ratios": {"F_f/F_c": model.feed_ratio, "F_p/F_c": model.passive_ratio},
+        "model": {
+            "kind": "oblique cutting per element of the nose arc (cutting/turning/forces.py, docs/forces.md)",
+            "rake_deg": math.degrees(model.rake),
+            "edge_radius_mm": model.edge_radius,
+        },
         "F_c_N": _stats(f[:, 0]),
         "F_f_N": _stats(f[:, 1]),
         "F_p_N": _stats(f[:, 2]),
@@ -369,10 +374,10 @@ def _force_lines(f: dict[str, Any]) -> list[str]:
     c, w, wo, d = f["carriage"], f["crests_um"]["with_forces"], f["crests_um"]["without_forces"], f["crests_um"]
     k = f"{c['k_axial_N_um']:.0f} N/um" if c["k_axial_N_um"] is not None else "rigid"
     return [
-        f"  cutting forces ({f['material']['key']}, F_f = {f['ratios']['F_f/F_c']:g} F_c, F_p = "
-        f"{f['ratios']['F_p/F_c']:g} F_c): F_c mean {f['F_c_N']['mean']:.0f} / peak {f['F_c_N']['peak']:.0f} N, "
-        f"F_f {f['F_f_N']['mean']:.0f} / {f['F_f_N']['peak']:.0f} N, F_p {f['F_p_N']['mean']:.0f} / "
-        f"{f['F_p_N']['peak']:.0f} N",
+        f"  cutting forces ({f['material']['key']}, oblique model, rake {f['model']['rake_deg']:g} deg, edge radius "
+        f"{f['model']['edge_radius_mm'] * 1e3:g} um): F_c mean {f['F_c_N']['mean']:.0f} / peak "
+        f"{f['F_c_N']['peak']:.0f} N, F_f {f['F_f_N']['mean']:.0f} / {f['F_f_N']['peak']:.0f} N, F_p "
+        f"{f['F_p_N']['mean']:.0f} / {f['F_p_N']['peak']:.0f} N",
         f"  spindle torque mean {f['spindle_torque_Nm']['mean']:.2f} / peak {f['spindle_torque_Nm']['peak']:.2f} N m "
         f"({100 * f['torque_share_of_motor_peak']:.1f} % of M1's peak {f['spindle_motor_peak_Nm']:g} N m)",
         f"  carriage pushed back by F_f: {c['path_deflection_um']:.2f} um (nut stage {c['nut_deflection_um']:.2f} um; "
@@ -436,9 +441,10 @@ def _force_table(f: dict[str, Any]) -> list[str]:
     crest_rows = [[k, cr["with_forces"][k], cr["without_forces"][k], cr["difference"][k]] for k in cr["with_forces"]]
     return [
         "<h2>Cutting forces</h2>",
-        f"<p>Kienzle's main force on the uncut chip ({html.escape(f['material']['key'])}, kc1.1 = "
-        f"{f['material']['kc11_N_mm2']:g} N/mm^2, mc = {f['material']['mc']:g}), F_f = {f['ratios']['F_f/F_c']:g} "
-        f"F_c, F_p = {f['ratios']['F_p/F_c']:g} F_c, fed back into the lathe at every physics step. Peak spindle "
+        f"<p>The oblique model on the uncut chip ({html.escape(f['material']['key'])}, kc1.1 = "
+        f"{f['material']['kc11_N_mm2']:g} N/mm^2, mc = {f['material']['mc']:g}; rake {f['model']['rake_deg']:g} deg, "
+        f"edge radius {f['model']['edge_radius_mm'] * 1e3:g} um): F_c along the cutting speed, F_f and F_p the "
+        f"thrust's axial and radial parts, fed back into the lathe at every physics step. Peak spindle "
         f"torque {100 * f['torque_share_of_motor_peak']:.1f} % of M1's peak {f['spindle_motor_peak_Nm']:g} N m; "
         f"the carriage pushed back {c['path_deflection_um']:.2f} um (nut stage {c['nut_deflection_um']:.2f} um, "
         f"F_f / k_axial {c['F_f_over_k_axial_um']:.2f} um).</p>",
