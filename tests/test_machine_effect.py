@@ -4,16 +4,30 @@ the generating point, and the static deflection's known answer on the gear."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from unittest import mock
 
 import numpy as np
 import pytest
 from small_jobs import small_job
 
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.sampled_motion import sampled_passes
+from metrology.measure import measure_gear
 from virtual_machine.job import load_job
-from virtual_machine.processes.skiving.machine_effect import FEED, flank_normals, generating_point_displacement
+from virtual_machine.processes.skiving.cosim import cosimulate
+from virtual_machine.processes.skiving.machine_effect import (
+    FEED,
+    flank_normals,
+    generating_point_displacement,
+    pass_deflection,
+    pass_forces,
+)
 from virtual_machine.processes.skiving.run import run_job
+from virtual_machine.processes.skiving.stability import pass_stability
+from virtual_machine.setting.machine_layout import machine_params
 
+JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
 #: a roughing pass and a finishing pass of 0.25 mm on the 18-tooth m1 gear, 4 mm face
 SMALL = small_job(sweep_error=0.02, axial_feed=0.4, face_width=4.0).replace("passes = [2.25]", "passes = [2.0, 0.25]")
 #: one soft mode at the tool along the centre distance: 20 N/um (issue 42's proof), 150 Hz, zeta 0.05
@@ -100,3 +114,73 @@ def test_the_report_gives_each_pass_its_components_and_vibration(pair) -> None:
             assert v["amplitude_um"] >= 0 and v["frequency_hz"] > 0 and "warning" not in v
     # the soft loop rings more under the tooth-passing force
     assert soft["run"]["vibration"][0]["amplitude_um"] > rigid["run"]["vibration"][0]["amplitude_um"]
+
+
+@pytest.mark.slow
+def test_spur_external_on_a_soft_radial_axis_grows_its_span_by_twice_the_flank_normal_deflection(tmp_path) -> None:
+    """Issue 42's proof: spur_external with the tool's radial (centre-distance) stiffness set to 20 N/um (the radial
+    slide, [machine.model] radial_stiffness, against its 200 N/um): the span W_k grows by 2 delta sin(alpha_n),
+    delta = the finishing pass's mean radial force in the steady cut (the face's middle half) over the stiffness,
+    within 20 %; the rigid run's own radial deflection (F / 200 N/um) subtracted. Here on a 10 mm face at 0.4 mm
+    feed (the same gear, cutter, passes and machine; a quarter of the run): 30.4 um against 28.3 um (1.07); the
+    full job (20 mm, 0.2 mm) 27.6 um against 26.6 um (1.04, docs/forces.md)."""
+    text = (JOBS / "spur_external.toml").read_text()
+    text = text.replace("face_width = 20.0", "face_width = 10.0").replace("axial_feed = 0.2 ", "axial_feed = 0.4 ")
+    soft = text.replace("[machine]", "[machine.model]\nradial_stiffness = 2.0e7\n\n[machine]", 1)
+    (tmp_path / "rigid.toml").write_text(text)
+    (tmp_path / "soft.toml").write_text(soft)
+    found = {}
+    for name in ("rigid", "soft"):
+        job = load_job(tmp_path / f"{name}.toml")
+        sim = cosimulate(job)
+        exact = SweptVolumes(job.gear, sim.edge, sampled_passes(job.skiving, sim.record.passes))
+        doc = measure_gear(exact, job.gear)
+        rec, rows = sim.record, sim.load_rows
+        turn = np.interp(rows[:, 0], rec.t, rec.q[:, 1]) + job.skiving.work_phase
+        radial = -(np.cos(turn) * rows[:, 1] - np.sin(turn) * rows[:, 2])
+        last = len(job.skiving.passes) - 1
+        steady = (np.interp(rows[:, 0], rec.t, rec.pass_index) > last - 0.5) & (
+            np.abs(np.interp(rows[:, 0], rec.t, rec.q[:, 2])) < job.gear.face_width / 4
+        )
+        found[name] = (doc["thickness"]["span"]["W_k_mm"], float(radial[steady].mean()))
+    (w0, f0), (w1, f1) = found["rigid"], found["soft"]
+    assert f1 > 300.0  # the thrust pushes the tool out of the space
+    delta = f1 / 2.0e7 - f0 / 2.0e8  # m: the soft axis's deflection less the rigid one's
+    expected = 2 * delta * 1e6 * math.sin(math.radians(20.0))
+    assert (w1 - w0) * 1e3 == pytest.approx(expected, rel=0.2), (w1 - w0, expected)
+
+
+@pytest.mark.slow
+def test_the_default_job_with_one_soft_mode_as_its_static_and_dynamic_estimates_say(tmp_path) -> None:
+    """Issue 42's proof: the default job with a user's [[machine.model.loop]] of one soft tool mode along the centre
+    distance (20 N/um, 150 Hz, zeta 0.05). Dynamic estimate: `skive stability` gives margins 1.57 and 2.04 (stable),
+    so the run must not chatter; the mode rings under the changing tooth load at its damped frequency with the
+    radial slide in series (measured 136 Hz, 0.7 um, not growing). Static estimate: the finishing pass's mean force
+    on the tool along x, F (259 N), moves the tool by F / k (12.9 um) and its generating point off the flanks by that
+    times the flank normals' x part: measured 0.84 of it (within 20 %). The class: the ideal machine's 7 becomes 8,
+    the profile slope the mode adds (f_Halpha +6.6 / -11.0 um: the radial force changes as the tooth rolls through the
+    generating zone). What it does not meet yet: the span grows 14 um where the static deflection gives 8.9 (open,
+    docs/forces.md)."""
+    base = (JOBS / "default.toml").read_text()
+    mode = '\n[[machine.model.loop]]\nat = "tool"\ndirection = [1.0, 0.0, 0.0]\nfrequency = 150.0\ndamping = 0.05\n'
+    (tmp_path / "rigid.toml").write_text(base)
+    (tmp_path / "soft.toml").write_text(base + mode + f"stiffness = {K}\n")
+    rigid, soft = (load_job(tmp_path / f"{n}.toml") for n in ("rigid", "soft"))
+    margins = [p.margin for p in pass_stability(soft.skiving, machine_params(soft), "16MnCr5", 0.010)]
+    assert min(margins) > 1.0
+    found = {}
+    for name, job in (("rigid", rigid), ("soft", soft)):
+        sim = cosimulate(job)
+        doc = measure_gear(SweptVolumes(job.gear, sim.edge, sampled_passes(job.skiving, sim.record.passes)), job.gear)
+        moved = pass_deflection(sim.record, job.skiving)
+        forces = pass_forces(sim.loads, sim.load_rows, len(job.skiving.passes), sim.record, job.skiving)
+        found[name] = (doc, moved, forces)
+    (doc0, moved0, _), (doc1, moved1, forces1) = found["rigid"], found["soft"]
+    assert all("warning" not in d for d in moved1)
+    assert max(d["vibration"]["growth"] for d in moved1) < 1.2
+    fx = forces1[-1]["tool_force_machine_mean_N"][0]
+    assert fx > 150.0  # the thrust pushes the tool out of the space
+    static = fx / K * 1e6 * float(np.mean(np.abs(flank_normals(soft.skiving)[:, 0])))  # um
+    change = moved1[-1]["flank_normal_deflection_um"]["mean"] - moved0[-1]["flank_normal_deflection_um"]["mean"]
+    assert change == pytest.approx(static, rel=0.2), (change, static)
+    assert doc1["iso1328"]["class"]["overall"] > doc0["iso1328"]["class"]["overall"]

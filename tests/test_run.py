@@ -366,3 +366,27 @@ def test_a_gear_that_cannot_be_measured_keeps_the_run_and_says_why(tmp_path, mon
     doc = json.loads((out / "measurement.json").read_text())
     assert doc["error"].startswith("the ball") and doc["run"]["cut"]["passages"] > 0
     assert (out / "gear.stl").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_the_report_says_what_the_machine_added(runs) -> None:
+    """run.machine_added: this gear minus the ideal cut of the same job, measured in a worker process while the
+    machine ran: exactly the in-process ideal cut's measurement subtracted (the same job, the same measurement), for
+    every ISO 1328-1 row and the size; printed and in the report."""
+    from virtual_machine.output.formatting import class_table
+    from virtual_machine.processes.skiving.machine_added import ideal_measurement
+
+    tmp, ((out, text), _), _ = runs
+    doc = json.loads((out / "measurement.json").read_text())
+    added = doc["run"]["machine_added"]
+    ideal = ideal_measurement(load_job(tmp / "small.toml"), "involute")
+    rows = {key: (left, right) for key, left, right, _, _ in class_table(ideal)}
+    assert set(added["deviations_um"]) == set(rows) and len(rows) == 9
+    for key, left, right, _, _ in class_table(doc):
+        assert added["deviations_um"][key]["left"] == pytest.approx(left - rows[key][0], abs=1e-9)
+        if right is not None:
+            assert added["deviations_um"][key]["right"] == pytest.approx(right - rows[key][1], abs=1e-9)
+    over_balls = (doc["thickness"]["over_balls"]["M_dK_mm"] - ideal["thickness"]["over_balls"]["M_dK_mm"]) * 1e3
+    assert added["size"]["M_dK_um"] == pytest.approx(over_balls, abs=1e-9)
+    assert added["class"]["ideal_cut"] == (ideal["iso1328"].get("class") or {}).get("overall")  # None: 2 mm face
+    assert "the machine added" in text and "What the machine added" in (out / "report.html").read_text()

@@ -166,6 +166,7 @@ def write_report(
         *_mesh_rows(doc.get("mesh")),
         "<h2>Size</h2>",
         html_table(["", "measured", "nominal"], thickness),
+        *_added_rows(run.get("machine_added")),
         "<h2>Profile, helix and pitch</h2>",
         *[image_tag(c) for c in charts],
         "<h2>Synchronisation error, cutting force and chips over time</h2>",
@@ -179,6 +180,26 @@ def write_report(
         f"<pre>{html.escape(job_text)}</pre>",
     ]
     return write_page(path, title, body)
+
+
+def _added_rows(added: dict | None) -> list[str]:
+    """What the machine added: this gear's deviations minus the ideal cut's (the same job with exact kinematics)."""
+    if not added:
+        return []
+    if "deviations_um" not in added:
+        return [
+            "<h2>What the machine added</h2>",
+            f"<p>The ideal cut could not be measured: {html.escape(str(added.get('error')))}</p>",
+        ]
+    rows = [[k, v.get("left"), v.get("right")] for k, v in added["deviations_um"].items()]
+    rows += [[k.replace("_um", " (size)"), v, None] for k, v in added["size"].items()]
+    c = added["class"]
+    return [
+        "<h2>What the machine added [um]</h2>",
+        f"<p>This gear minus the ideal cut of the same job (the same cutter and clamping, exact kinematics, measured "
+        f"the same way): class {c['run']} against the ideal cut's {c['ideal_cut']}.</p>",
+        html_table(["parameter", "left", "right"], rows),
+    ]
 
 
 def _mesh_rows(mesh: dict | None) -> list[str]:

@@ -326,6 +326,17 @@ def format_run(run: dict, out: Path, rrd: Path | None) -> str:
             f"(peak {normal.get('peak', 0.0):.1f} um) at the generating point"
         )
     lines += [f"  warning: {v['warning']}" for v in run.get("vibration", []) if "warning" in v]
+    added = run.get("machine_added") or {}
+    if "deviations_um" in added:
+        dev = added["deviations_um"]
+        parts = [f"{k} {'/'.join(f'{v:+.1f}' for v in dev[k].values())}" for k in dev]
+        size = ", ".join(f"{k[:-3]} {v:+.1f}" for k, v in added["size"].items())
+        lines.append(
+            f"  the machine added (this gear minus the ideal cut, um, left/right): {', '.join(parts)}; {size}; class "
+            f"{added['class']['run']} against the ideal cut's {added['class']['ideal_cut']}"
+        )
+    elif added.get("error"):
+        lines.append(f"  the ideal cut beside it could not be measured: {added['error']}")
     lines.append("  " + format_gear_stl(run["cut"]["gear_stl"]))
     if run.get("modification"):
         lines.append(f"  modification: {run['modification']}")

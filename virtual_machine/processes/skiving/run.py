@@ -43,6 +43,7 @@ from virtual_machine.output.report import run_chart, write_report
 from virtual_machine.processes.base import run_identity
 from virtual_machine.processes.sheets import sheet_product
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
+from virtual_machine.processes.skiving.machine_added import IdealReference, machine_added
 from virtual_machine.processes.skiving.machine_effect import (
     flank_normals,
     generating_point_displacement,
@@ -97,6 +98,8 @@ def run_job(
     workers = workers or default_workers()
     snapshots = SNAPSHOTS_PER_PASS if rrd else 0
     modification_path = None
+    # the ideal cut of the same job, measured in a worker while the machine runs: what the machine added
+    ideal = IdealReference(job, job.cutter_options.edge) if job.modification is None else None
     try:
         if job.modification is None:
             announce("machine and cut")
@@ -111,6 +114,10 @@ def run_job(
             )
         else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one (not streamed)
             sim, modification_path = _modification_runs(job, plan, announce, snapshots, workers, removal)
+    except BaseException:
+        if ideal is not None:
+            ideal.cancel()
+        raise
     finally:
         if live is not None:
             live.close()
@@ -125,7 +132,13 @@ def run_job(
         measurement = measure_written_cut(job, sim.edge, motions, sim.cut, stl, out / "gear.stl")
     except (UnmeasurableError, InputError) as exc:
         durations["measurement"] = time.perf_counter() - t0
+        if ideal is not None:
+            ideal.cancel()
         raise _unmeasurable(exc, job, Path(path), out, sim, durations, stl) from exc
+    added = None
+    if ideal is not None:
+        reference = ideal.result()
+        added = machine_added(measurement, reference) if reference is not None else {"error": ideal.error}
     durations["measurement"] = time.perf_counter() - t0
     announce("report")
     t0 = time.perf_counter()
@@ -144,6 +157,8 @@ def run_job(
         measurement["modification_path"] = modification_path
     doc = finite(measurement)
     doc["run"] = run_metadata(job, Path(path), sim, durations, stl)
+    if added is not None:
+        doc["run"]["machine_added"] = finite(added)
     write_json(out / "measurement.json", doc)
     sheet = format_sheet(plan.sheet(), str(path))
     title = f"skive run: {Path(path).name}"

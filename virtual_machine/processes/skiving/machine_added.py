@@ -1,0 +1,70 @@
+"""What the machine added: the gear the run cut against the ideal cut of the same job (the same cutter as made, the
+same clamping, the exact kinematics, no machine), parameter by parameter and flank by flank.
+
+The ideal cut is measured as the run's gear is (the exact swept surface of its passes, probed the same way); it
+depends on the job alone, so :func:`start_ideal` measures it in a worker process while the machine runs (its
+measurement costs about what the run's does: on two cores it comes nearly free). What the machine added is the
+difference of the two measurements' values: its deviations, its size (span, dimension over balls) and its class.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+from concurrent.futures import Future, ProcessPoolExecutor
+from typing import Any
+
+from virtual_machine.output.formatting import class_table
+
+
+def ideal_measurement(job, edge_kind: str) -> dict[str, Any]:
+    """The measurement document of the job's ideal cut (runs in a worker process: picklable in and out)."""
+    from cutting.skiving.edge import make_edge
+    from cutting.skiving.exact_sweep import SweptVolumes
+    from cutting.skiving.trajectory import ideal_passes
+    from metrology.measure import measure_gear
+
+    setup = job.skiving
+    exact = SweptVolumes(job.gear, make_edge(setup, edge_kind), ideal_passes(setup))
+    return measure_gear(exact, job.gear)
+
+
+class IdealReference:
+    """The ideal cut's measurement, made in a worker process from :meth:`start` on; :meth:`result` waits for it
+    (None if it failed: the run's report then says so, the run stands)."""
+
+    def __init__(self, job, edge_kind: str):
+        self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+        self._future: Future = self._pool.submit(ideal_measurement, job, edge_kind)
+        self.error: str | None = None
+
+    def result(self) -> dict[str, Any] | None:
+        try:
+            return self._future.result()
+        except Exception as exc:  # the reference is a report's extra: its failure must not lose the run
+            self.error = f"{type(exc).__name__}: {exc}"
+            return None
+        finally:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+
+    def cancel(self) -> None:
+        self._pool.shutdown(wait=False, cancel_futures=True)
+
+
+def machine_added(run: dict[str, Any], ideal: dict[str, Any]) -> dict[str, Any]:
+    """The run's measurement minus the ideal cut's: per ISO 1328-1 parameter the left and right flanks' (or the
+    gear's) difference [um], the size's (span W_k and dimension over balls M_dK) [um] and both classes."""
+    ideal_rows = {key: (left, right) for key, left, right, _, _ in class_table(ideal)}
+    deviations = {}
+    for key, left, right, _, _ in class_table(run):
+        i_left, i_right = ideal_rows[key]
+        deviations[key] = {"left": left - i_left}
+        if right is not None:
+            deviations[key]["right"] = right - i_right
+    size = {"M_dK_um": (run["thickness"]["over_balls"]["M_dK_mm"] - ideal["thickness"]["over_balls"]["M_dK_mm"]) * 1e3}
+    if run["thickness"]["span"].get("k"):
+        size["W_k_um"] = (run["thickness"]["span"]["W_k_mm"] - ideal["thickness"]["span"]["W_k_mm"]) * 1e3
+    classes = {
+        "run": (run["iso1328"].get("class") or {}).get("overall"),
+        "ideal_cut": (ideal["iso1328"].get("class") or {}).get("overall"),
+    }
+    return {"deviations_um": deviations, "size": size, "class": classes}
