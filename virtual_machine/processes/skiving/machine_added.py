@@ -37,6 +37,29 @@ class IdealReference:
         self._future: Future = self._pool.submit(ideal_measurement, job, edge_kind)
         self.error: str | None = None
 
+    @classmethod
+    def start(cls, job) -> IdealReference | None:
+        """The reference of ``job``, started; None where the run makes none: a flank modification's runs (their
+        path is iterated against the design, not an ideal cut), and a study's case (a worker process: the study
+        compares its cases itself, and a worker may not start processes of its own)."""
+        if job.modification is not None or _in_worker():
+            return None
+        return cls(job, job.cutter_options.edge)
+
+    @staticmethod
+    def cancel(ref: IdealReference | None) -> None:
+        if ref is not None:
+            ref._pool.shutdown(wait=False, cancel_futures=True)
+
+    @staticmethod
+    def added(ref: IdealReference | None, measurement: dict[str, Any]) -> dict[str, Any] | None:
+        """:func:`machine_added` of the run's ``measurement`` against the reference (waiting for it), {"error":
+        ...} if the reference failed, None without one."""
+        if ref is None:
+            return None
+        ideal = ref.result()
+        return machine_added(measurement, ideal) if ideal is not None else {"error": ref.error}
+
     def result(self) -> dict[str, Any] | None:
         try:
             return self._future.result()
@@ -46,8 +69,18 @@ class IdealReference:
         finally:
             self._pool.shutdown(wait=False, cancel_futures=True)
 
-    def cancel(self) -> None:
-        self._pool.shutdown(wait=False, cancel_futures=True)
+
+def _in_worker() -> bool:
+    """Whether this process is a worker of a pool or a Dask cluster (a study's case runs there)."""
+    if multiprocessing.current_process().daemon:
+        return True
+    try:
+        from distributed import get_worker
+
+        get_worker()
+    except (ImportError, ValueError):
+        return False
+    return True
 
 
 def machine_added(run: dict[str, Any], ideal: dict[str, Any]) -> dict[str, Any]:

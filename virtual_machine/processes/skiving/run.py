@@ -43,7 +43,7 @@ from virtual_machine.output.report import run_chart, write_report
 from virtual_machine.processes.base import run_identity
 from virtual_machine.processes.sheets import sheet_product
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
-from virtual_machine.processes.skiving.machine_added import IdealReference, machine_added
+from virtual_machine.processes.skiving.machine_added import IdealReference
 from virtual_machine.processes.skiving.machine_effect import (
     flank_normals,
     generating_point_displacement,
@@ -98,8 +98,7 @@ def run_job(
     workers = workers or default_workers()
     snapshots = SNAPSHOTS_PER_PASS if rrd else 0
     modification_path = None
-    # the ideal cut of the same job, measured in a worker while the machine runs: what the machine added
-    ideal = IdealReference(job, job.cutter_options.edge) if job.modification is None else None
+    ideal = IdealReference.start(job)  # the ideal cut of the same job, measured while the machine runs
     try:
         if job.modification is None:
             announce("machine and cut")
@@ -115,8 +114,7 @@ def run_job(
         else:  # seed 003: the path planned on the ideal machine, then iterated on the simulated one (not streamed)
             sim, modification_path = _modification_runs(job, plan, announce, snapshots, workers, removal)
     except BaseException:
-        if ideal is not None:
-            ideal.cancel()
+        IdealReference.cancel(ideal)
         raise
     finally:
         if live is not None:
@@ -132,13 +130,9 @@ def run_job(
         measurement = measure_written_cut(job, sim.edge, motions, sim.cut, stl, out / "gear.stl")
     except (UnmeasurableError, InputError) as exc:
         durations["measurement"] = time.perf_counter() - t0
-        if ideal is not None:
-            ideal.cancel()
+        IdealReference.cancel(ideal)
         raise _unmeasurable(exc, job, Path(path), out, sim, durations, stl) from exc
-    added = None
-    if ideal is not None:
-        reference = ideal.result()
-        added = machine_added(measurement, reference) if reference is not None else {"error": ideal.error}
+    added = IdealReference.added(ideal, measurement)
     durations["measurement"] = time.perf_counter() - t0
     announce("report")
     t0 = time.perf_counter()
@@ -333,6 +327,12 @@ def _record(
     if rows is not None and len(rows):
         series["cutting force [N]"] = (rows[:, 0], np.linalg.norm(rows[:, 1:4], axis=1))
         series["cutting torque about the work axis [N m]"] = (rows[:, 0], rows[:, 4])
+        # the force on the tool along the machine's axes (x the centre distance, y, z the work axis): what bends it
+        rec = sim.record
+        turn = np.interp(rows[:, 0], rec.t, rec.q[:, 1]) + job.skiving.work_phase
+        c, s = np.cos(turn), np.sin(turn)
+        on_tool = -np.stack([c * rows[:, 1] - s * rows[:, 2], s * rows[:, 1] + c * rows[:, 2], rows[:, 3]], -1)
+        series["force on the tool along x y z [N]"] = (rows[:, 0], on_tool)
     middles = engagement_middles(sim)
     if sim.loads:
         series["chip volume [mm^3]"] = (middles[0], middles[2])
