@@ -15,7 +15,7 @@ import numpy as np
 
 from cutting.forces import engagement_sums
 from cutting.gear import Gear
-from cutting.skiving.chip_of_the_moment import COLUMNS, tick_load
+from cutting.skiving.chip_of_the_moment import COLUMNS, machine_tick
 from cutting.skiving.dexel_cut import cut_dexel
 from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import make_edge
@@ -49,12 +49,13 @@ def warm() -> float:
     frames[:, :, :3] = np.eye(3)
     edge_pts = np.array([[9.0, -1.0, 0.0], [10.0, -0.5, 0.0], [10.0, 0.5, 0.0], [9.0, 1.0, 0.0]])
     body = np.tile([-1.0, 0.0, 0.0], (3, 1))
-    axes, rates = np.array([0.1, 0.2, 0.0, 20.0]), np.array([200.0, -180.0, -5.0, 0.0])
     chip = np.array([2000.0, 0.25, 1e-3, 1.6, 3e-3, 10.0, 17.0, 0.5, -0.5])
-    tick_load(
-        axes, rates, np.zeros(6), np.array([0.3, math.pi, 0.0]), frames, np.eye(3, 4), edge_pts,
-        np.array([0.0, 0.0, 1.0]), body, np.array([17.0, 0.0, 5.0]), frames, axes, np.zeros(6), True, axes, True,
-        chip, np.empty((2, COLUMNS)),
+    state = np.array([0.1, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, -0.01, 20.0, np.nan, 0.5, 0.3, 9.0, 30.0, 1.0, 0.0,
+                      0.3, math.pi, 0.0])  # fmt: skip
+    machine_tick(
+        np.array([0.1, 0.2, 0.0, 0.02]), np.array([200.0, -180.0, -0.005, 0.0]), np.arange(4), np.arange(4),
+        np.zeros(6), state, np.zeros((4, 7)), 0, frames, np.eye(3, 4), edge_pts, np.array([0.0, 0.0, 1.0]), body,
+        np.array([17.0, 0.0, 5.0]), chip, np.empty((4, COLUMNS)), np.empty(4, dtype=np.int64),
     )  # fmt: skip
     # and an engagement's load from its chip (the edge at 3 x 5 instants, 4 points)
     t = np.linspace(0.0, 1e-3, 5)

@@ -293,3 +293,68 @@ def deviation(axes, deflection, reference, geometry):
     out[2] = 0.5 * (turn[1, 0] - turn[0, 1])
     out[3], out[4], out[5] = shift[0], shift[1], shift[2]
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def machine_tick(
+    qpos, qvel, qadr, vadr, loop, state, history, count, frames, blank, edge, rake, body, envelope, chip, out,
+    passages,
+):  # fmt: skip
+    """One servo tick of the co-simulation's load hook in one compiled call (the hook's Python per tick cost as
+    much as the chips themselves): the machine's state from MuJoCo's ``qpos``, ``qvel`` at the axes' addresses
+    ``qadr``, ``vadr`` (B1, B2, P3, X; slides in m), the loop's deflection ``loop`` (6,); its deviation from the ideal
+    kinematics appended to the stroke's ``history`` ((n, 7): the work angle signed to grow, the deviation) at row
+    ``count``; then the engaged teeth's loads into ``out`` and their passage numbers into ``passages``. Returns the
+    number of engaged teeth (rows of ``out``; a tooth with no chip has WIDTH 0).
+
+    ``state`` (16,): B1, P3 [mm] at the stroke's start; B1, B2, P3 [mm] at home; the speed ratio, the differential
+    rotation [rad/mm], the carriage per cutter radian [mm/rad], the pass's centre distance, the previous pass's (nan:
+    none) [mm], the engagement's half angle, the cutter pitch, the cutter's turn over a work revolution [rad], the
+    passages that turn spans, the sign of the work angle's growth, and the tilt, cutter phase, work phase packed
+    after it as ``state[16:19]``. ``frames`` (z0, 3, 4): every cutter tooth's rake frame (tooth 0 first)."""
+    b1, b2 = qpos[qadr[0]], qpos[qadr[1]]
+    p3, x = qpos[qadr[2]] * 1e3, qpos[qadr[3]] * 1e3
+    axes = np.array([b1, b2, p3, x])
+    rates = np.array([qvel[vadr[0]], qvel[vadr[1]], qvel[vadr[2]] * 1e3, qvel[vadr[3]] * 1e3])
+    b1_s, p3_s, b1_0, b2_0, p3_0 = state[0], state[1], state[2], state[3], state[4]
+    ratio, diff, zeta, centre, before_centre = state[5], state[6], state[7], state[8], state[9]
+    half, pitch, revolution, back, sign = state[10], state[11], state[12], state[13], state[14]
+    geometry = state[16:19]
+
+    def ideal(b, a):
+        z = p3_s + zeta * (b - b1_s)
+        return np.array([b, b2_0 + ratio * (b - b1_0) + diff * (z - p3_0), z, a])
+
+    dev = deviation(axes, loop, ideal(b1, centre), geometry)
+    angle = sign * b2
+    history[count, 0] = angle
+    history[count, 1:] = dev
+    # the deviation one work revolution earlier (linear between ticks; before the stroke's first, its first)
+    target = angle - 2 * math.pi
+    visited = count > 0 and target >= history[0, 0]
+    earlier = np.zeros(6)
+    if visited:
+        i = np.searchsorted(history[: count + 1, 0], target)
+        i = min(max(i, 1), count)
+        a0, a1 = history[i - 1, 0], history[i, 0]
+        f = (target - a0) / (a1 - a0) if a1 > a0 else 1.0
+        earlier = history[i - 1, 1:] + f * (history[i, 1:] - history[i - 1, 1:])
+    lo, hi = math.ceil((b1 - half) / pitch), math.floor((b1 + half) / pitch)
+    n = hi - lo + 1
+    if n <= 0 or half <= 0:
+        return 0
+    z0 = len(frames)
+    teeth = np.empty((n, 3, 4))
+    previous = np.empty((n, 3, 4))
+    for j in range(n):
+        m = lo + j
+        passages[j] = m
+        teeth[j] = frames[(-m) % z0]
+        previous[j] = frames[(-(m - int(back))) % z0]
+    passed = not math.isnan(before_centre)
+    last = ideal(b1, before_centre if passed else 0.0)
+    tick_load(
+        axes, rates, loop, geometry, teeth, blank, edge, rake, body, envelope, previous, ideal(b1 - revolution, centre),
+        earlier, visited, last, passed, chip, out[:n],
+    )  # fmt: skip
+    return n
