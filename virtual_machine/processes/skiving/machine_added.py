@@ -10,7 +10,6 @@ difference of the two measurements' values: its deviations, its size (span, dime
 from __future__ import annotations
 
 import multiprocessing
-from concurrent.futures import Future, ProcessPoolExecutor
 from typing import Any
 
 from virtual_machine.output.formatting import class_table
@@ -28,13 +27,26 @@ def ideal_measurement(job, edge_kind: str) -> dict[str, Any]:
     return measure_gear(exact, job.gear)
 
 
+def _measure_into(conn, job, edge_kind: str) -> None:
+    """The worker's body: the ideal cut's measurement (or the error) sent back through ``conn``."""
+    try:
+        conn.send(("ok", ideal_measurement(job, edge_kind)))
+    except Exception as exc:
+        conn.send(("error", f"{type(exc).__name__}: {exc}"))
+    finally:
+        conn.close()
+
+
 class IdealReference:
-    """The ideal cut's measurement, made in a worker process from :meth:`start` on; :meth:`result` waits for it
-    (None if it failed: the run's report then says so, the run stands)."""
+    """The ideal cut's measurement, made in a worker process (a daemon: it dies with the run) from :meth:`start` on;
+    :meth:`added` waits for it."""
 
     def __init__(self, job, edge_kind: str):
-        self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
-        self._future: Future = self._pool.submit(ideal_measurement, job, edge_kind)
+        ctx = multiprocessing.get_context("spawn")
+        self._conn, child = ctx.Pipe(duplex=False)
+        self._process = ctx.Process(target=_measure_into, args=(child, job, edge_kind), daemon=True)
+        self._process.start()
+        child.close()
         self.error: str | None = None
 
     @classmethod
@@ -46,10 +58,25 @@ class IdealReference:
             return None
         return cls(job, job.cutter_options.edge)
 
+    def result(self) -> dict[str, Any] | None:
+        """The ideal cut's measurement (waiting for it), None if it failed (:attr:`error` says why)."""
+        try:
+            status, value = self._conn.recv()
+        except EOFError:
+            status, value = "error", f"the worker ended without a result (exit code {self._process.exitcode})"
+        finally:
+            self._process.join(timeout=5)
+        if status == "ok":
+            return value
+        self.error = value
+        return None
+
     @staticmethod
     def cancel(ref: IdealReference | None) -> None:
-        if ref is not None:
-            ref._pool.shutdown(wait=False, cancel_futures=True)
+        """Stop the worker (the run failed or was stopped)."""
+        if ref is not None and ref._process.is_alive():
+            ref._process.terminate()
+            ref._process.join(timeout=5)
 
     @staticmethod
     def added(ref: IdealReference | None, measurement: dict[str, Any]) -> dict[str, Any] | None:
@@ -59,15 +86,6 @@ class IdealReference:
             return None
         ideal = ref.result()
         return machine_added(measurement, ideal) if ideal is not None else {"error": ref.error}
-
-    def result(self) -> dict[str, Any] | None:
-        try:
-            return self._future.result()
-        except Exception as exc:  # the reference is a report's extra: its failure must not lose the run
-            self.error = f"{type(exc).__name__}: {exc}"
-            return None
-        finally:
-            self._pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _in_worker() -> bool:

@@ -122,17 +122,8 @@ def run_job(
     durations["machine and cut"] = time.perf_counter() - t0
     announce("measurement")
     t0 = time.perf_counter()
-    stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process.stl_tolerance)
+    stl, measurement, added = _measure(job, plan, sim, out, Path(path), durations, ideal)
     mesh = stl.mesh
-    # the truth: the exact swept surface of the motion the machine made; the mesh measured beside it
-    motions = sampled_passes(plan.setup, sim.record.passes)
-    try:  # a workpiece the measuring machine cannot take (its datum or a ball seat fails) is the cut's fault
-        measurement = measure_written_cut(job, sim.edge, motions, sim.cut, stl, out / "gear.stl")
-    except (UnmeasurableError, InputError) as exc:
-        durations["measurement"] = time.perf_counter() - t0
-        IdealReference.cancel(ideal)
-        raise _unmeasurable(exc, job, Path(path), out, sim, durations, stl) from exc
-    added = IdealReference.added(ideal, measurement)
     durations["measurement"] = time.perf_counter() - t0
     announce("report")
     t0 = time.perf_counter()
@@ -158,6 +149,24 @@ def run_job(
     title = f"skive run: {Path(path).name}"
     write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
     return doc
+
+
+def _measure(job: Job, plan: SkivingPlan, sim: CoSimulation, out: Path, path: Path, durations: dict, ideal):
+    """gear.stl written, the truth measured (the exact swept surface of the motion the machine made; the mesh
+    beside it) and what the machine added against the ideal cut ``ideal`` (an IdealReference or None)."""
+    t0 = time.perf_counter()
+    stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process.stl_tolerance)
+    motions = sampled_passes(plan.setup, sim.record.passes)
+    measurement = None
+    try:  # a workpiece the measuring machine cannot take (its datum or a ball seat fails) is the cut's fault
+        measurement = measure_written_cut(job, sim.edge, motions, sim.cut, stl, out / "gear.stl")
+    except (UnmeasurableError, InputError) as exc:
+        durations["measurement"] = time.perf_counter() - t0
+        raise _unmeasurable(exc, job, path, out, sim, durations, stl) from exc
+    finally:
+        if measurement is None:  # the measurement failed or the run was stopped: the reference is not needed
+            IdealReference.cancel(ideal)
+    return stl, measurement, IdealReference.added(ideal, measurement)
 
 
 def _modification_runs(
