@@ -155,6 +155,11 @@ class ObliqueForces:
         """K_c / tau_s of the table's tool (rake +6 deg, no inclination)."""
         return float(self.factors(math.radians(REFERENCE_RAKE_DEG), 0.0)[0])
 
+    @property
+    def reference_factor(self) -> float:
+        """K_c / tau_s of the table's tool (rake +6 deg, no inclination): tau_s(h) = kc(h) / this."""
+        return self._reference
+
     def shear_stress(self, h) -> np.ndarray | float:
         """tau_s(h) [N/mm^2] that gives the table's kc(h) at the table's tool (rake +6 deg, no inclination); a float
         for a float h (the co-simulation asks once per engagement)."""

@@ -52,7 +52,7 @@ def test_the_passes_coefficients_are_the_chip_of_the_moments_linearisation() -> 
     ratio, diff = st.speed_ratio, st.differential_rotation_per_mm
     rev, pitch = 2 * math.pi / abs(ratio), 2 * math.pi / st.cutter.teeth
     c = model.model
-    chip = np.array([model.material.kc11, model.material.mc, max(model.min_chip, 1e-4), model._reference,
+    chip = np.array([model.material.kc11, model.material.mc, max(model.min_chip, 1e-4), model.reference_factor,
                      model.min_chip, *model.edge_coefficients, c.friction_angle, c.rake_floor])  # fmt: skip
     sharp = chip.copy()
     sharp[5:7] = 0.0  # no edge forces

@@ -307,11 +307,11 @@ def machine_tick(
     ``count``; then the engaged teeth's loads into ``out`` and their passage numbers into ``passages``. Returns the
     number of engaged teeth (rows of ``out``; a tooth with no chip has WIDTH 0).
 
-    ``state`` (16,): B1, P3 [mm] at the stroke's start; B1, B2, P3 [mm] at home; the speed ratio, the differential
+    ``state`` (18,): B1, P3 [mm] at the stroke's start; B1, B2, P3 [mm] at home; the speed ratio, the differential
     rotation [rad/mm], the carriage per cutter radian [mm/rad], the pass's centre distance, the previous pass's (nan:
     none) [mm], the engagement's half angle, the cutter pitch, the cutter's turn over a work revolution [rad], the
-    passages that turn spans, the sign of the work angle's growth, and the tilt, cutter phase, work phase packed
-    after it as ``state[16:19]``. ``frames`` (z0, 3, 4): every cutter tooth's rake frame (tooth 0 first)."""
+    passages that turn spans, the sign of the work angle's growth; the tilt, the cutter phase and the work phase
+    [rad]. ``frames`` (z0, 3, 4): every cutter tooth's rake frame (tooth 0 first)."""
     b1, b2 = qpos[qadr[0]], qpos[qadr[1]]
     p3, x = qpos[qadr[2]] * 1e3, qpos[qadr[3]] * 1e3
     axes = np.array([b1, b2, p3, x])
@@ -319,7 +319,7 @@ def machine_tick(
     b1_s, p3_s, b1_0, b2_0, p3_0 = state[0], state[1], state[2], state[3], state[4]
     ratio, diff, zeta, centre, before_centre = state[5], state[6], state[7], state[8], state[9]
     half, pitch, revolution, back, sign = state[10], state[11], state[12], state[13], state[14]
-    geometry = state[16:19]
+    geometry = state[15:18]
 
     def ideal(b, a):
         z = p3_s + zeta * (b - b1_s)

@@ -4,8 +4,8 @@
 Per feed tick the hook reads the axes, their speeds and the loop's deflection (the state the tick starts from), the
 ideal kinematics' axes at the same cutter angle (the reference), and keeps the deviation between the two for the
 stroke; the deviation one work revolution earlier is the surface the teeth left there. The engaged teeth are those
-whose engagement window (the pass's half angle either side of the mesh) holds the cutter angle at the tick's middle;
-their loads act over the tick.
+whose engagement window (the pass's half angle either side of the mesh) holds the cutter angle at the tick's start;
+their loads act over the tick. The work is done in one compiled call per tick (chip_of_the_moment.machine_tick).
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class ChipLoad:
         ce, te = model.edge_coefficients
         c, mat = model.model, model.material
         self.chip = np.array(
-            [mat.kc11, mat.mc, max(model.min_chip, H_FLOOR), model._reference, model.min_chip, ce, te,
+            [mat.kc11, mat.mc, max(model.min_chip, H_FLOOR), model.reference_factor, model.min_chip, ce, te,
              c.friction_angle, c.rake_floor]
         )  # fmt: skip
         self.frames = np.ascontiguousarray(setup.tooth_frames, dtype=float)  # every tooth's rake frame, tooth 0 first
@@ -82,7 +82,7 @@ class ChipLoad:
         self._state = np.array(
             [q[0], q[2] / MM, b1_0, b2_0, p3_0, st.speed_ratio, st.differential_rotation_per_mm,
              plan.v_s / plan.omega0, plan.centre_distance, previous, self.halves[k], self.pitch, self.revolution,
-             float(self.back), self.sign, 0.0, *self.geometry]
+             float(self.back), self.sign, *self.geometry]
         )  # fmt: skip
         self._history = np.empty((int(plan.duration / dt) + 256, 7))
         self._count = 0
