@@ -34,7 +34,9 @@ import math
 import numpy as np
 from numba import njit
 
+from cutting.flank import twist_rate
 from cutting.forces import oblique_sums
+from cutting.gear import Gear
 
 #: columns of :func:`tick_load`'s output per engaged tooth
 FORCE, POINT, MOMENT, COMPONENTS = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -42,6 +44,24 @@ POWER, VOLUME_RATE, WIDTH, CHIP, FACTOR = 12, 13, 14, 15, 16
 COLUMNS = 17
 #: the central difference's half step for the elements' velocities [s] (the tick is 2.5e-4 s)
 VELOCITY_STEP = 1e-6
+
+
+def opened_space(gear: Gear, stock: float, samples: int = 200) -> np.ndarray:
+    """``envelope[3:]`` for :func:`_in_air`: the tooth space the passes so far opened, the nominal space of the gear
+    with the profile shift x + ``stock`` / mn (the cutter ``stock`` [mm] short of its finishing position; its root
+    r_f + stock, a ring gear's r_f - stock), as :func:`virtual_machine.reach.skiving_load.space_area` takes it. The
+    generated flanks are the shifted gear's involutes; the fillet the cutter's tip leaves is taken as the root circle
+    (a few hundredths of mn of material the chip model then counts as open)."""
+    import dataclasses
+
+    shifted = dataclasses.replace(
+        gear, profile_shift=gear.x + stock / gear.mn, tip_diameter=gear.tip_diameter_value, root_diameter=None
+    )
+    root = gear.root_radius - stock if gear.internal else gear.root_radius + stock
+    lo, hi = sorted((root, gear.tip_radius))
+    r = np.linspace(lo, hi, samples)
+    psi = np.asarray(shifted.half_thickness_angle(np.maximum(r, gear.base_radius * (1 + 1e-9))), dtype=float)
+    return np.concatenate([[1.0, float(gear.teeth), twist_rate(gear), lo, hi], psi])
 
 
 @njit(cache=True)
@@ -103,6 +123,27 @@ def _inside(p, envelope) -> bool:
 
 
 @njit(cache=True)
+def _in_air(p, envelope) -> bool:
+    """A point (3,) in the tooth space the previous passes opened (their nominal space: the gear with the profile
+    shift of the stock they left), where no chip can be: ``envelope[3:]`` = on (1.0), z2, the helix's twist [rad/mm],
+    the open space's radial range r_lo, r_hi [mm], then its half tooth angle psi(r) [rad] sampled evenly over it."""
+    if len(envelope) <= 9 or envelope[3] < 0.5:
+        return False
+    lo, hi = envelope[6], envelope[7]
+    r = math.sqrt(p[0] * p[0] + p[1] * p[1])
+    if r <= lo or r >= hi:
+        return False
+    m = len(envelope) - 8
+    f = (r - lo) / (hi - lo) * (m - 1)
+    i = min(int(f), m - 2)
+    w = f - i
+    psi = envelope[8 + i] * (1.0 - w) + envelope[9 + i] * w
+    pitch = 2 * math.pi / envelope[4]
+    u = (math.atan2(p[1], p[0]) - envelope[5] * p[2]) % pitch
+    return abs(u - pitch / 2) < pitch / 2 - psi
+
+
+@njit(cache=True)
 def _to_envelope(p, n, envelope) -> float:
     """The distance from ``p`` inside the envelope along the unit ``n`` to its boundary [mm]."""
     best = math.inf
@@ -139,7 +180,8 @@ def element_chips(
     MotionRecord.deflection); ``geometry``: tilt, cutter phase, work phase [rad]; ``teeth`` (n, 3, 4): the engaged
     teeth's rake frames in the cutter frame; ``blank`` (3, 4): the blank frame in the work spindle's; ``edge`` (k, 3)
     the edge in the rake frame, ``rake`` (3,) and ``body`` (k - 1, 3) its faces (cutting.forces.EdgeFaces);
-    ``envelope``: tip radius [mm], 1.0 for a ring gear, half the face width [mm]. The surfaces left before:
+    ``envelope``: tip radius [mm], 1.0 for a ring gear, half the face width [mm], and from a second pass on the
+    space the previous passes opened (:func:`_in_air`, :func:`opened_space`). The surfaces left before:
     ``previous`` (n, 3, 4) the teeth that passed one work revolution earlier, at the ideal axes ``before`` (4,) plus
     the deviation recorded then ``deviation_before`` (6,: w [rad], s [mm]), if ``visited``; the previous pass's ideal
     axes ``last_pass`` (4,), if ``passed``. ``friction``, ``floor``: the friction angle and the rake floor [rad].
@@ -175,7 +217,7 @@ def element_chips(
     normal, there = np.empty(3), np.empty(3)
     for i in range(n):
         for j in range(k - 1):
-            if width[i, j] <= 0:
+            if width[i, j] <= 0 or _in_air(mid[i, j], envelope):  # outside the blank, or in what was cut before
                 continue
             for a in range(3):
                 normal[a] = dirs[i, j, 1, a]

@@ -17,7 +17,7 @@ import numpy as np
 
 from cutting.forces import EdgeFaces, EngagementLoad
 from cutting.oblique import H_FLOOR, ObliqueForces
-from cutting.skiving.chip_of_the_moment import COLUMNS, POWER, VOLUME_RATE, WIDTH, machine_tick
+from cutting.skiving.chip_of_the_moment import COLUMNS, POWER, VOLUME_RATE, WIDTH, machine_tick, opened_space
 from cutting.skiving.trajectory import PassMotion
 from machine_models.skiving_machine import MM
 from virtual_machine.runtime.physics import AXES
@@ -44,11 +44,7 @@ class ChipLoad:
         self.blank = np.ascontiguousarray(setup.blank_frame, dtype=float)
         self.geometry = np.array([setup.tilt, setup.cutter_phase, setup.work_phase])
         self.envelope = np.array([g.tip_radius, 1.0 if g.internal else 0.0, g.face_width / 2])
-        ratio = abs(setup.speed_ratio)  # work turns per cutter turn
         self.sign = 1.0 if setup.speed_ratio >= 0 else -1.0  # the cutter angle grows along a stroke; the work's so
-        #: the cutter's turn over one work revolution [rad] and the passages it spans (z2 for an integer ratio)
-        self.revolution = 2 * math.pi / ratio
-        self.back = round(self.revolution / self.pitch)
         ce, te = model.edge_coefficients
         c, mat = model.model, model.material
         self.chip = np.array(
@@ -79,11 +75,18 @@ class ChipLoad:
         q = self._qpos.take(self._qa)
         b1_0, b2_0, p3_0 = self.machine.home
         previous = self.plans[k - 1].centre_distance if k > 0 else math.nan
+        zeta = plan.v_s / plan.omega0  # the carriage per cutter radian [mm/rad]
+        # one work revolution's cutter turn, the differential's share included (a helical gear's work turns by
+        # ratio + diff zeta per cutter radian), and the passages it spans
+        revolution = 2 * math.pi / abs(st.speed_ratio + st.differential_rotation_per_mm * zeta)
         self._state = np.array(
-            [q[0], q[2] / MM, b1_0, b2_0, p3_0, st.speed_ratio, st.differential_rotation_per_mm,
-             plan.v_s / plan.omega0, plan.centre_distance, previous, self.halves[k], self.pitch, self.revolution,
-             float(self.back), self.sign, *self.geometry]
+            [q[0], q[2] / MM, b1_0, b2_0, p3_0, st.speed_ratio, st.differential_rotation_per_mm, zeta,
+             plan.centre_distance, previous, self.halves[k], self.pitch, revolution,
+             float(round(revolution / self.pitch)), self.sign, *self.geometry]
         )  # fmt: skip
+        # from the second pass on, the space the passes before opened holds no chip
+        stock = abs(plan.centre_distance - st.final_centre_distance) + st.passes[k] if k > 0 else 0.0
+        self._envelope = np.concatenate([self.envelope, opened_space(st.gear, stock)]) if k > 0 else self.envelope
         self._history = np.empty((int(plan.duration / dt) + 256, 7))
         self._count = 0
         self._pass = k
@@ -109,7 +112,7 @@ class ChipLoad:
         # relative motion, and the load would do 9 % more work than the chip takes)
         n = machine_tick(
             self._qpos, self._qvel, self._qa, self._va, np.asarray(defl[-1]) if defl else self._zero, self._state,
-            self._history, self._count, self.frames, self.blank, self.edge, self.rake, self.body, self.envelope,
+            self._history, self._count, self.frames, self.blank, self.edge, self.rake, self.body, self._envelope,
             self.chip, self._out, self._passages,
         )  # fmt: skip
         self._count += 1

@@ -30,7 +30,7 @@ from cutting.forces import EdgeFaces
 from cutting.materials import material
 from cutting.oblique import ObliqueForces, load_cutting_model
 from cutting.regeneration import lobes
-from cutting.skiving.chip_of_the_moment import element_chips
+from cutting.skiving.chip_of_the_moment import element_chips, opened_space
 from cutting.skiving.edge import make_edge
 from cutting.skiving.kinematics import SkivingSetup, rot_x, rot_z
 from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
@@ -154,6 +154,8 @@ def oriented_coefficients(
     rates = np.array([omega0, ratio * omega0 + diff * zeta * omega0, zeta * omega0, 0.0])
     geometry = np.array([setup.tilt, setup.cutter_phase, setup.work_phase])
     envelope = np.array([g.tip_radius, 1.0 if g.internal else 0.0, g.face_width / 2])
+    if previous is not None:  # the space the passes before opened holds no chip
+        envelope = np.concatenate([envelope, opened_space(g, abs(previous - setup.final_centre_distance))])
     teeth = np.ascontiguousarray(setup.passage_frames(np.array([0])))
     before = np.ascontiguousarray(setup.passage_frames(np.array([-round(rev / pitch)])))
     blank = np.ascontiguousarray(setup.blank_frame)
@@ -212,13 +214,15 @@ def pass_stability(
     omega = 2 * math.pi * np.geomspace(f_lo, f_hi, 3000)
     count = math.ceil(omega[-1] * delays.max() / (2 * math.pi)) + 2
     out = []
-    previous = setup.pass_centre_distances[0] + setup.passes[0]  # the tip circle just touching
+    # the cutter goes deeper towards the work's axis (a ring gear: away from it)
+    deeper = 1.0 if setup.gear.internal else -1.0
+    previous = setup.pass_centre_distances[0] - deeper * setup.passes[0]  # the tip circle just touching
     for k, (a, infeed) in enumerate(zip(setup.pass_centre_distances, setup.passes, strict=True)):
         trials = infeed * np.unique(np.append(np.geomspace(0.1, 4.0, depths), 1.0))
         lims = np.empty((len(trials), len(speeds)))
         freqs = np.empty((len(trials), len(speeds)))
         for i, d in enumerate(trials):
-            dmat, _ = oriented_coefficients(setup, model, previous - d, None if k == 0 else previous)
+            dmat, _ = oriented_coefficients(setup, model, previous + deeper * d, None if k == 0 else previous)
             lb = lobes(g, dmat, omega, count)
             lims[i], freqs[i] = lb.limits(delays)
         critical = np.array([_critical(trials, lims[:, j]) for j in range(len(speeds))])
