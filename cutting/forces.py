@@ -323,6 +323,18 @@ def oblique_sums(placed, ins, rot, times, step, rake, body, friction, floor):
     return swept, width, mid, dirs, factors, speeds
 
 
+@njit(cache=True)
+def element_force(fc, ft, fp, directions, out) -> float:
+    """One element's force on the workpiece into ``out`` (3,) from its cutting, thrust and passive components [N]
+    and its ``directions`` (3, 3): cutting along v, thrust along -n (away from the tool's body), passive along p;
+    returns its magnitude [N]."""
+    mag = 0.0
+    for c in range(3):
+        out[c] = fc * directions[0, c] - ft * directions[1, c] + fp * directions[2, c]
+        mag += out[c] * out[c]
+    return math.sqrt(mag)
+
+
 @njit(cache=True, error_model="numpy")
 def assemble(width, mid, dirs, factors, speeds, times, shear, ce, te):
     """For :func:`oblique_load`, per time: the resultant force on the workpiece [N] of the elements (each
@@ -355,12 +367,9 @@ def assemble(width, mid, dirs, factors, speeds, times, shear, ce, te):
             comp[i, 1] += ft
             comp[i, 2] += fp
             power[i] += fc * speeds[i, j]
-            mag = 0.0
+            mag = element_force(fc, ft, fp, dirs[i, j], fe[j])
             for c in range(3):
-                fe[j, c] = fc * dirs[i, j, 0, c] - ft * dirs[i, j, 1, c] + fp * dirs[i, j, 2, c]
                 force[i, c] += fe[j, c]
-                mag += fe[j, c] * fe[j, c]
-            mag = math.sqrt(mag)
             weight += mag
             count += 1.0
             for c in range(3):

@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from cutting.flank import twist_rate
-from cutting.forces import oblique_sums
+from cutting.forces import element_force, oblique_sums
 from cutting.gear import Gear
 
 #: columns of :func:`tick_load`'s output per engaged tooth
@@ -214,7 +214,7 @@ def element_chips(
         _place(last_pass, np.eye(3), np.zeros(3), geometry, teeth, blank, edge, lower, 0, none)
     chips = np.zeros((n, k - 1))
     bound = np.zeros((n, k - 1), dtype=np.int64)
-    normal, there = np.empty(3), np.empty(3)
+    normal = np.empty(3)
     for i in range(n):
         for j in range(k - 1):
             if width[i, j] <= 0 or _in_air(mid[i, j], envelope):  # outside the blank, or in what was cut before
@@ -222,18 +222,11 @@ def element_chips(
             for a in range(3):
                 normal[a] = dirs[i, j, 1, a]
             h = _to_envelope(mid[i, j], normal, envelope)
-            if visited:
-                for a in range(3):
-                    there[a] = (earlier[i, j, a] + earlier[i, j + 1, a]) / 2
-                hv = sum_product(normal, there, mid[i, j])
-                if hv < h:
-                    h, bound[i, j] = hv, 1
-            if passed:
-                for a in range(3):
-                    there[a] = (lower[i, j, a] + lower[i, j + 1, a]) / 2
-                hp = sum_product(normal, there, mid[i, j])
-                if hp < h:
-                    h, bound[i, j] = hp, 2
+            for source, on, before in ((1, visited, earlier), (2, passed, lower)):
+                if on:  # the layer to that surface: n . (the element there - the element here)
+                    layer = _layer(normal, before[i, j], before[i, j + 1], mid[i, j])
+                    if layer < h:
+                        h, bound[i, j] = layer, source
             chips[i, j] = h
     return width, mid, dirs, factors, speeds, chips, bound
 
@@ -281,12 +274,9 @@ def tick_load(
             out[i, WIDTH] += b
             out[i, CHIP] += b * h
             out[i, FACTOR] += b * h * factors[i, j, 0]
-            mag = 0.0
+            mag = element_force(fc, ft, fp, dirs[i, j], fe[j])
             for a in range(3):
-                fe[j, a] = fc * dirs[i, j, 0, a] - ft * dirs[i, j, 1, a] + fp * dirs[i, j, 2, a]
                 out[i, a] += fe[j, a]
-                mag += fe[j, a] * fe[j, a]
-            mag = math.sqrt(mag)
             weight += mag
             active[j] = True
             for a in range(3):
@@ -309,9 +299,13 @@ def tick_load(
 
 
 @njit(cache=True)
-def sum_product(n, a, b) -> float:
-    """n . (a - b)."""
-    return n[0] * (a[0] - b[0]) + n[1] * (a[1] - b[1]) + n[2] * (a[2] - b[2])
+def _layer(n, a, b, here) -> float:
+    """n . ((a + b) / 2 - here): the distance along n from an element's midpoint ``here`` to the midpoint of the
+    same element (ends ``a``, ``b``) on an earlier surface."""
+    out = 0.0
+    for c in range(3):
+        out += n[c] * ((a[c] + b[c]) / 2 - here[c])
+    return out
 
 
 @njit(cache=True)
