@@ -4,7 +4,8 @@ put the cutter at that tick and where the teeth were when they last passed the s
 Every space of the gear is passed once per work revolution, so an edge element cutting at x_e now takes the layer
 between the surface it cuts and the surfaces left before it, measured along the cut surface's normal n_e (towards
 the tool's body, the side the layer lies on): the linear chip model of milling's stability theory (Martellotti,
-Trans. ASME 63 (1941) 677; Altintas and Budak, CIRP Annals 44/1 (1995) 357) per element, with three surfaces that can bound the layer::
+Trans. ASME 63 (1941) 677; Altintas and Budak, CIRP Annals 44/1 (1995) 357) per element, with three surfaces that
+can bound the layer::
 
     h_e = min( n_e . (x_prev - x_e),     the same element one work revolution earlier (the previous tooth in
                                           this space: cutter pitches z2 before, its own frame and errors), where
