@@ -50,12 +50,13 @@ def warm() -> float:
     edge_pts = np.array([[9.0, -1.0, 0.0], [10.0, -0.5, 0.0], [10.0, 0.5, 0.0], [9.0, 1.0, 0.0]])
     body = np.tile([-1.0, 0.0, 0.0], (3, 1))
     chip = np.array([2000.0, 0.25, 1e-3, 1.6, 3e-3, 10.0, 17.0, 0.5, -0.5])
-    state = np.array([0.1, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, -0.01, 20.0, np.nan, 0.5, 0.3, 9.0, 30.0, 1.0,
+    state = np.array([0.1, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, -0.01, 20.0, np.nan, 0.5, 0.3, 9.0, 30.0,
                       0.3, math.pi, 0.0])  # fmt: skip
     machine_tick(
         np.array([0.1, 0.2, 0.0, 0.02]), np.array([200.0, -180.0, -0.005, 0.0]), np.arange(4), np.arange(4),
-        np.zeros(6), state, np.zeros((4, 7)), 0, frames, np.eye(3, 4), edge_pts, np.array([0.0, 0.0, 1.0]), body,
-        np.array([17.0, 0.0, 5.0]), chip, np.empty((4, COLUMNS)), np.empty(4, dtype=np.int64),
+        np.zeros(6), state, np.zeros((4, 8)), 0, np.zeros((1, 8)), 0, frames, np.eye(3, 4), edge_pts,
+        np.array([0.0, 0.0, 1.0]), body, np.array([17.0, 0.0, 5.0]), chip, np.empty((4, COLUMNS)),
+        np.empty(4, dtype=np.int64),
     )  # fmt: skip
     # and an engagement's load from its chip (the edge at 3 x 5 instants, 4 points)
     t = np.linspace(0.0, 1e-3, 5)

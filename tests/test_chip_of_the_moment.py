@@ -82,7 +82,8 @@ def _ideal_chips(setup, motion, m: int, t: np.ndarray):
         before = np.zeros(6) if before is None else before
         return element_chips(
             ideal(b1), rates, np.zeros(6), geometry, teeth, blank, pts, faces.rake, faces.body, envelope,
-            previous, ideal(b1 - rev), before, True, np.zeros(4), False, math.radians(30), math.radians(-30),
+            previous, ideal(b1 - rev), before, True, np.zeros(4), np.zeros(6), False, math.radians(30),
+            math.radians(-30),
         )  # fmt: skip
 
     return edge, pts, at, [at(motion.omega0 * ti) for ti in t]
@@ -138,3 +139,41 @@ def test_the_previous_surface_moved_by_s_changes_each_chip_by_n_dot_s() -> None:
     assert (moved | still).all() and moved.sum() >= 0.8 * cut.sum() and cut.sum() > 10
     assert (moved == (bound[0][cut] == 1)).all()  # and the kernel says which
     assert np.abs(expected[moved]).max() > 1e-3  # the shift matters here
+
+
+#: the small job made helical (beta 15 deg) and cut in two passes: its second pass's chips lie in the space the first
+#: opened, where the machine's helical kinematics really put it
+HELICAL_TWO_PASSES = """
+[gear]
+teeth = 18
+normal_module = 1.0
+face_width = 6.0
+helix_angle = 15.0
+
+[cutter]
+teeth = 17
+helix_angle = 20.0
+edge = "involute"
+
+[process]
+tool_speed = 2000.0
+axial_feed = 0.3
+passes = [1.5, 0.75]
+sweep_error = 0.02
+"""
+
+
+def test_a_helical_gears_second_pass_takes_the_removals_chip(tmp_path) -> None:
+    """The second pass of a helical gear: the space the first pass opened is where the machine cut it, turned by the
+    differential's share of its home (cut_phase: here -0.185 rad, half a pitch of the 18 teeth modulo a pitch) and
+    moved by the first pass's own deviation at each height. The force model's chip volume over each pass against
+    the removal's: within 10 % in the first (measured -3.8 %), from 0.8 to 1.1 in the second (measured 0.91: the
+    thin flank layer the nearest-element chip under-counts, as on spur_external's later passes). Laid out at the
+    ideal kinematics' phase instead, the second pass counted 1.75 times the removal's chip."""
+    sim = cosimulate(job_from_text(tmp_path, HELICAL_TWO_PASSES))
+    ratios = []
+    for k in range(2):
+        loads = [a.load for a in sim.loads if a.pass_index == k]
+        ratios.append(sum(ld.model_volume for ld in loads) / sum(ld.volume for ld in loads))
+    assert ratios[0] == pytest.approx(1.0, abs=0.10)
+    assert 0.8 < ratios[1] < 1.1, ratios

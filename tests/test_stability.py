@@ -74,8 +74,8 @@ def test_the_passes_coefficients_are_the_chip_of_the_moments_linearisation() -> 
                 np.array([st.tilt, st.cutter_phase, st.work_phase]), st.passage_frames(np.array([0])),
                 np.ascontiguousarray(st.blank_frame), pts, faces.rake, faces.body,
                 np.array([st.gear.tip_radius, 0.0, st.gear.face_width / 2]),
-                st.passage_frames(np.array([-round(rev / pitch)])), ideal(b1 - rev), before, True, np.zeros(4), False,
-                chip, out,
+                st.passage_frames(np.array([-round(rev / pitch)])), ideal(b1 - rev), before, True, np.zeros(4),
+                np.zeros(6), False, chip, out,
             ):  # fmt: skip
                 force[i] = turn @ out[0, :3]
         return np.trapezoid(force, phi / omega0, axis=0) / (pitch / omega0)

@@ -47,10 +47,12 @@ COLUMNS = 17
 VELOCITY_STEP = 1e-6
 
 
-def opened_space(gear: Gear, stock: float, samples: int = 200) -> np.ndarray:
+def opened_space(gear: Gear, stock: float, phase: float = 0.0, samples: int = 200) -> np.ndarray:
     """``envelope[3:]`` for :func:`_in_air`: the tooth space the passes so far opened, the nominal space of the gear
     with the profile shift x + ``stock`` / mn (the cutter ``stock`` [mm] short of its finishing position; its root
-    r_f + stock, a ring gear's r_f - stock), as :func:`virtual_machine.reach.skiving_load.space_area` takes it. The
+    r_f + stock, a ring gear's r_f - stock), as :func:`virtual_machine.reach.skiving_load.space_area` takes it, turned
+    by ``phase`` [rad] about the work axis (the machine's cut gear against the ideal kinematics' one:
+    :func:`cut_phase`). The
     generated flanks are the shifted gear's involutes; the fillet the cutter's tip leaves is taken as the root circle
     (a few hundredths of mn of material the chip model then counts as open)."""
     import dataclasses
@@ -62,7 +64,17 @@ def opened_space(gear: Gear, stock: float, samples: int = 200) -> np.ndarray:
     lo, hi = sorted((root, gear.tip_radius))
     r = np.linspace(lo, hi, samples)
     psi = np.asarray(shifted.half_thickness_angle(np.maximum(r, gear.base_radius * (1 + 1e-9))), dtype=float)
-    return np.concatenate([[1.0, float(gear.teeth), twist_rate(gear), lo, hi], psi])
+    return np.concatenate([[1.0, float(gear.teeth), twist_rate(gear), phase, lo, hi], psi])
+
+
+def cut_phase(ratio: float, diff: float, home: tuple[float, float, float]) -> float:
+    """The turn [rad] of the gear the machine cuts against the ideal kinematics' gear (the one :func:`opened_space`
+    lays out, phi2 = ratio phi0 + diff s): the machine's work angle is B2 = B2_0 + ratio (B1 - B1_0) + diff
+    (P3 - P3_0) from its home (B1_0, B2_0, P3_0 [mm]), so its cutter sits turned by -(B2_0 - ratio B1_0 - diff
+    P3_0) in the blank frame, and so do the spaces it cuts. A helical gear's differential makes this a fraction of a
+    pitch (half a pitch on a small helical job: the passes after the first would see their opened space on a tooth)."""
+    b1_0, b2_0, p3_0 = home
+    return -(b2_0 - ratio * b1_0 - diff * p3_0)
 
 
 @njit(cache=True)
@@ -127,20 +139,21 @@ def _inside(p, envelope) -> bool:
 def _in_air(p, envelope) -> bool:
     """A point (3,) in the tooth space the previous passes opened (their nominal space: the gear with the profile
     shift of the stock they left), where no chip can be: ``envelope[3:]`` = on (1.0), z2, the helix's twist [rad/mm],
-    the open space's radial range r_lo, r_hi [mm], then its half tooth angle psi(r) [rad] sampled evenly over it."""
-    if len(envelope) <= 9 or envelope[3] < 0.5:
+    the space's turn [rad], the open space's radial range r_lo, r_hi [mm], then its half tooth angle psi(r) [rad]
+    sampled evenly over it."""
+    if len(envelope) <= 10 or envelope[3] < 0.5:
         return False
-    lo, hi = envelope[6], envelope[7]
+    lo, hi = envelope[7], envelope[8]
     r = math.sqrt(p[0] * p[0] + p[1] * p[1])
     if r <= lo or r >= hi:
         return False
-    m = len(envelope) - 8
+    m = len(envelope) - 9
     f = (r - lo) / (hi - lo) * (m - 1)
     i = min(int(f), m - 2)
     w = f - i
-    psi = envelope[8 + i] * (1.0 - w) + envelope[9 + i] * w
+    psi = envelope[9 + i] * (1.0 - w) + envelope[10 + i] * w
     pitch = 2 * math.pi / envelope[4]
-    u = (math.atan2(p[1], p[0]) - envelope[5] * p[2]) % pitch
+    u = (math.atan2(p[1], p[0]) - envelope[5] * p[2] - envelope[6]) % pitch
     return abs(u - pitch / 2) < pitch / 2 - psi
 
 
@@ -169,7 +182,7 @@ def _to_envelope(p, n, envelope) -> float:
 @njit(cache=True, error_model="numpy")
 def element_chips(
     axes, rates, deflection, geometry, teeth, blank, edge, rake, body, envelope,
-    previous, before, deviation_before, visited, last_pass, passed, friction, floor,
+    previous, before, deviation_before, visited, last_pass, deviation_pass, passed, friction, floor,
 ):  # fmt: skip
     """The engaged teeth's edge elements at one instant and the chip each takes (module docstring): per (tooth,
     element) the chip width b = dl cos(lambda_s) inside the blank [mm] (0 outside), the midpoint [mm], the directions
@@ -185,7 +198,9 @@ def element_chips(
     space the previous passes opened (:func:`_in_air`, :func:`opened_space`). The surfaces left before:
     ``previous`` (n, 3, 4) the teeth that passed one work revolution earlier, at the ideal axes ``before`` (4,) plus
     the deviation recorded then ``deviation_before`` (6,: w [rad], s [mm]), if ``visited``; the previous pass's ideal
-    axes ``last_pass`` (4,), if ``passed``. ``friction``, ``floor``: the friction angle and the rake floor [rad].
+    axes ``last_pass`` (4,) plus the deviation it had at this height ``deviation_pass`` (6,), if ``passed``: that pass
+    left its surface, and opened its space, where the machine really had the cutter, so both move with it.
+    ``friction``, ``floor``: the friction angle and the rake floor [rad].
 
     Also returns per element which surface bounds its chip (``bound``): 0 the blank, 1 the previous revolution's (the
     regenerative one), 2 the previous pass's."""
@@ -211,14 +226,22 @@ def element_chips(
         turned = turn_of(deviation_before[:3])
         _place(before, turned, deviation_before[3:], geometry, previous, blank, edge, earlier, 0, none)
     lower = np.empty((n, k, 3))
+    opened = np.eye(3)
     if passed:
-        _place(last_pass, np.eye(3), np.zeros(3), geometry, teeth, blank, edge, lower, 0, none)
+        opened = turn_of(deviation_pass[:3])
+        _place(last_pass, opened, deviation_pass[3:], geometry, teeth, blank, edge, lower, 0, none)
     chips = np.zeros((n, k - 1))
     bound = np.zeros((n, k - 1), dtype=np.int64)
     normal = np.empty(3)
+    back = np.empty(3)
     for i in range(n):
         for j in range(k - 1):
-            if width[i, j] <= 0 or _in_air(mid[i, j], envelope):  # outside the blank, or in what was cut before
+            if width[i, j] <= 0:  # outside the blank
+                continue
+            # in what the passes before cut: their nominal space where the previous pass really had the cutter
+            for a in range(3):
+                back[a] = mid[i, j, a] - deviation_pass[3 + a]
+            if _in_air(opened.T @ back, envelope):
                 continue
             for a in range(3):
                 normal[a] = dirs[i, j, 1, a]
@@ -235,7 +258,7 @@ def element_chips(
 @njit(cache=True, error_model="numpy")
 def tick_load(
     axes, rates, deflection, geometry, teeth, blank, edge, rake, body, envelope,
-    previous, before, deviation_before, visited, last_pass, passed, chip, out,
+    previous, before, deviation_before, visited, last_pass, deviation_pass, passed, chip, out,
 ):  # fmt: skip
     """The load of each engaged tooth at one instant into ``out`` (n, COLUMNS): the force on the workpiece [N], its
     point [mm] and the moment about it [N m] in the blank frame, the sums of the cutting, thrust and passive
@@ -249,7 +272,7 @@ def tick_load(
     ce, te = chip[5], chip[6]
     width, mid, dirs, factors, speeds, chips, _ = element_chips(
         axes, rates, deflection, geometry, teeth, blank, edge, rake, body, envelope,
-        previous, before, deviation_before, visited, last_pass, passed, chip[7], chip[8],
+        previous, before, deviation_before, visited, last_pass, deviation_pass, passed, chip[7], chip[8],
     )  # fmt: skip
     e = width.shape[1]
     out[:n] = 0.0
@@ -334,20 +357,22 @@ def deviation(axes, deflection, reference, geometry):
 
 @njit(cache=True, error_model="numpy")
 def machine_tick(
-    qpos, qvel, qadr, vadr, loop, state, history, count, frames, blank, edge, rake, body, envelope, chip, out,
-    passages,
+    qpos, qvel, qadr, vadr, loop, state, history, count, last_history, last_count, frames, blank, edge, rake, body,
+    envelope, chip, out, passages,
 ):  # fmt: skip
     """One servo tick of the co-simulation's load hook in one compiled call (the hook's Python per tick cost as
     much as the chips themselves): the machine's state from MuJoCo's ``qpos``, ``qvel`` at the axes' addresses
     ``qadr``, ``vadr`` (B1, B2, P3, X; slides in m), the loop's deflection ``loop`` (6,); its deviation from the ideal
-    kinematics appended to the stroke's ``history`` ((n, 7): the work angle signed to grow, the deviation) at row
-    ``count``; then the engaged teeth's loads into ``out`` and their passage numbers into ``passages``. Returns the
-    number of engaged teeth (rows of ``out``; a tooth with no chip has WIDTH 0).
+    kinematics appended to the stroke's ``history`` ((n, 8): the cutter angle B1, the ideal carriage P3 [mm], the
+    deviation) at row ``count``; the previous pass's ``last_history`` (its first ``last_count`` rows) gives the
+    deviation that pass had at this height; then the engaged teeth's loads into ``out`` and their passage numbers
+    into ``passages``. Returns the number of engaged teeth (rows of ``out``; a tooth with no chip has WIDTH 0).
 
-    ``state`` (18,): B1, P3 [mm] at the stroke's start; B1, B2, P3 [mm] at home; the speed ratio, the differential
+    ``state`` (17,): B1, P3 [mm] at the stroke's start; B1, B2, P3 [mm] at home; the speed ratio, the differential
     rotation [rad/mm], the carriage per cutter radian [mm/rad], the pass's centre distance, the previous pass's (nan:
-    none) [mm], the engagement's half angle, the cutter pitch, the cutter's turn over a work revolution [rad], the
-    passages that turn spans, the sign of the work angle's growth; the tilt, the cutter phase and the work phase
+    none) [mm], the engagement's half angle, the cutter pitch, the cutter's turn over a work revolution [rad] (a
+    whole number of its pitches: the pose then is the present one moved back along the helix by the feed), the
+    passages that turn spans; the tilt, the cutter phase and the work phase
     [rad]. ``frames`` (z0, 3, 4): every cutter tooth's rake frame (tooth 0 first)."""
     b1, b2 = qpos[qadr[0]], qpos[qadr[1]]
     p3, x = qpos[qadr[2]] * 1e3, qpos[qadr[3]] * 1e3
@@ -355,27 +380,27 @@ def machine_tick(
     rates = np.array([qvel[vadr[0]], qvel[vadr[1]], qvel[vadr[2]] * 1e3, qvel[vadr[3]] * 1e3])
     b1_s, p3_s, b1_0, b2_0, p3_0 = state[0], state[1], state[2], state[3], state[4]
     ratio, diff, zeta, centre, before_centre = state[5], state[6], state[7], state[8], state[9]
-    half, pitch, revolution, back, sign = state[10], state[11], state[12], state[13], state[14]
-    geometry = state[15:18]
+    half, pitch, revolution, back = state[10], state[11], state[12], state[13]
+    geometry = state[14:17]
 
     def ideal(b, a):
         z = p3_s + zeta * (b - b1_s)
         return np.array([b, b2_0 + ratio * (b - b1_0) + diff * (z - p3_0), z, a])
 
-    dev = deviation(axes, loop, ideal(b1, centre), geometry)
-    angle = sign * b2
-    history[count, 0] = angle
-    history[count, 1:] = dev
-    # the deviation one work revolution earlier (linear between ticks; before the stroke's first, its first)
-    target = angle - 2 * math.pi
+    here = ideal(b1, centre)
+    dev = deviation(axes, loop, here, geometry)
+    history[count, 0], history[count, 1] = b1, here[2]
+    history[count, 2:] = dev
+    # the deviation one work revolution earlier (linear between ticks)
+    target = b1 - revolution
     visited = count > 0 and target >= history[0, 0]
-    earlier = np.zeros(6)
-    if visited:
-        i = np.searchsorted(history[: count + 1, 0], target)
-        i = min(max(i, 1), count)
-        a0, a1 = history[i - 1, 0], history[i, 0]
-        f = (target - a0) / (a1 - a0) if a1 > a0 else 1.0
-        earlier = history[i - 1, 1:] + f * (history[i, 1:] - history[i - 1, 1:])
+    earlier = _between(history[: count + 1, 0], history[: count + 1, 2:], target) if visited else np.zeros(6)
+    # the previous pass's at this height (its carriage ran one way: the keys made to grow; held at its ends)
+    passed = not math.isnan(before_centre)
+    before_pass = np.zeros(6)
+    if passed and last_count > 1:
+        way = 1.0 if last_history[last_count - 1, 1] >= last_history[0, 1] else -1.0
+        before_pass = _between(way * last_history[:last_count, 1], last_history[:last_count, 2:], way * here[2])
     lo, hi = math.ceil((b1 - half) / pitch), math.floor((b1 + half) / pitch)
     n = hi - lo + 1
     if n <= 0 or half <= 0:
@@ -388,10 +413,23 @@ def machine_tick(
         passages[j] = m
         teeth[j] = frames[(-m) % z0]
         previous[j] = frames[(-(m - int(back))) % z0]
-    passed = not math.isnan(before_centre)
     last = ideal(b1, before_centre if passed else 0.0)
     tick_load(
         axes, rates, loop, geometry, teeth, blank, edge, rake, body, envelope, previous, ideal(b1 - revolution, centre),
-        earlier, visited, last, passed, chip, out[:n],
+        earlier, visited, last, before_pass, passed, chip, out[:n],
     )  # fmt: skip
     return n
+
+
+@njit(cache=True)
+def _between(keys, rows, target):
+    """``rows`` (n, m) linear between the rows whose growing ``keys`` (n,) hold ``target``; the end rows beyond."""
+    n = len(keys)
+    if target <= keys[0]:
+        return rows[0].copy()
+    if target >= keys[n - 1]:
+        return rows[n - 1].copy()
+    i = min(max(np.searchsorted(keys, target), 1), n - 1)
+    a0, a1 = keys[i - 1], keys[i]
+    f = (target - a0) / (a1 - a0) if a1 > a0 else 1.0
+    return rows[i - 1] + f * (rows[i] - rows[i - 1])

@@ -17,7 +17,15 @@ import numpy as np
 
 from cutting.forces import EdgeFaces, EngagementLoad
 from cutting.oblique import H_FLOOR, ObliqueForces
-from cutting.skiving.chip_of_the_moment import COLUMNS, POWER, VOLUME_RATE, WIDTH, machine_tick, opened_space
+from cutting.skiving.chip_of_the_moment import (
+    COLUMNS,
+    POWER,
+    VOLUME_RATE,
+    WIDTH,
+    cut_phase,
+    machine_tick,
+    opened_space,
+)
 from cutting.skiving.trajectory import PassMotion
 from machine_models.skiving_machine import MM
 from virtual_machine.runtime.physics import AXES
@@ -44,7 +52,6 @@ class ChipLoad:
         self.blank = np.ascontiguousarray(setup.blank_frame, dtype=float)
         self.geometry = np.array([setup.tilt, setup.cutter_phase, setup.work_phase])
         self.envelope = np.array([g.tip_radius, 1.0 if g.internal else 0.0, g.face_width / 2])
-        self.sign = 1.0 if setup.speed_ratio >= 0 else -1.0  # the cutter angle grows along a stroke; the work's so
         ce, te = model.edge_coefficients
         c, mat = model.model, model.material
         self.chip = np.array(
@@ -52,7 +59,8 @@ class ChipLoad:
              c.friction_angle, c.rake_floor]
         )  # fmt: skip
         self.frames = np.ascontiguousarray(setup.tooth_frames, dtype=float)  # every tooth's rake frame, tooth 0 first
-        self._pass: int | None = None
+        self._pass: int | None = None  # the stroke in the cut (None between strokes)
+        self._stroke: int | None = None  # the pass whose deviation the history holds
         self._zero = np.zeros(6)
         teeth = math.ceil(2 * max(self.halves, default=0.0) / self.pitch) + 2  # the most teeth a window holds
         self._out, self._passages = np.empty((teeth, COLUMNS)), np.empty(teeth, dtype=np.int64)
@@ -76,20 +84,28 @@ class ChipLoad:
         b1_0, b2_0, p3_0 = self.machine.home
         previous = self.plans[k - 1].centre_distance if k > 0 else math.nan
         zeta = plan.v_s / plan.omega0  # the carriage per cutter radian [mm/rad]
-        # one work revolution's cutter turn, the differential's share included (a helical gear's work turns by
-        # ratio + diff zeta per cutter radian), and the passages it spans
-        revolution = 2 * math.pi / abs(st.speed_ratio + st.differential_rotation_per_mm * zeta)
+        # the previous tooth in this space passed z2 cutter pitches ago: the cutter's turn over a work revolution
+        # without the differential's share. A helical gear's work has turned by 2 pi plus the differential's turn over
+        # that feed: the pose then is the present one moved back along the helix by the feed (a whole turn of the
+        # work would leave the cutter a fraction of a pitch off, 0.08 mm at the edge on a small helical job)
+        back = round(2 * math.pi / abs(st.speed_ratio) / self.pitch)
+        revolution = back * self.pitch
         self._state = np.array(
             [q[0], q[2] / MM, b1_0, b2_0, p3_0, st.speed_ratio, st.differential_rotation_per_mm, zeta,
-             plan.centre_distance, previous, self.halves[k], self.pitch, revolution,
-             float(round(revolution / self.pitch)), self.sign, *self.geometry]
+             plan.centre_distance, previous, self.halves[k], self.pitch, revolution, float(back), *self.geometry]
         )  # fmt: skip
         # from the second pass on, the space the passes before opened holds no chip
         stock = abs(plan.centre_distance - st.final_centre_distance) + st.passes[k] if k > 0 else 0.0
-        self._envelope = np.concatenate([self.envelope, opened_space(st.gear, stock)]) if k > 0 else self.envelope
-        self._history = np.empty((int(plan.duration / dt) + 256, 7))
+        phase = cut_phase(st.speed_ratio, st.differential_rotation_per_mm, (b1_0, b2_0, p3_0))
+        opened = opened_space(st.gear, stock, phase)
+        self._envelope = np.concatenate([self.envelope, opened]) if k > 0 else self.envelope
+        if self._stroke == k - 1:  # the pass before's deviation along its stroke
+            self._last, self._last_count = self._history, self._count
+        else:
+            self._last, self._last_count = np.zeros((1, 8)), 0
+        self._history = np.empty((int(plan.duration / dt) + 256, 8))
         self._count = 0
-        self._pass = k
+        self._pass = self._stroke = k
 
     def __call__(self, t: float, dt: float) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         tick = self.machine._tick
@@ -112,8 +128,8 @@ class ChipLoad:
         # relative motion, and the load would do 9 % more work than the chip takes)
         n = machine_tick(
             self._qpos, self._qvel, self._qa, self._va, np.asarray(defl[-1]) if defl else self._zero, self._state,
-            self._history, self._count, self.frames, self.blank, self.edge, self.rake, self.body, self._envelope,
-            self.chip, self._out, self._passages,
+            self._history, self._count, self._last, self._last_count, self.frames, self.blank, self.edge, self.rake,
+            self.body, self._envelope, self.chip, self._out, self._passages,
         )  # fmt: skip
         self._count += 1
         if n == 0:

@@ -168,7 +168,7 @@ def oriented_coefficients(
         width, _, dirs, factors, _, chips, bound = element_chips(
             ideal(b1, centre_distance), rates, np.zeros(6), geometry, teeth, blank, pts, faces.rake, faces.body,
             envelope, before, ideal(b1 - rev, centre_distance), np.zeros(6), True,
-            ideal(b1, previous if previous is not None else 0.0), previous is not None,
+            ideal(b1, previous if previous is not None else 0.0), np.zeros(6), previous is not None,
             c.friction_angle, c.rake_floor,
         )  # fmt: skip
         b, h = width[0], chips[0]
