@@ -31,18 +31,19 @@ def job_with(tmp_path, k: float):
 @pytest.mark.slow
 def test_a_pass_the_lobes_call_unstable_chatters_and_a_stable_one_does_not(tmp_path) -> None:
     """The wide small job (one full-depth pass at 2000 rpm) with the mode at 42 N/um: `skive stability` gives the
-    pass a margin of 0.88 (chatter at 209.7 Hz); the run's vibration grows at 210 Hz (the record's spectrum, 0.5 Hz
-    apart from the lobes' frequency) until the cut tears the gear, which the run refuses with a ChatterError naming
-    the pass. At 55 N/um the margin is 1.15 and the run's vibration does not grow (measured 1.03x: the teeth's forced
-    vibration at 568 Hz). The time domain and the lobes agree on the stability limit within 15 % of the stiffness."""
+    pass a margin of 0.86 (chatter at 209.6 Hz; the spindles' torsion through their drives included); the run's
+    vibration grows at 210 Hz (the record's spectrum, 0.5 Hz apart from the lobes' frequency) until the cut tears the
+    gear, which the run refuses with a ChatterError naming the pass. At 55 N/um the margin is 1.11 and the run's
+    vibration does not grow (measured 1.03x: the teeth's forced vibration at 568 Hz). The time domain and the lobes
+    agree on the stability limit within 15 % of the stiffness."""
     unstable, stable = job_with(tmp_path, 4.2e7), job_with(tmp_path, 5.5e7)
     (lobe,) = pass_stability(unstable.skiving, machine_params(unstable), "16MnCr5", 0.010)
-    assert lobe.margin == pytest.approx(0.88, abs=0.03)
+    assert lobe.margin == pytest.approx(0.86, abs=0.03)
     with pytest.raises(ChatterError, match="pass 1") as err:
         cosimulate(unstable)
     frequency = float(str(err.value).split(" Hz")[0].rsplit(" ", 1)[1])
     assert frequency == pytest.approx(lobe.chatter_frequency, rel=0.02)
     (calm,) = pass_stability(stable.skiving, machine_params(stable), "16MnCr5", 0.010)
-    assert calm.margin == pytest.approx(1.15, abs=0.03)
+    assert calm.margin == pytest.approx(1.11, abs=0.03)
     (row,) = pass_deflection(cosimulate(stable).record, stable.skiving)
     assert row["vibration"]["growth"] < 1.2 and "warning" not in row

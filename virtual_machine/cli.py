@@ -281,7 +281,10 @@ def stability(job: Path | None, out: Path, as_json: bool) -> None:
     j = load_job(job or default_job_path())
     if j.kind != "skiving":
         raise InputError(Problem("job", j.kind, "skive stability draws a skiving job's lobes", "give a skiving job"))
-    results = pass_stability(j.skiving, machine_params(j), j.process.material, j.cutter_options.edge_radius)
+    results = pass_stability(
+        j.skiving, machine_params(j), j.process.material, j.cutter_options.edge_radius,
+        structure=j.machine.structure, adaptive=j.machine.adaptive_correction,
+    )  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     doc = {"job": str(job or default_job_path()), "passes": [r.summary() for r in results]}
     (out / "stability.json").write_text(json_text(doc))

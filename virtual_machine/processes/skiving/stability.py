@@ -38,6 +38,7 @@ from cutting.skiving.trajectory import ideal_passes
 from cutting.skiving.working_angles import rake_normal
 from machine_models.loop import LoopMode, frequency_response
 from machine_models.parameters import SkivingMachineParams
+from virtual_machine.processes.skiving.spindle_torsion import spindle_drives, torsion_response
 from virtual_machine.reach.skiving_load import engagement_half_angle_at
 
 
@@ -106,18 +107,23 @@ def axis_modes(params: SkivingMachineParams) -> tuple[LoopMode, ...]:
     return tuple(out)
 
 
-def loop_response(setup: SkivingSetup, params: SkivingMachineParams):
+def loop_response(
+    setup: SkivingSetup, params: SkivingMachineParams, structure: str = "mechatronic", adaptive: bool = True
+):
     """G(omega) (n, 3, 3) [m/N]: the tool's displacement relative to the workpiece per force on the tool at the
-    cutting point (tool side plus work side: the workpiece takes the opposite force)."""
+    cutting point (tool side plus work side: the workpiece takes the opposite force): the loop's modes, the axes'
+    and the spindles' torsion through their drives (spindle_torsion: the job's ``structure``, ``adaptive``
+    correction)."""
     tool_axis = rot_x(setup.tilt) @ np.array([0.0, 0.0, 1.0])  # the head's z turned by the tilt about x
     point = np.array([setup.gear.reference_radius, 0.0, 0.0])  # the pitch point on the mesh line
     a = setup.pass_centre_distances[-1]
     modes = params.loop + axis_modes(params)
+    drives = spindle_drives(params, setup, structure, adaptive)
 
     def g(omega: np.ndarray) -> np.ndarray:
         tool = frequency_response(modes, "tool", omega, tool_axis, point - np.array([a, 0.0, 0.0]))
         work = frequency_response(modes, "work", omega, np.array([0.0, 0.0, 1.0]), point)
-        return tool + work
+        return tool + work + torsion_response(drives, setup, omega)
 
     return g
 
@@ -199,18 +205,24 @@ def pass_stability(
     edge_radius: float = 0.010,
     speeds: np.ndarray | None = None,
     depths: int = 16,
+    structure: str = "mechatronic",
+    adaptive: bool = True,
 ) -> list[PassStability]:
     """Every pass's lobes (see the module docstring): tool speeds from 0.4 to 2.5 times the job's (``speeds`` [rpm]
-    to choose), the critical infeed at each by ``depths`` trial infeeds from 0.1 to 4 times the pass's."""
+    to choose), the critical infeed at each by ``depths`` trial infeeds from 0.1 to 4 times the pass's; the loop
+    with the spindles' drives of the machine ``structure`` (``adaptive``: its correction on)."""
     model = ObliqueForces(material(material_key), load_cutting_model(), edge_radius)
     ratio = abs(setup.speed_ratio)  # work turns per tool turn
     n0 = setup.tool_speed
     speeds = np.linspace(0.4 * n0, 2.5 * n0, 300) if speeds is None else np.asarray(speeds, dtype=float)
     delays = 60.0 / (speeds * ratio)
-    g = loop_response(setup, params)
-    modes = params.loop + axis_modes(params)
-    f_lo = 0.5 * min(m.frequency for m in modes)
-    f_hi = 1.6 * max(m.frequency for m in modes)
+    g = loop_response(setup, params, structure, adaptive)
+    # the modes' frequencies and the drives': their stages' and their speed loops' (the PI's own, w / 2)
+    drives = spindle_drives(params, setup, structure, adaptive).values()
+    freqs = [m.frequency for m in params.loop + axis_modes(params)] + [d.frequency() for d in drives]
+    freqs += [d.tuning.speed_bandwidth / 2 for d in drives if d.tuning is not None]
+    f_lo = 0.5 * min(f for f in freqs if f > 0)
+    f_hi = 1.6 * max(freqs)
     omega = 2 * math.pi * np.geomspace(f_lo, f_hi, 3000)
     count = math.ceil(omega[-1] * delays.max() / (2 * math.pi)) + 2
     out = []
