@@ -400,7 +400,16 @@ class MachineRun:
                 saturated.append(f"machine.model.{keys[name]}")
         um = delta * self.setup.gear.reference_radius * 1e3
         more = f"give the motor at its limit more torque ({', '.join(saturated)})" if saturated else ""
-        if seg == "feed" and saturated:  # cutting: the chips' torque is what the motor cannot hold
+        ringing = self._growing_vibration() if seg == "feed" else None
+        if ringing is not None:  # chatter: more torque would only let it grow further
+            f, before, after, n_s = ringing
+            remedy = (
+                f"It followed a vibration growing at {f:.0f} Hz ({before:.0f} -> {after:.0f} um peak to peak on the "
+                f"reference circle over {n_s:.1f} s): chatter, which `skive stability` maps pass by pass. A stiffer "
+                f"machine (machine.size, the drives in [machine.model]) or a loop of your machine's measured modes "
+                f"([[machine.model.loop]]) where its lobes call the passes stable"
+            )
+        elif seg == "feed" and saturated:  # cutting: the chips' torque is what the motor cannot hold
             remedy = f"{more}, or take less per pass (process.passes) or a smaller process.axial_feed"
         else:
             remedy = f"lower process.tool_speed (work spindle {abs(self.setup.work_speed):.0f} rpm), or " + (
@@ -412,6 +421,16 @@ class MachineRun:
             f"limit is {self.following_limit:.0f} um). Peak motor torques over the last 0.2 s: {', '.join(peaks)}. "
             f"{remedy[0].upper()}{remedy[1:]}"
         )
+
+    def _growing_vibration(self) -> tuple[float, float, float, float] | None:
+        """:func:`growing_vibration` of the synchronisation error [um of arc on the reference circle] over the last
+        two seconds (or what ran of them)."""
+        n = min(round(2.0 / self.dt), len(self.rows))
+        a = np.array([r[:6] for r in self.rows[-n:]])
+        b1_0, b2_0, p3_0 = self.home
+        delta = (a[:, 2] - b2_0) - self._ratio * (a[:, 1] - b1_0) - self._diff * (a[:, 3] / MM - p3_0)
+        delta = (delta - np.array(self.corrections[-n:])) * self.setup.gear.reference_radius * 1e3
+        return growing_vibration(delta, self.dt, self.following_limit)
 
     def record(self) -> MotionRecord:
         """The motion record of everything run so far."""
@@ -482,6 +501,28 @@ def simulate(
     if timing is not None:
         timing.update(run.timing)
     return run.record()
+
+
+def growing_vibration(signal: np.ndarray, dt: float, limit: float) -> tuple[float, float, float, float] | None:
+    """A vibration that grew in ``signal`` (samples ``dt`` [s] apart, at least 0.4 s of them): its frequency [Hz]
+    (the largest peak of the last 0.2 s), its peak to peak over the first and the last 0.1 s (linear trend taken
+    out), and the span [s]; None if it did not grow 2-fold, stays under a tenth of ``limit`` (the signal's units) or
+    is slower than 20 Hz (a drift, not a vibration)."""
+    tenth = round(0.1 / dt)
+    if len(signal) < 4 * tenth:
+        return None
+
+    def swing(part: np.ndarray) -> float:
+        t = np.arange(len(part))
+        return float(np.ptp(part - np.polyval(np.polyfit(t, part, 1), t)))
+
+    before, after = swing(signal[:tenth]), swing(signal[-tenth:])
+    if not (after > 2 * before and after > 0.1 * limit):
+        return None
+    late = signal[-2 * tenth :] - signal[-2 * tenth :].mean()
+    spectrum = np.abs(np.fft.rfft(late * np.hanning(len(late))))
+    frequency = float(np.fft.rfftfreq(len(late), dt)[1 + int(np.argmax(spectrum[1:]))])
+    return (frequency, before, after, len(signal) * dt) if frequency >= 20.0 else None
 
 
 def relative_pose(setup, q: np.ndarray, deflection: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
