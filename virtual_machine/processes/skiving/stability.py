@@ -9,7 +9,9 @@ period T = 60 / n2 = 60 / (n0 |z0 / z2|) s, so the tool speed n0 = 60 / (T |z0 /
 The loop at the cutting point (the generating point at the pitch circle on the mesh line, +x of the machine frame):
 the machine's `[machine.model.loop]` modes at the tool and at the workpiece (their shapes there: machine_models/loop.py)
 plus the axes' own compliance as modes: the radial slide's position servo along x (radial_stiffness, radial_mass and
-what rides on it, radial_damping) and the nut along z (nut_stiffness, the carriage with everything on it).
+what rides on it, radial_damping) and the nut along z (nut_stiffness, the carriage with everything on it); plus the
+spindles' torsion through their drives (spindle_torsion.py: stage, motor, speed regulator and correction), along
+each spindle's turn at the point.
 
 The oriented coefficients D of a pass (3 x 3, N/m): its engaged edge (the involute edge inside the blank's envelope,
 as the co-simulation's force model spreads the chip) over one engagement at the pass's centre distance by the ideal
