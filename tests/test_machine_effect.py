@@ -159,13 +159,13 @@ def test_spur_external_on_a_soft_radial_axis_grows_its_span_by_twice_the_flank_n
 @pytest.mark.slow
 def test_the_default_job_with_one_soft_mode_as_its_static_and_dynamic_estimates_say(tmp_path) -> None:
     """Issue 42's proof: the default job with a user's [[machine.model.loop]] of one soft tool mode along the centre
-    distance (20 N/um, 150 Hz, zeta 0.05). Dynamic estimate: `skive stability` gives margins 1.57 and 9.7 (stable),
-    so the run must not chatter; the mode rings under the changing tooth load at its damped frequency with the
-    radial slide in series (measured 135-136 Hz, 0.7 um, not growing beyond 1.1x). Static estimate: the finishing
-    pass's mean force on the tool along x, F (82 N), moves the tool by F / k (4.1 um) and its generating point off the
-    flanks by that times the flank normals' x part (1.41 um): measured 1.18 um (0.84, within 20 %). The class stays 7
-    (it may not get better). What it does not meet yet: the span grows 4.7 um where the static deflection gives 2.8
-    (open, docs/forces.md)."""
+    distance (20 N/um, 150 Hz, zeta 0.05). Dynamic estimate: `skive stability` gives margins 1.59 and 3.19 (stable; with
+    the spindles' drives in the loop), so the run must not chatter; the mode rings under the changing tooth load at its
+    damped frequency with the radial slide in series (measured 135-136 Hz, 0.7 um, not growing beyond 1.1x). Static
+    estimate: the finishing pass's mean force on the tool along x, F (82 N), moves the tool by F / k (4.1 um) and its
+    generating point off the flanks by that times the flank normals' x part (1.41 um): measured 1.18 um (0.84, within
+    20 %). The class stays 7 (it may not get better). What it does not meet yet: the span grows 4.7 um where the
+    static deflection gives 2.8 (open, docs/forces.md)."""
     base = (JOBS / "default.toml").read_text()
     mode = '\n[[machine.model.loop]]\nat = "tool"\ndirection = [1.0, 0.0, 0.0]\nfrequency = 150.0\ndamping = 0.05\n'
     (tmp_path / "rigid.toml").write_text(base)
