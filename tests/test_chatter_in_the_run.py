@@ -47,3 +47,26 @@ def test_a_pass_the_lobes_call_unstable_chatters_and_a_stable_one_does_not(tmp_p
     assert calm.margin == pytest.approx(1.11, abs=0.03)
     (row,) = pass_deflection(cosimulate(stable).record, stable.skiving)
     assert row["vibration"]["growth"] < 1.2 and "warning" not in row
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("rpm", "chatters"), [(2570.0, False), (2738.0, True)])
+def test_the_lobes_and_the_run_agree_at_other_speeds(tmp_path, rpm: float, chatters: bool) -> None:
+    """The same job at 42 N/um at two more tool speeds (with 2000 rpm above, three): the lobes of the work period
+    60 / (n0 z0 / z2) put 2570 rpm in a pocket (margin 1.72) and 2738 rpm on a lobe (0.75, chatter at 205.1 Hz); the
+    runs agree: at 2570 rpm no chatter (the largest vibration is the teeth's forced one at 730 Hz, 1.1 um), at 2738
+    rpm the vibration grows at 206 Hz until the cut tears the gear (ChatterError)."""
+    text = small_job(sweep_error=0.02, face_width=10.0).replace("tool_speed = 2000.0", f"tool_speed = {rpm}")
+    job = job_from_text(tmp_path, text + MODE.format(k=4.2e7), f"n{rpm:.0f}.toml")
+    (lobe,) = pass_stability(job.skiving, machine_params(job), "16MnCr5", 0.010)
+    assert (lobe.margin < 1.0) == chatters, lobe.margin
+    if chatters:
+        with pytest.raises(ChatterError, match="pass 1") as err:
+            cosimulate(job)
+        frequency = float(str(err.value).split(" Hz")[0].rsplit(" ", 1)[1])
+        assert frequency == pytest.approx(lobe.chatter_frequency, rel=0.02)
+        return
+    (row,) = pass_deflection(cosimulate(job).record, job.skiving)
+    assert "warning" not in row
+    # no vibration near the mode grows: what rings is the teeth's forced vibration, far above it
+    assert row["vibration"]["frequency_hz"] > 2 * lobe.chatter_frequency or row["vibration"]["growth"] < 1.2
