@@ -63,12 +63,14 @@ class Lobes:
         return best, freq
 
 
-def lobes(g: FrequencyResponse, d: np.ndarray, omega: np.ndarray, count: int = 8) -> Lobes:
-    """The lobes of the loop ``g`` and the oriented coefficients ``d`` (3, 3) [N/m] over the chatter frequencies
-    ``omega`` [rad/s]: for each frequency every eigenvalue of G D with Re mu > 0 gives a limit 1 / (2 Re mu) at the
-    delays (pi + 2 arg mu + 2 pi k) / omega; per frequency and lobe the least limit is kept."""
+def lobes(g: FrequencyResponse | np.ndarray, d: np.ndarray, omega: np.ndarray, count: int = 8) -> Lobes:
+    """The lobes of the loop ``g`` (its response function, or its response at ``omega`` already, (n, 3, 3)) and the
+    oriented coefficients ``d`` (3, 3) [N/m] over the chatter frequencies ``omega`` [rad/s]: for each frequency every
+    eigenvalue of G D with Re mu > 0 gives a limit 1 / (2 Re mu) at the delays (pi + 2 arg mu + 2 pi k) / omega; per
+    frequency and lobe the least limit is kept."""
     omega = np.asarray(omega, dtype=float)
-    mu = np.linalg.eigvals(g(omega) @ np.asarray(d, dtype=float))  # (n, 3)
+    response = g if isinstance(g, np.ndarray) else g(omega)
+    mu = np.linalg.eigvals(response @ np.asarray(d, dtype=float))  # (n, 3)
     k = np.arange(count)
     delay = np.full((count, len(omega)), np.nan)
     limit = np.full((count, len(omega)), np.inf)

@@ -226,6 +226,7 @@ def pass_stability(
     f_lo = 0.5 * min(f for f in freqs if f > 0)
     f_hi = 1.6 * max(freqs)
     omega = 2 * math.pi * np.geomspace(f_lo, f_hi, 3000)
+    response = g(omega)  # the loop's, the same for every pass and trial
     count = math.ceil(omega[-1] * delays.max() / (2 * math.pi)) + 2
     out = []
     # the cutter goes deeper towards the work's axis (a ring gear: away from it)
@@ -237,7 +238,7 @@ def pass_stability(
         freqs = np.empty((len(trials), len(speeds)))
         for i, d in enumerate(trials):
             dmat, _ = oriented_coefficients(setup, model, previous + deeper * d, None if k == 0 else previous)
-            lb = lobes(g, dmat, omega, count)
+            lb = lobes(response, dmat, omega, count)
             lims[i], freqs[i] = lb.limits(delays)
         critical = np.array([_critical(trials, lims[:, j]) for j in range(len(speeds))])
         # at the job's own speed and infeed
