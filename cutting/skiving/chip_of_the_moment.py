@@ -52,9 +52,8 @@ def opened_space(gear: Gear, stock: float, phase: float = 0.0, samples: int = 20
     with the profile shift x + ``stock`` / mn (the cutter ``stock`` [mm] short of its finishing position; its root
     r_f + stock, a ring gear's r_f - stock), as :func:`virtual_machine.reach.skiving_load.space_area` takes it, turned
     by ``phase`` [rad] about the work axis (the machine's cut gear against the ideal kinematics' one:
-    :func:`cut_phase`). The
-    generated flanks are the shifted gear's involutes; the fillet the cutter's tip leaves is taken as the root circle
-    (a few hundredths of mn of material the chip model then counts as open)."""
+    :func:`cut_phase`). The generated flanks are the shifted gear's involutes; the fillet the cutter's tip leaves is
+    taken as the root circle (a few hundredths of mn of material the chip model then counts as open)."""
     import dataclasses
 
     shifted = dataclasses.replace(
@@ -233,15 +232,15 @@ def element_chips(
     chips = np.zeros((n, k - 1))
     bound = np.zeros((n, k - 1), dtype=np.int64)
     normal = np.empty(3)
-    back = np.empty(3)
+    unmoved = np.empty(3)
     for i in range(n):
         for j in range(k - 1):
             if width[i, j] <= 0:  # outside the blank
                 continue
             # in what the passes before cut: their nominal space where the previous pass really had the cutter
             for a in range(3):
-                back[a] = mid[i, j, a] - deviation_pass[3 + a]
-            if _in_air(opened.T @ back, envelope):
+                unmoved[a] = mid[i, j, a] - deviation_pass[3 + a]
+            if _in_air(opened.T @ unmoved, envelope):
                 continue
             for a in range(3):
                 normal[a] = dirs[i, j, 1, a]
@@ -372,8 +371,8 @@ def machine_tick(
     rotation [rad/mm], the carriage per cutter radian [mm/rad], the pass's centre distance, the previous pass's (nan:
     none) [mm], the engagement's half angle, the cutter pitch, the cutter's turn over a work revolution [rad] (a
     whole number of its pitches: the pose then is the present one moved back along the helix by the feed), the
-    passages that turn spans; the tilt, the cutter phase and the work phase
-    [rad]. ``frames`` (z0, 3, 4): every cutter tooth's rake frame (tooth 0 first)."""
+    passages that turn spans; the tilt, the cutter phase and the work phase [rad]. ``frames`` (z0, 3, 4): every
+    cutter tooth's rake frame (tooth 0 first)."""
     b1, b2 = qpos[qadr[0]], qpos[qadr[1]]
     p3, x = qpos[qadr[2]] * 1e3, qpos[qadr[3]] * 1e3
     axes = np.array([b1, b2, p3, x])

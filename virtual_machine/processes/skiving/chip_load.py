@@ -94,11 +94,12 @@ class ChipLoad:
             [q[0], q[2] / MM, b1_0, b2_0, p3_0, st.speed_ratio, st.differential_rotation_per_mm, zeta,
              plan.centre_distance, previous, self.halves[k], self.pitch, revolution, float(back), *self.geometry]
         )  # fmt: skip
-        # from the second pass on, the space the passes before opened holds no chip
-        stock = abs(plan.centre_distance - st.final_centre_distance) + st.passes[k] if k > 0 else 0.0
-        phase = cut_phase(st.speed_ratio, st.differential_rotation_per_mm, (b1_0, b2_0, p3_0))
-        opened = opened_space(st.gear, stock, phase)
-        self._envelope = np.concatenate([self.envelope, opened]) if k > 0 else self.envelope
+        # from the second pass on, the space the passes before opened holds no chip (where this machine cut it)
+        self._envelope = self.envelope
+        if k > 0:
+            stock = abs(plan.centre_distance - st.final_centre_distance) + st.passes[k]
+            phase = cut_phase(st.speed_ratio, st.differential_rotation_per_mm, (b1_0, b2_0, p3_0))
+            self._envelope = np.concatenate([self.envelope, opened_space(st.gear, stock, phase)])
         if self._stroke == k - 1:  # the pass before's deviation along its stroke
             self._last, self._last_count = self._history, self._count
         else:

@@ -53,16 +53,17 @@ class SpindleDrive:
     def response(self, omega: np.ndarray) -> np.ndarray:
         """H(i omega) [rad/(N m)]: the spindle's turn per torque on it."""
         s = 1j * np.atleast_1d(np.asarray(omega, dtype=float))
-        st = self.stage
-        if st.stiffness is None:  # a rigid stage: the spindle rides on the motor
-            return 1.0 / (self.spindle * s**2 + self._servo(s) / st.ratio**2 + self.motor * s**2 / st.ratio**2)
+        st, r = self.stage, self.stage.ratio
+        kv = self.tuning.position_gain if self.tuning is not None and self.adaptive else 0.0
+        if st.stiffness is None:  # a rigid stage: the spindle rides on the motor (a held one: no turn at all)
+            if self.tuning is None:
+                return np.zeros_like(s)
+            return 1.0 / ((self.spindle + self.motor / r**2) * s**2 + self._servo(s) * (1 + kv / s) / r**2)
         spring = st.stiffness + st.damping * s
         b = self.spindle * s**2 + spring
         if self.tuning is None:
             return 1.0 / b
-        r = st.ratio
         a = self.motor * s**2 + r**2 * spring + self._servo(s)
-        kv = self.tuning.position_gain if self.adaptive else 0.0
         across = -r * spring + self._servo(s) / s * kv / r  # the motor's row: the spindle's encoder in the loop
         return a / (a * b + r * spring * across)
 
