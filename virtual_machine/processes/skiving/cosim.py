@@ -41,7 +41,13 @@ from cutting.skiving.working_angles import check_working_clearance, rake_normal
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.job import Job, dexel_spacing
 from virtual_machine.processes.skiving.chip_load import ChipLoad
-from virtual_machine.processes.skiving.cosim_removal import DexelRemoval, InlineRemoval, ParallelRemoval, Samples
+from virtual_machine.processes.skiving.cosim_removal import (
+    DexelRemoval,
+    InlineRemoval,
+    NoRemoval,
+    ParallelRemoval,
+    Samples,
+)
 from virtual_machine.runtime.machine_run import SEGMENTS, MachineRun, MotionRecord, relative_pose
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 
@@ -69,7 +75,7 @@ class CoSimulation:
     load_rows: np.ndarray | None = None  # per servo tick: t [s], resultant on the workpiece [N] (3), torque [N m]
     snapshots: list[tuple[float, np.ndarray, np.ndarray]] = field(default_factory=list)  # t, vertices, triangles
     edge: CuttingEdge | None = None  # the cutting edge the removal swept
-    removal: str = "dexel"  # "dexel" or "manifold"
+    removal: str = "dexel"  # "dexel", "manifold" or "none"
     lag: int = 0  # passages the removal's chips were taken behind the machine
     dexel: dict | None = None  # the dexel removal's figures (cutting.skiving.dexel_cut.removal_summary)
 
@@ -157,6 +163,8 @@ class CuttingRun:
         check_holder_side(plans, edge, setup.cutter.face_width, setup.holder_diameter_value)
         check_working_clearance(setup, edge)  # the relieved flank off the flank it generates
         check_body_interference(setup, edge)  # and the relieved tooth off the finished teeth over the whole mesh
+        if removal == "none" and snapshots_per_pass:
+            raise ValueError("snapshots of the stock need a workpiece: removal 'dexel' or 'manifold'")
         self.removal = _removal(job, setup, edge, plans, removal, workers)
         self.workers, self.snapshots_per_pass = workers, snapshots_per_pass
         self.chunk = self.pitch / (setup.tool_speed * 2 * math.pi / 60) / 2  # half a cutter pitch of machine time
@@ -256,10 +264,10 @@ class CuttingRun:
             self._stroke = None
 
     def _apply(self, key: tuple[int, int]) -> None:
-        """The chip of passage ``key`` (waiting for it): its volume for the report, its thickness for the size effect
-        of the coefficients (:meth:`ChipLoad.chip_measured`). Chips are taken in submission order at a fixed point
-        of the simulation (``lag`` submissions later), never when a worker happens to finish: the run does not
-        depend on the workers' timing."""
+        """The chip of passage ``key`` (waiting for it): its volume and mean thickness for the report (the force is
+        the chip of the moment's, :class:`ChipLoad`, and does not wait for it). Chips are taken in submission order
+        at a fixed point of the simulation (``lag`` submissions later), never when a worker happens to finish: the
+        run does not depend on the workers' timing."""
         while key not in self._arrived:
             self._arrived.update({(i, m): chip for i, m, chip in self.removal.finished(block=True)})
         chip = self._arrived.pop(key)
@@ -277,6 +285,8 @@ class CuttingRun:
         result = self.removal.close()
         result.chips.sort(key=lambda c: (c.pass_index, c.time))
         gear = self.setup.gear
+        if isinstance(self.removal, NoRemoval):  # no solid: a torn gear shows in the vibration's warning only
+            return result
         if result.gear.status() != mf.Error.NoError or result.gear.is_empty():
             raise RuntimeError(f"the removal left no valid solid ({result.gear.status()})")
         if result.gear.genus() != expected_genus(gear):
@@ -311,10 +321,12 @@ def _no_force(t: float, dt: float) -> tuple:
 def _removal(job: Job, setup, edge: CuttingEdge, plans, removal: str, workers: int):
     """The removal the run cuts with: the dexel workpiece, or the manifold reference inline or in ``workers``
     processes."""
+    if removal == "none":
+        return NoRemoval()
     if removal == "dexel":
         return DexelRemoval(setup.gear, edge, plans, dexel_spacing(job), job.process.sweep_error)
     if removal != "manifold":
-        raise ValueError(f"removal {removal!r}: use 'dexel' or 'manifold'")
+        raise ValueError(f"removal {removal!r}: use 'dexel', 'manifold' or 'none'")
     n_pass = len(setup.passes)
     tols = [job.process.sweep_error if i == n_pass - 1 else job.process.roughing_sweep_error for i in range(n_pass)]
     if workers <= 1:
@@ -343,7 +355,9 @@ def cosimulate(
     then runs at most :func:`max_lag` passages ahead of the finished chips. ``correction``: the finishing pass's
     path corrections of a flank modification (virtual_machine/processes/skiving/modification_path.py), made by the
     CNC. ``removal``: "dexel" (the default: the dexel workpiece, cut a few passages at a time in this process;
-    ``workers`` is moot) or "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes).
+    ``workers`` is moot), "manifold" (the reference: per-passage booleans, inline or in ``workers`` processes) or
+    "none" (no workpiece: the motion, the loads and the exact swept surfaces only; no chips' volumes, solid or
+    snapshots: :class:`NoRemoval`).
     ``plan``: the job's setup, ideal passes and setting sheets if an earlier stage made them. ``live(machine rows,
     load rows)``: each chunk's new rows as the run goes (:class:`virtual_machine.output.recorder.LiveView`)."""
     run = CuttingRun(

@@ -1,8 +1,8 @@
 """The removal side of the co-simulation: tooth passages submitted as the machine makes them, chips returned.
 
-Three backends with one interface. :class:`DexelRemoval` (the default) cuts the passages on the dexel workpiece,
-a batch at a time, in this process (the kernel runs on every core). The manifold removal (the reference) has
-:class:`InlineRemoval`, which cuts each passage at once in this process, and
+Three backends with one interface, and :class:`NoRemoval`, which cuts nothing. :class:`DexelRemoval` (the default)
+cuts the passages on the dexel workpiece, a batch at a time, in this process (the kernel runs on every core). The
+manifold removal (the reference) has :class:`InlineRemoval`, which cuts each passage at once in this process, and
 :class:`ParallelRemoval` gives each worker process a share of the tooth spaces (as cutting.skiving.engine does): every
 worker receives every passage and cuts the cells it owns, so a passage's chip is the sum of the workers' parts and
 is finished when the slowest worker has done it. Workers take the passages in order (one queue each), so chips
@@ -151,6 +151,28 @@ class DexelRemoval:
     def close(self) -> CutResult:
         self.finished()
         self.result.gear = self.solid()
+        return self.result
+
+
+class NoRemoval:
+    """No workpiece: every passage is handed back without a chip. For a run whose gear is read only from the
+    passages' exact swept surfaces (cutting.skiving.exact_sweep.SweptVolumes of the record's passes, as a measurement
+    reads them) and whose forces are the chip of the moment, which reads those surfaces too: the machine's motion,
+    loads and gear are the dexel run's; the chips' volumes (``sim.loads``' removal side), the solid and the snapshots
+    are absent."""
+
+    def __init__(self) -> None:
+        self.result = CutResult(None)
+        self._done: list[Finished] = []
+
+    def submit(self, index: int, m: int, samples: Samples) -> None:
+        self._done.append((index, m, None))
+
+    def finished(self, block: bool = False) -> list[Finished]:
+        done, self._done = self._done, []
+        return done
+
+    def close(self) -> CutResult:
         return self.result
 
 
