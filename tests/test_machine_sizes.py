@@ -8,7 +8,6 @@ before the run, naming the motor and the torque it needs."""
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
 import tomllib
 from pathlib import Path
@@ -158,21 +157,27 @@ def test_a_bad_size_is_an_input_error_naming_the_valid_ones() -> None:
 # ---- the cutting-load estimate -------------------------------------------------------------------------------
 
 
-def _crossed_axes_load(job, depth_before: float, depth_after: float) -> dict[str, float]:
-    """A spur job's pass worked from the gear geometry and the crossed axes alone (nothing of the estimate's code).
+def _crossed_axes_load(job, depth: float) -> dict[str, float]:
+    """A spur job's first pass worked from the gear geometry and the crossed axes alone (nothing of the estimate's
+    code), at mid face.
 
     The space: the transverse area between the root circle r_f + delta and the tip circle of the gear with profile
     shift delta / mn (delta the cutter's shortfall), r (2 pi / z - 2 psi(r)) dr with the involute's half tooth angle
-    psi(r) = pi / (2 z) + 2 x tan(alpha) / z + inv(alpha) - inv(alpha_r), held at its base-circle value below r_b.
-    The engagement: the cutter (helical, z0, beta0: the transverse involute of its end section, the tip at
-    r0 + 1.25 mn) at a = r2 + r0 + delta from the work axis, its axis crossed by Sigma = beta0 about the line of
-    centres: an edge point at radius rho and angle theta from that line is at (a - rho cos theta, rho sin theta cos
-    Sigma, rho sin theta sin Sigma); generating, omega2 r2 = omega0 r0 cos Sigma (omega2 = omega0 z0 / z2). Its
-    speed relative to the work is omega0 n0 x (p - C) - omega2 z x p. Inside the blank (r < r_a, |z| <= b / 2) each
-    edge element dl sweeps |v| dl; the chip V = A s over the swept area is h; Kienzle's force k_c h dl along v with
-    k_c = 2100 h^-0.26 x 1.09 (the rake correction at 0 deg: +1.5 % per degree below +6 deg) gives the spindles'
-    torques F . v_tool / omega0 and -(p x F)_z; their mean over a cutter pitch is z0 / 2 pi times the integral over
-    the engagement, the peak the largest sum of the engagements a pitch apart."""
+    psi(r) = pi / (2 z) + 2 x tan(alpha) / z + inv(alpha) - inv(alpha_r), held at its base-circle value below r_b;
+    the steady chip A s. The engagement: the cutter (helical, z0, beta0: the transverse involute of its end section,
+    the tip at r0 + 1.25 mn) at a = r2 + r0 + delta from the work axis, its axis crossed by Sigma = beta0 about the
+    line of centres: an edge point at radius rho and angle theta from that line is at (a - rho cos theta, rho sin
+    theta cos Sigma, rho sin theta sin Sigma); generating, omega2 r2 = omega0 r0 cos Sigma (omega2 = omega0 z0 / z2).
+    Its speed relative to the work is omega0 n0 x (p - C) - omega2 z x p. The chip of each edge element (width
+    dl cos(lambda_s) normal to its velocity, inside the blank r < r_a, |z| <= b / 2): the carriage feeds the cutter
+    down the work axis by s per work turn (the job's setting sheet: v_s < 0), and a spur gear's work turns once in
+    z2 cutter pitches, so the same element of the tooth before in this space stood s higher: the layer between them
+    along the cut surface's normal n (towards the tooth's body) is s n_z, unless the blank's tip cylinder or a face
+    is nearer along n (the first pass: no surface of a pass before). Each element takes the oblique model's three
+    components (cutting.oblique, 10 um edge) at that chip, its working normal rake (the end-plane rake face against
+    the velocity's part normal to the edge) and inclination, the thrust away from the tooth's middle line; the
+    spindles' torques F . v_tool / omega0 and -(p x F)_z; their mean over a cutter pitch is z0 / 2 pi times the
+    integral over the engagement, the peak the largest sum of the engagements a pitch apart."""
     g, c = job.gear, job.cutter
     z2, z0, mn, alpha = g.z, c.z, g.mn, g.alpha_n
     full = 2.25 * mn
@@ -193,14 +198,13 @@ def _crossed_axes_load(job, depth_before: float, depth_after: float) -> dict[str
         ra = z2 * mn / 2 + mn
         return quad(width, lo, ra, points=[rb2] if lo < rb2 else None, limit=200)[0] if lo < ra else 0.0
 
-    area = space(full - depth_after) - space(full - depth_before)
-    volume = area * job.skiving.axial_feed
+    area = space(full - depth) - space(full)
 
     sigma, beta0 = c.helix_angle, c.helix_angle  # spur gear: Sigma = beta2 + beta0 = beta0
     alpha_t = math.atan(math.tan(alpha) / math.cos(beta0))
     r0 = z0 * mn / (2 * math.cos(beta0))
     rb0, tip = r0 * math.cos(alpha_t), r0 + 1.25 * mn
-    a, ra, half_face = z2 * mn / 2 + r0 + full - depth_after, z2 * mn / 2 + mn, g.face_width / 2
+    a, ra, half_face = z2 * mn / 2 + r0 + full - depth, z2 * mn / 2 + mn, g.face_width / 2
     rho = np.linspace(rb0, tip, 600)
     psi = math.pi / (2 * z0) + inv(alpha_t) - np.array([inv(math.acos(rb0 / r)) for r in rho])
     land = np.linspace(psi[-1], -psi[-1], 80)
@@ -211,7 +215,9 @@ def _crossed_axes_load(job, depth_before: float, depth_after: float) -> dict[str
     n0, centre, up = np.array([0.0, math.sin(sigma), -math.cos(sigma)]), np.array([a, 0.0, 0.0]), np.array([0, 0, 1.0])
 
     phis = np.linspace(-0.8, 0.8, 2001)  # 0.8 mrad apart (the estimate takes 121 over its window)
-    swept, parts = 0.0, []
+    feed = job.skiving.axial_feed
+    chip_area = chip_width = volume_rate = 0.0
+    parts = []
     for phi in phis:
         th = phi + edge_t
         sin_th = edge_r * np.sin(th)
@@ -226,7 +232,6 @@ def _crossed_axes_load(job, depth_before: float, depth_after: float) -> dict[str
         u = v / speed[:, None]
         along = np.sum(t * u, axis=1)
         width = dl * np.sqrt(1 - along**2) * inside
-        swept += float((width * speed).sum())
         # the cut surface's normal towards the tooth's body (its middle line, at the tooth's mid height)
         perp = t - along[:, None] * u
         perp /= np.maximum(np.linalg.norm(perp, axis=1, keepdims=True), 1e-12)
@@ -234,20 +239,28 @@ def _crossed_axes_load(job, depth_before: float, depth_after: float) -> dict[str
         middle = np.array([a - 0.5 * (rb0 + tip) * math.cos(phi), 0.0, 0.0])
         middle[1:] = 0.5 * (rb0 + tip) * math.sin(phi) * np.array([math.cos(sigma), math.sin(sigma)])
         normal *= np.sign(np.sum(normal * (middle - mid), axis=1))[:, None]
+        # the chip: the layer s n_z to the tooth before, or the blank's tip cylinder or face along n if nearer
+        nn, mn_, cc = (normal[:, :2] ** 2).sum(1), (mid[:, :2] * normal[:, :2]).sum(1), (mid[:, :2] ** 2).sum(1) - ra**2
+        to_tip = (-mn_ + np.sqrt(np.maximum(mn_**2 - nn * cc, 0.0))) / np.maximum(nn, 1e-300)
+        with np.errstate(divide="ignore"):
+            to_face = np.where(normal[:, 2] > 0, half_face - mid[:, 2], -half_face - mid[:, 2]) / normal[:, 2]
+        h = np.where(width > 0, np.minimum(np.minimum(feed * normal[:, 2], to_tip), to_face), 0.0)
+        on = (width > 0) & (h > 0)
+        chip_area += float((width * h)[on].sum())
+        chip_width += float(width[on].sum())
+        volume_rate += float((width * h * speed)[on].sum())
         # the end-plane rake face's normal towards the chip (the way the edge cuts) and the working normal rake
         g = n0 * np.sign(np.sum(u @ n0))
         e1 = u - along[:, None] * t
         e1 /= np.maximum(np.linalg.norm(e1, axis=1, keepdims=True), 1e-12)
         rake = np.arctan2(normal @ g, e1 @ g)
-        parts.append((mid, width, u, normal, perp, rake, np.arcsin(along), v_tool))
+        parts.append((mid, width, u, normal, perp, rake, np.arcsin(along), v_tool, h))
     dphi = phis[1] - phis[0]
-    swept *= dphi / omega0
-    h = volume / swept
-    model = oblique_forces("16MnCr5", 0.010)
+    model = oblique_forces(job.process.material, 0.010)
     t1, t2, engaged = np.zeros(len(phis)), np.zeros(len(phis)), np.zeros(len(phis), bool)
     work = 0.0
-    for i, (mid, width, u, normal, perp, rake, lam, v_tool) in enumerate(parts):
-        fc, ft, fp = model.element(np.where(width > 0, h, 0.0), width, rake, lam)
+    for i, (mid, width, u, normal, perp, rake, lam, v_tool, h) in enumerate(parts):
+        fc, ft, fp = model.element(h, width, rake, lam)
         force = fc[:, None] * u - ft[:, None] * normal + fp[:, None] * perp  # on the workpiece [N]
         t1[i] = float((force * v_tool).sum()) / omega0 * 1e-3
         t2[i] = -float(np.cross(mid, force)[:, 2].sum()) * 1e-3
@@ -259,8 +272,9 @@ def _crossed_axes_load(job, depth_before: float, depth_after: float) -> dict[str
     overlap = sum(np.interp(grid + j * pitch, phis, t1, left=0.0, right=0.0) for j in range(-5, 6))
     return {
         "area": area,
-        "volume": volume,
-        "h": h,
+        "steady_volume": area * feed,
+        "volume": volume_rate * dphi / omega0,
+        "h": chip_area / chip_width,
         "power": work * z0 * job.skiving.tool_speed / 60,
         "teeth_in_cut": (phis[engaged][-1] - phis[engaged][0]) / pitch,
         "tool_torque_mean": z0 / (2 * math.pi) * float(t1.sum()) * dphi,
@@ -278,61 +292,62 @@ def test_the_estimate_by_hand() -> None:
     tan(20 deg) (1 - 1.25^2) = 3.330 mm^2; with the cutter 0.5 mm short of it (y from -0.75) A = 1.75 pi/2 +
     tan(20 deg) (0.5^2 - 1.25^2) = 2.271 mm^2. The involute spaces of the circle come within 0.5 % of that.
 
-    Load: the default job's first pass (1.75 of 2.25 mm) worked from the gear and the crossed axes alone
-    (:func:`_crossed_axes_load`): A = 2.463 mm^2 per space, V = A s = 0.493 mm^3 per engagement; over the area the
-    engaged edge sweeps normal to its velocity (dl cos(lambda_s) |v|: 10.69 mm^2) h = 0.0461 mm. Each element takes
-    the oblique model's three components (cutting.oblique, 10 um edge) at its working normal rake (the end-plane
-    rake face against the velocity's part normal to the edge) and inclination, the thrust away from the tooth's
-    middle line. Every cutter tooth takes one chip per turn; the chips' power is what the two spindles supply:
-    T1 omega0 + T2 omega2 = P (the thrust and passive forces, normal to the relative velocity, do no work on the
-    chip but shift it between the spindles: here 0.2 kW at the tool, 2.2 kW at the work). The estimate takes the
-    edge in elements of <= 0.2 mm and the engagement in 121 steps: within 1 % of the hand's figures (the tool's
-    peak within 2 %, its mean, a small difference, within 1 % of the work's torque), the teeth in the cut within its
-    window's margin of
-    one 0.1 deg step either side."""
+    Load: spur_external's first pass (2.0 of 4.5 mm) worked from the gear and the crossed axes alone
+    (:func:`_crossed_axes_load`): A = 4.383 mm^2 per space, the steady chip A s = 0.877 mm^3; each element's chip the
+    layer s n_z to the tooth before in its space (every element of this engagement: the tip cylinder is farther),
+    0.770 mm^3 over the engagement (0.88 of A s: the chip model's count, against the removal's in the run 0.83-0.99
+    per pass, docs/forces.md), h 59 um on average. Every cutter tooth takes one chip per turn; the chips' power is
+    what the two spindles supply: T1 omega0 + T2 omega2 = P (the thrust and passive forces, normal to the relative
+    velocity, do no work on the chip but shift it between the spindles). The estimate takes the edge in elements of
+    <= 0.2 mm and the engagement in 121 steps: within 1 % of the hand's volume, power and the spindles' mean and
+    peak torques (measured 0.2-0.7 %), the mean chip within 2 % (1.5 %), the teeth in the cut within its window's
+    margin of one 0.1 deg step either side."""
     rack = Gear(400, 1.0, math.radians(20.0), 0.0, 10.0)
     t = math.tan(math.radians(20.0))
     assert space_area(rack, 0.0) == pytest.approx(2.25 * math.pi / 2 + t * (1 - 1.25**2), rel=0.005)
     assert space_area(rack, 0.5) == pytest.approx(1.75 * math.pi / 2 + t * (0.5**2 - 1.25**2), rel=0.005)
     assert space_area(rack, 2.25) == 0.0
 
-    job = load_job(JOBS / "default.toml")
+    job = load_job(JOBS / "spur_external.toml")
     setup = job.skiving
+    assert ideal_passes(setup)[0].v_s < 0  # the carriage feeds down: the tooth before stood s higher
     first = pass_loads(setup, "16MnCr5")[0]
-    hand = _crossed_axes_load(job, 0.0, setup.passes[0])
-    assert hand["area"] == pytest.approx(2.463, abs=5e-4) and hand["h"] == pytest.approx(0.0461, abs=1e-4)
-    assert first.area == pytest.approx(hand["area"], rel=1e-4) and first.chip_volume == pytest.approx(0.2 * first.area)
-    assert first.chip_thickness == pytest.approx(hand["h"], rel=0.01)
+    hand = _crossed_axes_load(job, setup.passes[0])
+    assert hand["area"] == pytest.approx(4.383, abs=5e-4) and hand["h"] == pytest.approx(0.0589, abs=1e-4)
+    assert first.area == pytest.approx(hand["area"], rel=1e-4) and first.steady_volume == pytest.approx(
+        setup.axial_feed * first.area
+    )
+    assert first.chip_volume == pytest.approx(hand["volume"], rel=0.01)
+    assert first.chip_thickness == pytest.approx(hand["h"], rel=0.02)
     omega0 = setup.tool_speed * 2 * math.pi / 60
     omega2 = abs(setup.speed_ratio) * omega0
     power = first.kc * first.chip_volume * 1e-3 * setup.cutter.teeth * setup.tool_speed / 60
     assert first.power == pytest.approx(power, rel=1e-9) and power == pytest.approx(hand["power"], rel=0.01)
     assert first.tool_torque_mean * omega0 + first.work_torque_mean * omega2 == pytest.approx(power, rel=0.005)
-    # the tool's mean torque is now the small difference of the cutting components' (about 7 N m) and the thrust's
-    # moment: within 1 % of the work spindle's torque (measured 0.64 against 0.66 N m, of 8.3 N m at the work)
-    assert first.tool_torque_mean == pytest.approx(hand["tool_torque_mean"], abs=0.01 * hand["work_torque_mean"])
-    assert first.work_torque_mean == pytest.approx(hand["work_torque_mean"], rel=0.05)
-    # the estimate's window: its search's last angle inside plus one step (0.1 deg) either side; here 0.0002 rad steps
-    steps = np.array([2 * math.pi / 3600, 1.6 / 8000]) * setup.cutter.teeth / (2 * math.pi)  # in cutter pitches
+    for key in ("tool_torque_mean", "work_torque_mean", "tool_torque_peak", "work_torque_peak"):
+        assert getattr(first, key) == pytest.approx(hand[key], rel=0.01), key
+    # the estimate's window: its search's last angle inside plus one step (0.1 deg) either side; here 0.0008 rad steps
+    steps = np.array([2 * math.pi / 3600, 1.6 / 2000]) * setup.cutter.teeth / (2 * math.pi)  # in cutter pitches
     assert -2 * steps[1] <= first.teeth_in_cut - hand["teeth_in_cut"] <= 2 * steps.sum()
-    assert first.tool_torque_peak == pytest.approx(hand["tool_torque_peak"], rel=0.02)
 
 
 @pytest.mark.slow
 def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
-    """The small job (z2 18, mn 1, b 4, one full-depth pass) co-simulated on the small machine, forces on, one
-    process: its peak cutting force, tool motor torque and torque about the work axis stay within the check's margin
-    of the estimate's: the check refuses a job whose estimate x MARGIN exceeds a motor's peak, so the machine's real
-    peak must not exceed that (measured 0.95x, 0.77x, 0.94x: 1440 vs 1510 N, 8.1 vs 10.5 N m at M1, 2.7 vs 2.9 N m;
-    the 4 mm face is shorter than the engagement zone, so the chips stay below the estimate's steady state, by an
-    amount nothing here bounds)."""
+    """The small job (z2 18, mn 1, b 4, one full-depth pass) co-simulated on the small machine, forces on: its peak
+    cutting force, tool motor torque and torque about the work axis against the estimate's, which is the
+    co-simulation's chip of the moment on the ideal machine at mid face: each within 15 % of it (measured 0.995x,
+    0.91x, 1.08x: 839 against 843 N, 2.61 against 2.87 N m at M1, 4.57 against 4.25 N m; the run's peaks carry its
+    servo ripple and the teeth's entry and exit) and below the check's margin: the check refuses a job whose estimate
+    x MARGIN exceeds a motor's peak, so the machine's real peak must not exceed that. (The estimate before the chip of
+    the moment, one mean chip spread over the engaged edge, gave 3047 N and 13.4 N m here: 3.6x over; on
+    helical_internal 2.7x under the run's work torque.)"""
     from virtual_machine.processes.skiving.cosim import cosimulate
     from virtual_machine.runtime.machine_run import SEGMENTS
 
     job = job_from_text(tmp_path, small_job(face_width=4.0, sweep_error=0.02))
     (est,) = pass_loads(job.skiving, job.process.material)
     m1 = next(m for m in motor_loads(job, machine_params(job), [est]) if m.motor == "M1")
-    sim = cosimulate(job, workers=1)
+    sim = cosimulate(job, removal="none")  # the loads and the motors' torques: no chip volume is read
     rows, rec = sim.load_rows, sim.record
     feed = rec.segment == SEGMENTS.index("feed")
     measured = {
@@ -342,17 +357,18 @@ def test_the_estimate_against_the_co_simulation(tmp_path) -> None:
     }
     estimated = {"force": est.force_peak, "M1": m1.torque, "work": est.work_torque_peak}
     ratios = {k: measured[k] / estimated[k] for k in measured}
-    assert all(0 < r <= MARGIN for r in ratios.values()), (ratios, measured, estimated)
+    assert all(0.85 <= r <= min(1.15, MARGIN) for r in ratios.values()), (ratios, measured, estimated)
 
 
 def test_a_job_too_heavy_for_its_machine_is_refused_before_the_run(tmp_path) -> None:
-    """spur_external's one-pass roughing (4.3 mm, then 0.2) on the small machine: the estimate asks 59.8 N m of the
-    60 N m work motor M2 in the first pass, x 1.25 = 74.7 N m: refused before any physics runs, naming M2, both torques
-    and what holds it (the medium machine's 150 N m, or work_motor_torque >= 75). The cut's power falls mostly to the
-    work spindle: the thrust normal to the flanks differs between the flanks (the leading one cuts at strongly
-    negative working rake) and its moment drives the tool and brakes the work (docs/forces.md). The shipped jobs pass
-    on their own sizes (spur_external: M2 27.0 of 150 N m on the medium machine; helical_internal on the large), and
-    spur_external as shipped passes on the small machine too (M2 25.9 x 1.25 = 32.4 of 60 N m)."""
+    """spur_external in 42CrMo4 roughed in one pass (4.3 mm, then 0.2) at 0.7 mm feed on the small machine: the
+    estimate asks 33.1 N m of the 40 N m tool motor M1 in the first pass, x 1.25 = 41.4 N m: refused before any
+    physics runs, naming M1, both torques and what holds it (the medium machine's tool motor, or tool_motor_torque
+    >= 42). The chip of the moment gives most of the cut's power to the tool spindle here (the work motor M2 holds:
+    56.5 of 60 N m with the margin). The shipped jobs pass on their own sizes (spur_external on the medium machine,
+    helical_internal on the large), and spur_external as shipped passes on the small machine too (M1 8.6 x 1.25 =
+    10.7 of 40 N m). M1's torque is the hand's (:func:`_crossed_axes_load`: the pass's peak tool torque, the
+    spindle's friction, through the tool drive) within 2 % (measured 0.7 %)."""
     from click.testing import CliRunner
 
     from virtual_machine.cli import main
@@ -363,22 +379,14 @@ def test_a_job_too_heavy_for_its_machine_is_refused_before_the_run(tmp_path) -> 
             job = dataclasses.replace(job, machine=dataclasses.replace(job.machine, size=size))
         motors = check_machine_holds(job, machine_params(job))
         assert all(m.torque * MARGIN <= m.limit for m in motors), (name, size, motors)
-    # M2's load worked from the crossed axes pass by pass (_crossed_axes_load): the second pass (1.5 mm) is the
-    # heaviest; with the spindle's friction through its drive
-    params = machine_params(job)
-    small = {m.motor: m for m in motor_loads(job, params)}
-    depths = [0.0, *itertools.accumulate(job.skiving.passes)]
-    peaks = [_crossed_axes_load(job, d0, d1)["work_torque_peak"] for d0, d1 in itertools.pairwise(depths)]
-    assert int(np.argmax(peaks)) == small["M2"].pass_index
-    hand = (max(peaks) + params.work_friction) * abs(params.work_drive.ratio)
-    assert small["M2"].torque == pytest.approx(hand, rel=0.02)
     text = (JOBS / "spur_external.toml").read_text()
     # the small machine's class ends at 80 mm and mn 1.5 (machine_reach.py refuses more): told it takes this gear
     takes = "\n[machine.model]\nworkpiece_diameter_limit = 0.09\nmodule_limit = 0.002\n"
     heavy = (
-        text.replace("passes = [2.0, 1.5, 0.8, 0.2]", "passes = [4.3, 0.2]").replace(
-            'structure = "mechatronic"', 'structure = "mechatronic"\nsize = "small"'
-        )
+        text.replace("passes = [2.0, 1.5, 0.8, 0.2]", "passes = [4.3, 0.2]")
+        .replace("axial_feed = 0.2 ", "axial_feed = 0.7 ")
+        .replace('material = "16MnCr5"', 'material = "42CrMo4"')
+        .replace('structure = "mechatronic"', 'structure = "mechatronic"\nsize = "small"')
         + takes
     )
     path = tmp_path / "heavy.toml"
@@ -388,27 +396,25 @@ def test_a_job_too_heavy_for_its_machine_is_refused_before_the_run(tmp_path) -> 
         MachineRun(job)
     (problem,) = err.value.problems
     assert problem.key == "machine.size" and problem.value == "small"
-    # the refusal names the estimate's M2 torque, which the crossed axes give for the 4.3 mm pass, the motor's
-    # 60 N m, the medium machine's 150 N m and the torque that holds it with the margin (75 N m)
     params = machine_params(job)
-    m2 = next(m for m in motor_loads(job, params) if m.motor == "M2")
-    hand = (_crossed_axes_load(job, 0.0, 4.3)["work_torque_peak"] + params.work_friction) * abs(params.work_drive.ratio)
-    assert m2.torque == pytest.approx(hand, rel=0.02) and m2.torque > params.work_motor_torque / MARGIN
-    for words in ("work spindle motor M2", "pass 1 (4.3 mm)", f"{m2.torque:.1f} N m at M2", "against its 60 N m"):
+    m1 = next(m for m in motor_loads(job, params) if m.motor == "M1")
+    hand = (_crossed_axes_load(job, 4.3)["tool_torque_peak"] + params.tool_friction) * abs(params.tool_drive.ratio)
+    assert m1.torque == pytest.approx(hand, rel=0.02) and m1.torque > params.tool_motor_torque / MARGIN
+    for words in ("tool spindle motor M1", "pass 1 (4.3 mm)", f"{m1.torque:.1f} N m at M1", "against its 40 N m"):
         assert words in problem.reason, problem.reason
     medium = machine_params(
         dataclasses.replace(job, machine=dataclasses.replace(job.machine, size="medium"))
-    ).work_motor_torque
-    assert f'machine.size = "medium" (work_motor_torque {medium:.0f} N m)' in problem.hint
-    assert f"machine.model.work_motor_torque >= {math.ceil(m2.torque * MARGIN)}" in problem.hint
+    ).tool_motor_torque
+    assert f'machine.size = "medium" (tool_motor_torque {medium:.0f} N m)' in problem.hint
+    assert f"machine.model.tool_motor_torque >= {math.ceil(m1.torque * MARGIN)}" in problem.hint
     # overrides count: the stronger motor holds it on the small machine
-    stronger = heavy + f"work_motor_torque = {math.ceil(m2.torque * MARGIN)}.0\n"
+    stronger = heavy + f"tool_motor_torque = {math.ceil(m1.torque * MARGIN)}.0\n"
     path.write_text(stronger)
     assert [m.motor for m in check_machine_holds(load_job(path), machine_params(load_job(path)))] == ["M1", "M2", "M3"]
     # skive run refuses it as an input error (exit 2) before the machine runs
     path.write_text(heavy)
     res = CliRunner().invoke(main, ["run", str(path), "--out", str(tmp_path / "out"), "--workers", "1"])
-    assert res.exit_code == 2 and "motor M2" in res.output and "machine.size" in res.output, res.output
+    assert res.exit_code == 2 and "motor M1" in res.output and "machine.size" in res.output, res.output
 
 
 @pytest.mark.parametrize(

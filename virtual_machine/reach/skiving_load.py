@@ -2,12 +2,11 @@
 that the job's machine holds it (its motors' peak torques against the estimate x a margin).
 
 A job whose motors cannot hold its cut is refused as an input error before the run, naming the motor and what would
-hold it. The estimate uses the force law the co-simulation applies (cutting/forces.py: the oblique model's cutting,
-thrust and passive components per edge element at its working rake and inclination, the chip thickness from the
-chip's volume over the swept area): :func:`pass_loads` per pass (its
-steps there), :func:`motor_loads` at the motors of the job's structure, :func:`check_machine_holds` the check. How the
-estimate compares with the co-simulated peaks, and the margin that covers it: docs/machines.md ("The cut against the
-motors").
+hold it. The estimate is the co-simulation's force law at the ideal machine: the chip of the moment of every edge
+element (cutting.skiving.ideal_moment) and the oblique model's cutting, thrust and passive components at its chip,
+working rake and inclination: :func:`pass_loads` per pass (its steps there), :func:`motor_loads` at the motors of
+the job's structure, :func:`check_machine_holds` the check. How the estimate compares with the co-simulated peaks,
+and the margin that covers it: docs/machines.md ("The cut against the motors").
 """
 
 from __future__ import annotations
@@ -19,14 +18,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from cutting.errors import MachineLimitError, Problem
-from cutting.forces import EdgeFaces, assemble, oblique_sums
 from cutting.gear import Gear
 from cutting.materials import material
 from cutting.oblique import ObliqueForces, load_cutting_model
-from cutting.skiving.edge import make_edge
+from cutting.skiving.chip_of_the_moment import CHIP, COLUMNS, POWER, VOLUME_RATE, WIDTH
+from cutting.skiving.ideal_moment import IdealMoment, chip_constants
 from cutting.skiving.kinematics import SkivingSetup
-from cutting.skiving.sweep import outline_points, place, simplify_outline, split_sides
-from cutting.skiving.working_angles import rake_normal
+from cutting.skiving.sweep import place
 from machine_models.parameters import SkivingMachineParams, override
 from machine_models.sizes import SIZE_NAMES, size_params
 from machine_models.structure_drives import MOTOR_TORQUE_KEYS
@@ -52,8 +50,9 @@ class PassLoad:
     index: int
     depth: float  # radial increment of the pass [mm]
     area: float  # removed transverse cross-section of one space, A [mm^2]
-    chip_volume: float  # one engagement's chip, V = A s [mm^3]
-    chip_thickness: float  # mean uncut chip thickness h [mm]
+    steady_volume: float  # one engagement's chip by the geometry in the steady state, A s [mm^3]
+    chip_volume: float  # one engagement's chip by the chip of the moment at mid face, V [mm^3]
+    chip_thickness: float  # its mean uncut chip thickness h (the chips' area over the engaged width) [mm]
     kc: float  # the chip's specific energy: one engagement's work over its volume [N/mm^2]
     teeth_in_cut: float  # engagement window over the cutter pitch
     tool_torque_mean: float
@@ -105,58 +104,57 @@ def pass_loads(
 
     Per pass k:
 
-    1. Removed cross-section. A tooth space cut with the cutter standing delta short of its finishing position is the
-       space of the gear with profile shift x2 + delta/mn; its transverse area inside the blank is
-       S(delta) = integral of r (2 pi/z2 - 2 psi(r)) dr from its root (r_f + delta; ring gear: r_f - delta) to the tip
-       circle (psi: half the tooth's angular thickness, involute, held at its base-circle value below r_b;
-       :func:`space_area`). Pass k removes A_k = S(full - d_k) - S(full - d_(k-1)) per space (d_k: cumulative depth,
-       full: the full depth).
-    2. Chip of one engagement. Each space is passed once per work revolution while the carriage moves the axial feed
-       s, so in the steady state (the engagement zone inside the face) an engagement takes V_k = A_k s.
-    3. The engagement. One cutter tooth turns through the engagement window (the cutter angles at which its edge is
-       within the tip cylinder) at the pass's centre distance, the carriage at mid face, by the ideal kinematics. The
-       edge (the involute outline in elements of <= 0.2 mm, as the co-simulation's) inside the blank's envelope is
-       the chip width b(t); each element dl moves at v relative to the work. Mean chip thickness
-       h = V_k / integral(sum dl cos(lambda_s) |v| dt), exactly as cutting/forces.py does.
-    4. Loads. Each element pushes the workpiece with the oblique model's three components (cutting along v, thrust
-       normal to the cut surface, passive along the edge; ``edge_radius`` [mm] the cutter's; the cutter takes the
-       opposite): a torque about
-       the work axis T2(phi) and one about the cutter axis T1(phi). Successive cutter teeth engage a cutter pitch
-       apart and overlap (2-6 teeth in the cut on the shipped jobs): the torques of all teeth are summed over one
-       pitch and the peak is taken. The mean power is the chips' energy rate, kc V_k z0 n0 (tested).
+    1. Removed cross-section (the steady chip's geometry, for the report beside the model's). A tooth space cut with
+       the cutter standing delta short of its finishing position is the space of the gear with profile shift
+       x2 + delta/mn; its transverse area inside the blank is S(delta) = integral of r (2 pi/z2 - 2 psi(r)) dr from
+       its root (r_f + delta; ring gear: r_f - delta) to the tip circle (psi: half the tooth's angular thickness,
+       involute, held at its base-circle value below r_b; :func:`space_area`). Pass k removes
+       A_k = S(full - d_k) - S(full - d_(k-1)) per space (d_k: cumulative depth, full: the full depth); each space
+       is passed once per work revolution while the carriage moves the axial feed s, so in the steady state an
+       engagement takes A_k s.
+    2. The engagement, by the chip of the moment (:class:`cutting.skiving.ideal_moment.IdealMoment`): one cutter
+       tooth turns through the engagement window (the cutter angles at which its edge is within the tip cylinder)
+       at the pass's centre distance, the carriage at mid face, by the ideal kinematics, in ``samples`` steps; at
+       each, every element of the edge (the involute outline in elements of <= 0.2 mm, as the co-simulation's) takes
+       the chip between it and the surface the previous tooth in its space left one work revolution earlier, the
+       previous pass's surface or the blank's, and the oblique model's three components at that chip, its working
+       rake and inclination (cutting, thrust normal to the cut surface, passive along the edge; ``edge_radius``
+       [mm] the cutter's): the co-simulation's force law at the ideal machine. The chip is not spread evenly over
+       the engaged edge: the elements near the tip and on the leading flank take most of it, and that decides the
+       spindles' torques (docs/machines.md, "The cut against the motors").
+    3. Loads. Each element pushes the workpiece (the cutter takes the opposite): a torque about the work axis
+       T2(phi) and one about the cutter axis T1(phi). Successive cutter teeth engage a cutter pitch apart and
+       overlap (2-6 teeth in the cut on the shipped jobs): the torques of all teeth are summed over one pitch and
+       the peak is taken. The chip's volume V_k is the model's over the engagement, its mean thickness the chips'
+       area over the engaged width, kc its cutting work over V_k, the mean power kc V_k z0 n0.
     """
     model = ObliqueForces(material(material_key), load_cutting_model(), edge_radius)
+    chip = chip_constants(model)
     g = setup.gear
-    omega0 = setup.tool_speed * 2 * math.pi / 60
-    omega2 = setup.speed_ratio * omega0
     pitch = 2 * math.pi / setup.cutter.teeth
     depths = (0.0, *setup.pass_depths)
-    out = []
+    out, previous = [], None
     for k, a in enumerate(setup.pass_centre_distances):
         area = space_area(g, setup.full_depth - depths[k + 1]) - space_area(g, setup.full_depth - depths[k])
-        volume = area * setup.axial_feed
-        e = ideal_engagement(setup, model, a, samples)
-        if e is None or volume <= 0 or e.swept <= 0:
+        e = _moment_engagement(IdealMoment(setup, a, previous), chip, samples)
+        previous = a
+        if e is None or area <= 0 or e.volume <= 0:
             continue
-        h = volume / e.swept
-        shear = float(model.shear_stress(h)) * max(h - model.min_chip, 0.0)
-        force, point, moment, _, energy = assemble(
-            e.width, e.mid, e.dirs, e.factors, e.speed, e.t, shear, *model.edge_coefficients
-        )  # on the workpiece: the resultant at its point and the moment about it [N, mm, N m]; the work [J]
-        kc = energy * 1e3 / volume
-        work = np.cross(point, force)[:, 2] * 1e-3 + moment[:, 2]  # the load's torque about +z [N m]
+        kc = e.energy * 1e3 / e.volume
+        work = np.cross(e.point, e.force)[:, 2] * 1e-3 + e.moment[:, 2]  # the load's torque about +z [N m]
         axis = e.rot[:, :, 2]  # the cutter axis
-        tool = -(np.sum(np.cross(point - e.centre, force) * axis, axis=1) * 1e-3 + np.sum(moment * axis, axis=1))
+        tool = -(np.sum(np.cross(e.point - e.centre, e.force) * axis, axis=1) * 1e-3 + np.sum(e.moment * axis, axis=1))
         total = _overlapped(e.phi, pitch, e.half)
-        t1, t2 = -total(tool), -total(work) * math.copysign(1.0, omega2)  # what the drives supply
-        f = np.stack([total(force[:, i]) for i in range(3)], axis=-1)
+        t1, t2 = -total(tool), -total(work) * math.copysign(1.0, setup.speed_ratio)  # what the drives supply
+        f = np.stack([total(e.force[:, i]) for i in range(3)], axis=-1)
         out.append(
             PassLoad(
                 k,
                 setup.passes[k],
                 area,
-                volume,
-                h,
+                area * setup.axial_feed,
+                e.volume,
+                e.thickness,
                 kc,
                 2 * e.half / pitch,
                 float(t1.mean()),
@@ -165,61 +163,60 @@ def pass_loads(
                 float(np.abs(t2).max()),
                 float(np.linalg.norm(f, axis=1).max()),
                 float(np.abs(f[:, 2]).max()),
-                float(kc * volume * setup.cutter.teeth * omega0 / (2 * math.pi) * 1e-3),
+                float(kc * e.volume * setup.cutter.teeth * setup.tool_speed / 60 * 1e-3),
             )
         )
     return out
 
 
 @dataclass(frozen=True)
-class IdealEngagement:
-    """One cutter tooth's engagement at a centre distance by the ideal kinematics (the carriage at mid face), in the
-    turning work frame: the cutter angles ``phi`` (n,) over the window +-``half`` [rad], their times ``t`` [s], the
-    cutter's pose (``rot`` (n, 3, 3), ``centre`` (n, 3) [mm]) and the engaged edge's elements as
-    :func:`cutting.forces.oblique_sums` gives them (``swept`` [mm^2], ``width``, ``mid``, ``dirs``, ``factors``,
-    ``speed``): what the pre-run estimate and the stability lobes both read."""
+class MomentEngagement:
+    """One tooth's engagement by the chip of the moment on the ideal machine: the cutter angles ``phi`` (n,) over the
+    window +-``half`` [rad], the cutter's pose in the work frame (``rot`` (n, 3, 3), ``centre`` (n, 3) [mm]), the
+    load on the workpiece per angle (``force`` [N], its ``point`` [mm], the ``moment`` about it [N m], (n, 3) each,
+    in the blank frame), and over the engagement the chip's ``volume`` [mm^3], its mean ``thickness`` [mm] and the
+    cutting components' ``energy`` [J]."""
 
     phi: np.ndarray
     half: float
-    t: np.ndarray
     rot: np.ndarray
     centre: np.ndarray
-    swept: float
-    width: np.ndarray
-    mid: np.ndarray
-    dirs: np.ndarray
-    factors: np.ndarray
-    speed: np.ndarray
+    force: np.ndarray
+    point: np.ndarray
+    moment: np.ndarray
+    volume: float
+    thickness: float
+    energy: float
 
 
-def ideal_engagement(
-    setup: SkivingSetup, model: ObliqueForces, centre_distance: float, samples: int = 121
-) -> IdealEngagement | None:
-    """The engagement at ``centre_distance`` [mm] (None when the edge stays clear of the blank): the involute edge
-    (within micrometres of the conjugate one: the same engaged length) in elements of <= 0.2 mm as the
-    co-simulation's, inside the blank's envelope (tip cylinder and faces), each element at its working angles."""
-    g = setup.gear
-    edge = make_edge(setup, "involute")
-    pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
-    # the rake face's normal in the cutter frame the outline is placed in here (the rake frame's rotation)
-    faces = EdgeFaces.of_outline(pts, setup.rake_frame[:, :3] @ rake_normal(setup))
-    half = engagement_half_angle_at(setup, pts, centre_distance)
+def _moment_engagement(moment: IdealMoment, chip: np.ndarray, samples: int) -> MomentEngagement | None:
+    """The engagement of ``moment`` in ``samples`` steps over its window (None when the edge stays clear of the
+    blank)."""
+    setup, a = moment.setup, moment.centre_distance
+    half = engagement_half_angle_at(setup, moment.points, a)
     if half <= 0:
         return None
-    omega0 = setup.tool_speed * 2 * math.pi / 60
     phi = np.linspace(-half, half, samples)
-    step = 1e-4
-    w, before, after = (place(pts, *setup.cutter_pose(phi + d, 0.0, centre_distance)) for d in (0.0, -step, step))
-    r = np.hypot(w[..., 0], w[..., 1])
-    radial = r > g.tip_radius if g.internal else r < g.tip_radius
-    inside = (radial & (np.abs(w[..., 2]) <= g.face_width / 2)).astype(float)
-    rot, centre = setup.cutter_pose(phi, 0.0, centre_distance)
-    c = model.model
-    swept, width, mid, dirs, factors, speed = oblique_sums(
-        np.concatenate([w, before, after]), inside, np.ascontiguousarray(rot), phi / omega0, step / omega0,
-        faces.rake, faces.body, c.friction_angle, c.rake_floor,
-    )  # fmt: skip
-    return IdealEngagement(phi, half, phi / omega0, rot, centre, swept, width, mid, dirs, factors, speed)
+    rows = np.zeros((samples, COLUMNS))
+    out = np.zeros((1, COLUMNS))
+    for i, b1 in enumerate(phi):
+        if moment.load(b1, chip, out):
+            rows[i] = out[0]
+    t = phi / moment.omega0
+    width = rows[:, WIDTH]
+    rot, centre = setup.cutter_pose(phi, 0.0, a)
+    return MomentEngagement(
+        phi,
+        half,
+        rot,
+        centre,
+        rows[:, 0:3],
+        rows[:, 3:6],
+        rows[:, 6:9],
+        float(np.trapezoid(rows[:, VOLUME_RATE], t)),
+        float((width * rows[:, CHIP]).sum() / width.sum()) if width.sum() > 0 else 0.0,
+        float(np.trapezoid(rows[:, POWER], t)),
+    )
 
 
 def engagement_half_angle_at(setup: SkivingSetup, pts: np.ndarray, centre_distance: float) -> float:

@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from cutting.forces import EdgeFaces, EngagementLoad
-from cutting.oblique import H_FLOOR, ObliqueForces
+from cutting.oblique import ObliqueForces
 from cutting.skiving.chip_of_the_moment import (
     COLUMNS,
     POWER,
@@ -26,6 +26,7 @@ from cutting.skiving.chip_of_the_moment import (
     machine_tick,
     opened_space,
 )
+from cutting.skiving.ideal_moment import chip_constants
 from cutting.skiving.trajectory import PassMotion
 from machine_models.skiving_machine import MM
 from virtual_machine.runtime.physics import AXES
@@ -52,12 +53,7 @@ class ChipLoad:
         self.blank = np.ascontiguousarray(setup.blank_frame, dtype=float)
         self.geometry = np.array([setup.tilt, setup.cutter_phase, setup.work_phase])
         self.envelope = np.array([g.tip_radius, 1.0 if g.internal else 0.0, g.face_width / 2])
-        ce, te = model.edge_coefficients
-        c, mat = model.model, model.material
-        self.chip = np.array(
-            [mat.kc11, mat.mc, max(model.min_chip, H_FLOOR), model.reference_factor, model.min_chip, ce, te,
-             c.friction_angle, c.rake_floor]
-        )  # fmt: skip
+        self.chip = chip_constants(model)
         self.frames = np.ascontiguousarray(setup.tooth_frames, dtype=float)  # every tooth's rake frame, tooth 0 first
         self._pass: int | None = None  # the stroke in the cut (None between strokes)
         self._stroke: int | None = None  # the pass whose deviation the history holds

@@ -28,16 +28,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cutting.forces import EdgeFaces
 from cutting.materials import material
 from cutting.oblique import ObliqueForces, load_cutting_model
 from cutting.regeneration import lobes
-from cutting.skiving.chip_of_the_moment import element_chips, opened_space
-from cutting.skiving.edge import make_edge
+from cutting.skiving.ideal_moment import IdealMoment
 from cutting.skiving.kinematics import SkivingSetup, rot_x, rot_z
-from cutting.skiving.sweep import outline_points, simplify_outline, split_sides
-from cutting.skiving.trajectory import ideal_passes
-from cutting.skiving.working_angles import rake_normal
 from machine_models.loop import LoopMode, frequency_response
 from machine_models.parameters import SkivingMachineParams
 from virtual_machine.processes.skiving.spindle_torsion import spindle_drives, torsion_response
@@ -142,43 +137,18 @@ def oriented_coefficients(
     delta(t - T)); its force changes by dF/dh = tau_s(h) (1 - mc (h - h_min) / h) b (f_c e_c - f_t n + f_p p), so it
     adds dF/dh n^T. The elements bounded by the previous pass or the blank have no delayed term (no regeneration:
     they stiffen the process and are left out)."""
-    g = setup.gear
-    edge = make_edge(setup, "involute")
-    pts = outline_points(split_sides(simplify_outline(edge.outline, 0.005)[0], 0.2))
-    faces = EdgeFaces.of_outline(pts, rake_normal(setup))
-    half = engagement_half_angle_at(setup, pts, centre_distance)
+    moment = IdealMoment(setup, centre_distance, previous)
+    half = engagement_half_angle_at(setup, moment.points, centre_distance)
     if half <= 0:
         return np.zeros((3, 3)), 0.0
-    pitch = 2 * math.pi / setup.cutter.teeth
-    omega0 = setup.tool_speed * 2 * math.pi / 60
-    rev = 2 * math.pi / abs(setup.speed_ratio)
-    ratio, diff = setup.speed_ratio, setup.differential_rotation_per_mm
-    zeta = ideal_passes(setup)[0].v_s / omega0  # the carriage per cutter radian [mm/rad], signed
-
-    def ideal(b1: float, a: float) -> np.ndarray:
-        z = zeta * b1
-        return np.array([b1, ratio * b1 + diff * z, z, a])
-
-    rates = np.array([omega0, ratio * omega0 + diff * zeta * omega0, zeta * omega0, 0.0])
-    geometry = np.array([setup.tilt, setup.cutter_phase, setup.work_phase])
-    envelope = np.array([g.tip_radius, 1.0 if g.internal else 0.0, g.face_width / 2])
-    if previous is not None:  # the space the passes before opened holds no chip
-        envelope = np.concatenate([envelope, opened_space(g, abs(previous - setup.final_centre_distance))])
-    teeth = np.ascontiguousarray(setup.passage_frames(np.array([0])))
-    before = np.ascontiguousarray(setup.passage_frames(np.array([-round(rev / pitch)])))
-    blank = np.ascontiguousarray(setup.blank_frame)
+    ratio, diff, zeta, omega0 = setup.speed_ratio, setup.differential_rotation_per_mm, moment.zeta, moment.omega0
     c, mat = model.model, model.material
     h_min = model.min_chip
     phi = np.linspace(-half, half, samples)
     per_time = np.zeros((samples, 3, 3))
     area = width_sum = 0.0
     for i, b1 in enumerate(phi):
-        width, _, dirs, factors, _, chips, bound = element_chips(
-            ideal(b1, centre_distance), rates, np.zeros(6), geometry, teeth, blank, pts, faces.rake, faces.body,
-            envelope, before, ideal(b1 - rev, centre_distance), np.zeros(6), True,
-            ideal(b1, previous if previous is not None else 0.0), np.zeros(6), previous is not None,
-            c.friction_angle, c.rake_floor,
-        )  # fmt: skip
+        width, _, dirs, factors, _, chips, bound = moment.chips(b1, c.friction_angle, c.rake_floor)
         b, h = width[0], chips[0]
         on = (b > 0) & (h > 0)
         area += float((b[on] * h[on]).sum())
@@ -196,7 +166,7 @@ def oriented_coefficients(
         force = f[:, 0:1] * d[:, 0] - f[:, 1:2] * d[:, 1] + f[:, 2:3] * d[:, 2]
         per_time[i] = np.einsum("e,ei,ej->ij", slope, force, d[:, 1])
     integral = np.trapezoid(per_time, phi / omega0, axis=0)
-    pitch_time = pitch / omega0
+    pitch_time = moment.pitch / omega0
     return integral / pitch_time * 1e3, (area / width_sum if width_sum > 0 else 0.0)
 
 
