@@ -325,7 +325,16 @@ def format_run(run: dict, out: Path, rrd: Path | None) -> str:
             f"{p['passive_mean_N']:.0f} N (means); the tool off the flanks by {normal.get('mean', 0.0):.2f} um "
             f"(peak {normal.get('peak', 0.0):.1f} um) at the generating point"
         )
-    lines += [f"  warning: {v['warning']}" for v in run.get("vibration", []) if "warning" in v]
+    for v in run.get("vibration", []):
+        if "warning" not in v:
+            continue
+        lines.append(f"  warning: {v['warning']}")
+        marks, expected = v.get("flanks"), v.get("surface_wavelength_mm")
+        if marks and expected:  # the finishing pass: the flanks it left carry the marks
+            lines.append(
+                f"  the flanks show it: their helix traces wave {marks['amplitude_um']:.1f} um at "
+                f"{marks['wavelength_mm']:.2f} mm along the face (this vibration's marks: {expected:.2f} mm)"
+            )
     added = run.get("machine_added") or {}
     if "deviations_um" in added:
         dev = added["deviations_um"]

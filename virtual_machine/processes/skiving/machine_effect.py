@@ -100,12 +100,26 @@ def flank_normals(setup) -> np.ndarray:
     return math.cos(beta_b) * np.array([[side * sa, -ca, 0.0], [side * sa, ca, 0.0]])
 
 
+def surface_wavelength(frequency: float, setup) -> float | None:
+    """The wavelength along the face [mm] of the marks a vibration of ``frequency`` [Hz] leaves on the flanks, or
+    None when it is synchronous with the visits (a constant or a pitch pattern, no wave). A space's flank at height
+    z is finished when a cutter tooth passes it; the same space is passed again z2 cutter pitches later (its
+    interval T = z2 pitches of the cutter's turn; a helical gear's differential included: chip_load's revolution)
+    while the carriage moves the axial feed s, so the flank samples the vibration once per T: the samples' phase
+    advances by 2 pi (f T - round(f T)) per s of face, a wavelength s / |f T - round(f T)| (metrology/waviness.py
+    reads it back from the measured helix traces)."""
+    pitch = 2 * math.pi / setup.cutter.teeth
+    visits = round(2 * math.pi / abs(setup.speed_ratio) / pitch) * pitch / (setup.tool_speed * 2 * math.pi / 60)
+    beat = frequency * visits - round(frequency * visits)
+    return setup.axial_feed / abs(beat) if abs(beat) > 1e-3 else None
+
+
 def pass_deflection(rec: MotionRecord, setup) -> list[dict]:
     """Per pass: the displacement normal to the flanks at the generating point while the cutter is in the blank
     [um] (mean of the two flanks' and their peak; each flank's mean) and the vibration: the half range of the
     flank-normal displacement about its 25 ms moving average on the flank where it is larger, its dominant frequency
-    [Hz] and its growth (the largest later quarter of the cut against the first), with a warning when it grows like
-    chatter."""
+    [Hz], its growth (the largest later quarter of the cut against the first) and the wavelength of the marks it
+    leaves along the face (:func:`surface_wavelength`), with a warning when it grows like chatter."""
     t, index, disp = generating_point_displacement(rec, setup)
     in_cut = rec.cutting[rec.segment == FEED]
     normal = disp @ flank_normals(setup).T  # (n, 2)
@@ -135,6 +149,7 @@ def pass_deflection(rec: MotionRecord, setup) -> list[dict]:
         step = max(quarter // 4, 1)
         last = max(np.ptp(wave[i : i + quarter]) / 2 for i in range(quarter, max(n - quarter, quarter) + 1, step))
         growth = float(last / first) if first > 0 else math.inf
+        frequency = float(freq[1:][np.argmax(spec[1:])]) if n > 2 else 0.0
         row = {
             "pass": k + 1,
             "flank_normal_deflection_um": {
@@ -144,8 +159,10 @@ def pass_deflection(rec: MotionRecord, setup) -> list[dict]:
             },
             "vibration": {
                 "amplitude_um": float(np.ptp(wave) / 2),
-                "frequency_hz": float(freq[1:][np.argmax(spec[1:])]) if n > 2 else 0.0,
+                "frequency_hz": frequency,
                 "growth": growth,
+                # the marks it leaves along the face (if this pass finishes the flank): surface_wavelength
+                "surface_wavelength_mm": surface_wavelength(frequency, setup) if frequency > 0 else None,
             },
         }
         if growth > CHATTER_GROWTH and last > CHATTER_UM:

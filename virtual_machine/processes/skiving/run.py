@@ -34,6 +34,7 @@ from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
 from metrology.measure import MeasureOptions
+from metrology.waviness import helix_waviness
 from virtual_machine.job import Job, load_job
 from virtual_machine.output.cutter_charts import write_cutter_charts
 from virtual_machine.output.formatting import format_sheet
@@ -142,6 +143,7 @@ def run_job(
         measurement["modification_path"] = modification_path
     doc = finite(measurement)
     doc["run"] = run_metadata(job, Path(path), sim, durations, stl)
+    _flank_marks(doc["run"]["vibration"], measurement, len(job.skiving.passes), job.skiving.axial_feed)
     if added is not None:
         doc["run"]["machine_added"] = finite(added)
     write_json(out / "measurement.json", doc)
@@ -149,6 +151,19 @@ def run_job(
     title = f"skive run: {Path(path).name}"
     write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
     return doc
+
+
+def _flank_marks(vibration: list[dict], measurement: dict, passes: int, feed: float) -> None:
+    """The finishing pass's vibration entry gets the waviness of the measured helix traces other than the feed
+    marks (``flanks``: metrology.waviness.helix_waviness; ``feed`` the axial feed [mm]), the marks it left on the
+    flanks beside the wavelength its frequency predicts (``surface_wavelength_mm``)."""
+    traces = measurement.get("_traces")
+    last = [v for v in vibration if v["pass"] == passes]
+    if traces is None or not last:
+        return
+    marks = helix_waviness(traces["z_mm"], traces["helix"], feed)
+    if marks is not None:
+        last[0]["flanks"] = marks
 
 
 def _measure(job: Job, plan: SkivingPlan, sim: CoSimulation, out: Path, path: Path, durations: dict, ideal):
