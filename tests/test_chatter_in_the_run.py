@@ -45,7 +45,7 @@ def test_a_pass_the_lobes_call_unstable_chatters_and_a_stable_one_does_not(tmp_p
     assert frequency == pytest.approx(lobe.chatter_frequency, rel=0.02)
     (calm,) = pass_stability(stable.skiving, machine_params(stable), "16MnCr5", 0.010)
     assert calm.margin == pytest.approx(1.11, abs=0.03)
-    (row,) = pass_deflection(cosimulate(stable).record, stable.skiving)
+    (row,) = pass_deflection(cosimulate(stable, removal="none").record, stable.skiving)  # the motion is the dexel run's
     assert row["vibration"]["growth"] < 1.2 and "warning" not in row
 
 
@@ -66,7 +66,7 @@ def test_the_lobes_and_the_run_agree_at_other_speeds(tmp_path, rpm: float, chatt
         frequency = float(str(err.value).split(" Hz")[0].rsplit(" ", 1)[1])
         assert frequency == pytest.approx(lobe.chatter_frequency, rel=0.02)
         return
-    (row,) = pass_deflection(cosimulate(job).record, job.skiving)
+    (row,) = pass_deflection(cosimulate(job, removal="none").record, job.skiving)  # the motion is the dexel run's
     assert "warning" not in row
     # no vibration near the mode grows: what rings is the teeth's forced vibration, far above it
     assert row["vibration"]["frequency_hz"] > 2 * lobe.chatter_frequency or row["vibration"]["growth"] < 1.2
