@@ -30,7 +30,9 @@ from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.tooling import Clamping, CutterErrors
 from cutting.skiving.trajectory import ideal_passes
-from metrology.measure import MeasureOptions, measure_gear
+from metrology.datum import establish_datum
+from metrology.measure import MeasureOptions, helix_range, measure_gear
+from metrology.traces import helix_trace
 
 DEG = math.pi / 180
 UM = 1e3
@@ -43,6 +45,9 @@ def setup_at(feed: float) -> SkivingSetup:
 
 #: fine feed marks (F_r 0.3 um) for the once-per-turn signatures; the default feed for the cutter's bands
 FINE, COARSE = setup_at(0.05), setup_at(0.2)
+#: a test that reads the mid section's profile, the helix, the pitch and the runout alone has the profile measured in
+#: that section alone (the same figures, a quarter less probing); F_alpha and f_falpha are the worst of three sections
+MID = MeasureOptions(sections=(0.5,))
 
 
 @functools.cache
@@ -51,8 +56,17 @@ def workpiece(st: SkivingSetup) -> SweptVolumes:
 
 
 @functools.cache
-def measured(st: SkivingSetup) -> dict:
-    return measure_gear(workpiece(st), st.gear, MeasureOptions())
+def measured(st: SkivingSetup, opt: MeasureOptions | None = None) -> dict:
+    return measure_gear(workpiece(st), st.gear, opt or MeasureOptions())
+
+
+@functools.cache
+def helix_traces(st: SkivingSetup) -> dict[str, np.ndarray]:
+    """Every tooth's helix trace per flank [mm] (teeth, points): the measurement's own (measure_gear's ``_traces``,
+    the same datum, range and points) without the rest of the measurement, which the band tests do not read."""
+    g, wp = st.gear, workpiece(st)
+    z = np.linspace(*helix_range(g), MeasureOptions().helix_points)
+    return helix_trace(wp, g, establish_datum(wp, g), g.reference_radius, z)
 
 
 def sinusoid(values: np.ndarray) -> tuple[float, float]:
@@ -70,14 +84,14 @@ def per_tooth(doc: dict, block: str, side: str, name: str) -> np.ndarray:
 
 def band_change(base: dict, other: dict, side: str) -> np.ndarray:
     """The change of every helix trace point [um], from the median change of its trace (the datum's share)."""
-    d = (np.array(other["_traces"]["helix"][side]) - np.array(base["_traces"]["helix"][side])) * UM
+    d = (np.array(other[side]) - np.array(base[side])) * UM
     assert np.isfinite(d).mean() > 0.95
     return d - np.nanmedian(d, axis=1, keepdims=True)
 
 
 def test_eccentricity_gives_twice_its_runout_and_a_sinusoidal_pitch():
     e = 0.008
-    base, ecc = measured(FINE), measured(replace(FINE, clamping=Clamping(e, 40 * DEG)))
+    base, ecc = measured(FINE), measured(replace(FINE, clamping=Clamping(e, 40 * DEG)), MID)
     assert base["runout"]["F_r"] < 0.5  # the ideal cut's feed marks alone
     assert ecc["runout"]["F_r"] == pytest.approx(2 * e * UM, rel=0.05)
     g = FINE.gear
@@ -97,7 +111,7 @@ def test_eccentricity_gives_twice_its_runout_and_a_sinusoidal_pitch():
 
 def test_tilt_turns_the_helix_slope_round_the_gear():
     tilt = 0.02  # axial runout at the reference diameter: tau = tilt / d
-    base, tilted = measured(FINE), measured(replace(FINE, clamping=Clamping(tilt=tilt, tilt_phase=30 * DEG)))
+    base, tilted = measured(FINE), measured(replace(FINE, clamping=Clamping(tilt=tilt, tilt_phase=30 * DEG)), MID)
     lo, hi = tilted["evaluation"]["helix_z_mm"]
     expected = tilt / FINE.gear.reference_diameter * (hi - lo) * UM
     for side in ("left", "right"):
@@ -113,7 +127,7 @@ def test_one_cutter_tooth_ahead_cuts_its_bands_deeper_on_its_leading_flank():
     f = 0.005
     pitch = [0.0] * 17
     pitch[5], pitch[6] = f, -f  # tooth 5 alone stands f ahead along +phi of the cutter
-    base, errored = measured(COARSE), measured(replace(COARSE, cutter_errors=CutterErrors(pitch=tuple(pitch))))
+    base, errored = helix_traces(COARSE), helix_traces(replace(COARSE, cutter_errors=CutterErrors(pitch=tuple(pitch))))
     depth = f * math.cos(COARSE.cutter.alpha_n) * math.cos(COARSE.cutter.helix_angle) * UM
     # the cutter's left flank faces +phi and generates the gear's left flank (cutting.skiving.edge.mate_flank)
     left, right = band_change(base, errored, "left"), band_change(base, errored, "right")
@@ -122,7 +136,7 @@ def test_one_cutter_tooth_ahead_cuts_its_bands_deeper_on_its_leading_flank():
     assert np.nanmax(left) < 0.3 and np.nanmin(right) > -0.3  # no other tooth moved
     # the bands where tooth 5 finished are where the kinematics put it: one band of one feed per meeting
     banded = (left < -depth / 2).mean(axis=1)
-    z_lo, z_hi = errored["evaluation"]["helix_z_mm"]
+    z_lo, z_hi = helix_range(COARSE.gear)
     bands = banded * (z_hi - z_lo) / COARSE.axial_feed
     assert np.all((bands > 0.5) & (bands < 2.6))  # 17 revolutions (3.4 mm of feed) between two meetings
 
@@ -130,12 +144,12 @@ def test_one_cutter_tooth_ahead_cuts_its_bands_deeper_on_its_leading_flank():
 def test_cutter_radial_runout_moves_every_band_by_its_tooths_offset():
     e_c = 0.005
     errors = CutterErrors(radial_runout=2 * e_c, radial_runout_phase=0.3)
-    base, errored = measured(COARSE), measured(replace(COARSE, cutter_errors=errors))
+    base, errored = helix_traces(COARSE), helix_traces(replace(COARSE, cutter_errors=errors))
     c = COARSE.cutter
     beta_b0 = math.asin(math.sin(c.helix_angle) * math.cos(c.alpha_n))
     expected = e_c * math.cos(beta_b0) * UM
     for side in ("left", "right"):
-        d = (np.array(errored["_traces"]["helix"][side]) - np.array(base["_traces"]["helix"][side])) * UM
+        d = (np.array(errored[side]) - np.array(base[side])) * UM
         assert np.nanmax(d) == pytest.approx(expected, rel=0.15)  # the tooth the offset pushes into the space
         assert -np.nanmin(d) == pytest.approx(expected, rel=0.15)  # and the one it pulls back
 
@@ -208,8 +222,10 @@ def test_a_cutter_profile_deviation_maps_through_the_generating_onto_the_gear(sl
     against the exact measurement of the cut: f_Halpha within 10 %, f_falpha within 10 % plus the feed marks."""
     from cutting.skiving.cutter_profile import active_flank, roll_map
 
-    base = measured(FINE)
-    errored = measured(replace(FINE, cutter_errors=CutterErrors(profile_slope=slope, profile_form=form)))
+    base = measured(FINE)  # f_falpha: the worst of the three sections (the form's case reads it)
+    errored = measured(
+        replace(FINE, cutter_errors=CutterErrors(profile_slope=slope, profile_form=form)), None if any(form) else MID
+    )
     c = FINE.cutter
     cos_bb0 = math.cos(math.asin(math.sin(c.helix_angle) * math.cos(c.alpha_n)))
     lo, hi = errored["evaluation"]["profile_roll_mm"]
@@ -237,8 +253,7 @@ def test_each_cutter_tooth_cuts_with_its_own_profile():
     of roll lengths x face positions on every tooth, probed on the exact swept surface from one datum (the base
     cut's: the change is absolute)."""
     from cutting.skiving.cutter_profile import active_flank, roll_map
-    from metrology.datum import establish_datum
-    from metrology.measure import helix_range, profile_range
+    from metrology.measure import profile_range
     from metrology.workpiece import flank_deviation
 
     f_h, z0 = 0.005, COARSE.cutter.teeth
