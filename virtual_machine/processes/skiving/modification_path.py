@@ -31,7 +31,7 @@ from cutting.skiving.edge import CuttingEdge, make_edge
 from cutting.skiving.exact_sweep import SweptVolumes
 from cutting.skiving.path_correction import PathCorrection, corrected_motion
 from cutting.skiving.trajectory import PassMotion
-from metrology.measure import MeasureOptions, measure_gear
+from metrology.measure import MeasureOptions, measure_helix
 from virtual_machine.job import Job
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 
@@ -53,7 +53,7 @@ class ModificationPath:
     jacobian: np.ndarray  # (2, 2): (e_left, e_right) [mm] per (da [mm], dphi2 [rad])
     iterations: list[Iteration]
     converged: bool
-    measurement: dict[str, Any]  # the last cut's measurement (against the design)
+    measurement: dict[str, Any]  # the best cut's helices measured against the design (metrology.measure_helix)
     motions: list = field(default_factory=list)  # the passes to cut (the finishing one corrected)
     beyond_path_um: dict[str, float] = field(default_factory=dict)  # per flank: what only a cutter could make
 
@@ -180,8 +180,9 @@ def mean_residual(doc: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def measure(gear, edge: CuttingEdge, motions: list[PassMotion], opt: MeasureOptions) -> dict[str, Any]:
-    """The exact swept surface of ``motions`` measured against the design."""
-    return measure_gear(SweptVolumes(gear, edge, motions), gear, opt)
+    """The exact swept surface of ``motions``: its helices measured against the design (all the path reads; the
+    gear the path makes is measured whole afterwards, as every cut is)."""
+    return measure_helix(SweptVolumes(gear, edge, motions), gear, opt)
 
 
 @dataclass
