@@ -125,9 +125,10 @@ def loaded_job():
 @pytest.mark.slow
 def test_parallel_manifold_removal_cuts_the_same_gear(tmp_path) -> None:
     """The manifold reference: two worker processes, each owning half the tooth spaces, take the same chips as the
-    inline removal (without forces the machine's motion does not depend on when the chips finish)."""
+    inline removal (without forces the machine's motion does not depend on when the chips finish). The claim does not
+    depend on the feed: the small job at 0.4 mm/rev (233 passages in 327 subtractions, not 470 in 658)."""
     path = tmp_path / "small.toml"
-    path.write_text(SMALL_JOB)
+    path.write_text(small_job(sweep_error=0.02, axial_feed=0.4))
     job = load_job(path)
     inline = cosimulate(job, forces=False, removal="manifold")
     par = cosimulate(job, forces=False, workers=2, removal="manifold")

@@ -221,21 +221,23 @@ def two_pass_job():
 @functools.cache
 def both_cuts():
     """The job cut with the ideal motion by the dexel workpiece (its solid stated within 10 um, the default
-    process.sweep_error) and by the manifold reference (5 um tubes)."""
+    process.sweep_error) and by the manifold reference: 5 um tubes in the finishing pass, whose surface is measured
+    (7 um there leaves a p95 of 2.2 %), 10 um in the roughing pass, as the dexel's (5 um there cost the reference 40 %
+    more CPU time, and the chips agreed no better: p95 1.5 % and 1.9 %, measured)."""
     from cutting.skiving.ideal_cut import cut_ideal
 
     job = two_pass_job()
     st = job.skiving
     return job, {
         "dexel": cut_ideal(st, "conjugate", 0.010, 0.010, removal="dexel"),
-        "manifold": cut_ideal(st, "conjugate", 0.005, 0.005, workers=2, removal="manifold"),
+        "manifold": cut_ideal(st, "conjugate", 0.005, 0.010, workers=2, removal="manifold"),
     }
 
 
 @pytest.mark.slow
 def test_both_removals_take_the_same_chips():
     """Every pass's chip volume within 2 %, 95 % of its chips (above 1 % of the largest) within 2 % each, chip by
-    chip matched by (pass, cutter tooth, time). Measured: passes 0.1-0.7 %, p95 0.6-1.6 %."""
+    chip matched by (pass, cutter tooth, time). Measured: passes 0.5 %, p95 1.8 % (roughing) and 1.2 %."""
     job, cuts = both_cuts()
     chips = {
         k: {(c.pass_index, c.cutter_tooth, round(c.time, 7)): c.volume for c in r.result.chips} for k, r in cuts.items()
@@ -255,8 +257,8 @@ def test_both_removals_take_the_same_chips():
 @pytest.mark.slow
 def test_both_solids_measure_within_their_bounds_of_the_exact_surface():
     """Each solid, written as gear.stl, measured beside the exact swept surface: its traces within its stated bound
-    (the dexel solid: 10 um, measured 7.9 um: the feed marks between its slices; the manifold: its 5 um sweep
-    error), and the ISO values close."""
+    (the dexel solid: 10 um, measured 8.6 um: the feed marks between its slices; the manifold: its 5 um sweep
+    error, measured 3.5 um), and the ISO values close."""
     from cutting.gear_file import write_gear_stl
     from metrology.cut_measurement import measure_cut
     from metrology.datum import check_mesh

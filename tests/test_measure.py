@@ -38,7 +38,12 @@ def tol(expected_um: float) -> float:
     return max(0.2, 0.03 * abs(expected_um))
 
 
-def mesh_of(gear: Gear, deviation=None, **kw) -> MeshData:
+def mesh_of(gear: Gear, deviation=None, along_face: bool = True, **kw) -> MeshData:
+    """The gear's mesh, turned by 0.1 pitch, with ``deviation``. One that does not vary ``along_face`` is exact on a
+    spur gear without sections along the face: the 24 the reference gear puts under any deviation cost 3/4 of those
+    spur tests' time and changed no measured value (measured); a helical gear keeps the sections of its helix."""
+    if not along_face and gear.beta == 0:
+        kw.setdefault("z_divisions", 0)
     pitch = 2 * math.pi / gear.teeth
     m = reference_gear_mesh(gear, deviation, flank_points=FLANK_POINTS, rotation=0.1 * pitch, helix_sagitta=2e-5, **kw)
     return check_mesh(m)
@@ -125,7 +130,7 @@ def test_pitch_pattern(gear):
     def dev(side, tooth, L, zz):
         return side_sign(gear, side) * gear.base_radius * dtheta[tooth]
 
-    res = measure(mesh_of(gear, dev), gear)
+    res = measure(mesh_of(gear, dev, along_face=False), gear)
     f_pi = arc - np.roll(arc, 1)
     k = default_sector_pitches(z)
     F_pk = max(abs(np.sum(np.take(f_pi, range(i, i + k), mode="wrap"))) for i in range(z))
@@ -157,7 +162,9 @@ def _flank_arc_after_shift(gear: Gear, side: str, tooth: int, offset: float, r_p
 
 def test_eccentricity_and_thickness(gear):
     ex, de = 8e-3, 10e-3  # mm: shift of the gear, and excess material on every flank
-    res = measure(mesh_of(gear, lambda side, tooth, L, z: np.full(np.shape(L), de), offset=(ex, 0.0)), gear)
+    res = measure(
+        mesh_of(gear, lambda side, tooth, L, z: np.full(np.shape(L), de), along_face=False, offset=(ex, 0.0)), gear
+    )
     D = res["runout"]["ball_diameter_mm"]
     g_thick = Gear(
         gear.teeth,
