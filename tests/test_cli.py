@@ -19,16 +19,22 @@ def test_setup_default_job_prints_the_sheet():
     assert "cutting speed 58.3 m/min" in res.output
 
 
-def test_setup_json_for_every_structure():
+def test_setup_json_for_every_structure(tmp_path: Path) -> None:
+    """Every structure's sheet of the helical internal job (z2 = 60, beta2 = +20 deg, spur cutter: Sigma = 20 deg) as
+    JSON, and a spur gear's infinite lead as null. `setup` maps the cutter's working angles on every pass (seconds
+    per pass of a full-size gear), which neither claim depends on: helical_internal.toml runs in one full-depth pass
+    instead of four, and the spur gear is the default job's (z2 = 20, mn 1) instead of spur_external.toml's."""
+    text = (JOBS / "helical_internal.toml").read_text()
+    assert "passes = [2.0, 1.5, 0.8, 0.2]" in text
+    job = tmp_path / "helical_internal.toml"
+    job.write_text(text.replace("passes = [2.0, 1.5, 0.8, 0.2]", "passes = [4.5]"))  # 2.25 mn: the same depth
     for structure in ("mechanical", "hydraulic-differential", "hydraulic-shaft", "mechatronic"):
-        res = CliRunner().invoke(
-            main, ["setup", str(JOBS / "helical_internal.toml"), "--structure", structure, "--json"]
-        )
+        res = CliRunner().invoke(main, ["setup", str(job), "--structure", structure, "--json"])
         assert res.exit_code == 0, res.output
         data = json.loads(res.output)
         assert data["structure"] == structure
         assert data["geometry"]["shaft_angle_deg"] == 20.0
-    spur = json.loads(CliRunner().invoke(main, ["setup", str(JOBS / "spur_external.toml"), "--json"]).output)
+    spur = json.loads(CliRunner().invoke(main, ["setup", str(JOBS / "default.toml"), "--json"]).output)
     assert spur["geometry"]["gear"]["lead_mm"] is None  # infinite lead of a spur gear is null in JSON
 
 

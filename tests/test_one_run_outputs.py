@@ -13,8 +13,11 @@ import time
 from pathlib import Path
 
 import pytest
-from checks import JOBS, ROOT
+from checks import ROOT
+from click.testing import CliRunner
+from small_jobs import small_job
 
+from virtual_machine.cli import main
 from virtual_machine.output.json_file import json_text
 from virtual_machine.output.staging import MANIFEST, StagedOutputs, sha256_of
 
@@ -54,17 +57,24 @@ def test_staged_outputs_replace_the_previous_stage_and_name_their_final_place(tm
 
 
 @pytest.mark.slow
-def test_a_run_killed_during_its_measurement_leaves_the_previous_outputs(tmp_path: Path) -> None:
+def test_a_run_killed_during_its_measurement_leaves_the_previous_outputs(
+    tmp_path: Path, tmp_path_factory: pytest.TempPathFactory
+) -> None:
     """`skive cut` into o1, then `skive run` into o1 ended by SIGTERM while it measures: o1 still holds the cut's
-    complete outputs (measurement.json of the gear.stl beside it), and no staging folder is left."""
+    complete outputs (measurement.json of the gear.stl beside it), and no staging folder is left. The job is the
+    tests' small one (z2 18, b 2 mm, one pass, coarse feed): what a stage leaves does not depend on the gear, and
+    its cut and its run up to the measurement take about half the default job's time. The cut only makes the
+    previous outputs: it runs in this process (the run, the one killed, in its own)."""
     out = tmp_path / "o1"
+    job = tmp_path_factory.mktemp("job") / "small.toml"  # not in tmp_path: o1 is to be all it holds at the end
+    job.write_text(small_job(sweep_error=0.02, axial_feed=0.4))
+    done = CliRunner().invoke(main, ["cut", str(job), "--out", str(out)])
+    assert done.exit_code == 0, done.output
+    before = _consistent(out)
     env = {**os.environ, "CI": "1"}  # a line per stage on stderr
     cli = [sys.executable, "-m", "virtual_machine.cli"]
-    done = subprocess.run([*cli, "cut", str(JOBS / "default.toml"), "--out", str(out)], env=env, cwd=ROOT, check=False)
-    assert done.returncode == 0
-    before = _consistent(out)
     run = subprocess.Popen(
-        [*cli, "run", str(JOBS / "default.toml"), "--out", str(out)],
+        [*cli, "run", str(job), "--out", str(out)],
         env=env,
         cwd=ROOT,
         stderr=subprocess.PIPE,

@@ -1,6 +1,6 @@
-"""The scenario jobs of assets/jobs/scenarios/: each runs on the simulated machine (machine, cutting forces, cut,
-measurement, as skive run does) and shows the deviation theory predicts for the one thing it changes against its
-baseline.
+"""The scenario jobs of assets/jobs/scenarios/: each runs on the simulated machine (machine and cutting forces, the
+gear measured as skive run measures it) and shows the deviation theory predicts for the one thing it changes against
+its baseline.
 
 A phase error of the work that drifts with the carriage tilts the helix: a drift de/ds of the synchronisation
 error (arc on the reference circle) per mm of carriage over the face changes the helix slope deviation by
@@ -42,8 +42,11 @@ STUDIED = ("helical_mechatronic", "lead_screw_error", "mechanical_change_gears")
 @pytest.fixture(scope="module")
 def scenario(shared_runs):
     """name -> (job, the machine's motion record, measurement of the exact swept surface of the motion the machine
-    made): each scenario job run once as skive run does, the tests share it. The studied ones first: test_study.py,
-    in the other process, takes them from the store."""
+    made): each scenario job run once, the tests share it. The studied ones first, as a study's worker runs a case
+    (tests/shared_runs.py): test_study.py, in the other process, takes them from the store. The others are
+    co-simulated without a workpiece (removal "none"): the force is the chip of the moment's, not the removal's, so
+    the motion is the same bit for bit, and the gear is measured on its exact swept surface, not on the removal's
+    solid; the dexel removal would take ~3/4 of each co-simulation's time."""
     for name in STUDIED:
         shared_runs.run(SCENARIOS / f"{name}.toml")
 
@@ -53,7 +56,7 @@ def scenario(shared_runs):
         if name in STUDIED:
             result, record = shared_runs.run(SCENARIOS / f"{name}.toml")
             return job, record, result["measurement"]
-        sim = cosimulate(job, workers=2)
+        sim = cosimulate(job, removal="none")
         exact = SweptVolumes(job.gear, sim.edge, sampled_passes(job.skiving, sim.record.passes))
         return job, sim.record, measure_gear(exact, job.gear)
 
