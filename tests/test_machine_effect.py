@@ -59,14 +59,21 @@ def pair(tmp_path_factory):
     return out
 
 
+def radial_force(sim, job) -> np.ndarray:
+    """Per load row: the cutting load's radial component on the tool [N] (the resultant on the workpiece, turned
+    with the work spindle into the machine frame; positive: pushing the tool out along the centre distance)."""
+    rec, rows = sim.record, sim.load_rows
+    turn = np.interp(rows[:, 0], rec.t, rec.q[:, 1]) + job.skiving.work_phase
+    return -(np.cos(turn) * rows[:, 1] - np.sin(turn) * rows[:, 2])
+
+
 def _at_section(job, doc, sim):
     """While the finishing pass's cutter passes the span's section (the helix range's end, +-0.3 mm): the mean radial
     force on the tool [N] and the mean displacement normal to the flanks at the generating point [um]."""
     rec, rows = sim.record, sim.load_rows
     z = doc["evaluation"]["helix_z_mm"][1]
     last = len(job.skiving.passes) - 1
-    turn = np.interp(rows[:, 0], rec.t, rec.q[:, 1]) + job.skiving.work_phase
-    radial = -(np.cos(turn) * rows[:, 1] - np.sin(turn) * rows[:, 2])
+    radial = radial_force(sim, job)
     near = (np.abs(np.interp(rows[:, 0], rec.t, rec.q[:, 2]) - z) < 0.3) & (
         np.interp(rows[:, 0], rec.t, rec.pass_index) > last - 0.5
     )
@@ -136,8 +143,7 @@ def test_spur_external_on_a_soft_radial_axis_grows_its_span_by_twice_the_flank_n
         exact = SweptVolumes(job.gear, sim.edge, sampled_passes(job.skiving, sim.record.passes))
         doc = measure_gear(exact, job.gear)
         rec, rows = sim.record, sim.load_rows
-        turn = np.interp(rows[:, 0], rec.t, rec.q[:, 1]) + job.skiving.work_phase
-        radial = -(np.cos(turn) * rows[:, 1] - np.sin(turn) * rows[:, 2])
+        radial = radial_force(sim, job)
         last = len(job.skiving.passes) - 1
         steady = (np.interp(rows[:, 0], rec.t, rec.pass_index) > last - 0.5) & (
             np.abs(np.interp(rows[:, 0], rec.t, rec.q[:, 2])) < job.gear.face_width / 4
@@ -160,8 +166,7 @@ def _band(sim, job, zs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     the mean radial force on the tool [N] and the mean displacement normal to the two flanks there [um] (n, 2)."""
     rec, rows = sim.record, sim.load_rows
     last = len(job.skiving.passes) - 1
-    turn = np.interp(rows[:, 0], rec.t, rec.q[:, 1]) + job.skiving.work_phase
-    radial = -(np.cos(turn) * rows[:, 1] - np.sin(turn) * rows[:, 2])
+    radial = radial_force(sim, job)
     at = np.interp(rows[:, 0], rec.t, rec.q[:, 2])
     finishing = np.interp(rows[:, 0], rec.t, rec.pass_index) > last - 0.5
     _, index, disp = generating_point_displacement(rec, job.skiving)
