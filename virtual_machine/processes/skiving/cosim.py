@@ -377,8 +377,8 @@ def cosimulate(
 #: passages the dexel removal's chips are taken behind the machine: the batch it cuts in one call. Nothing waits for
 #: a chip (the force is the chip of the moment; a snapshot drains the batch first), and a line takes its passages in
 #: time order whatever the batch (the chips are the same bit for bit); a batch of 16 gives both threads cells to share
-#: and the call's overhead to 16 passages: spur_external on a 10 mm face 21-22 s of CPU against 26-29 s passage by
-#: passage, and about half the wall time in the removal (docs/performance.md)
+#: and the call's overhead to 16 passages: spur_external on a 10 mm face the removal 8.2 s against 12.0 s passage by
+#: passage (CPU 20.1 against 25.1 s for the whole co-simulation; docs/performance.md)
 DEXEL_LAG = 16
 
 
