@@ -20,6 +20,7 @@ from cutting.skiving.dexel_cut import cut_dexel
 from cutting.skiving.dexel_lines import DexelSpacing
 from cutting.skiving.edge import make_edge
 from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.ideal_moment import IdealMoment
 from cutting.skiving.kinematics import SkivingSetup
 from cutting.skiving.sampled_motion import ideal_samples
 from cutting.skiving.sweep import place_few
@@ -58,6 +59,13 @@ def warm() -> float:
         np.array([0.0, 0.0, 1.0]), body, np.array([17.0, 0.0, 5.0]), chip, np.empty((4, COLUMNS)),
         np.empty(4, dtype=np.int64),
     )  # fmt: skip
+    # the same chip on the ideal machine, called from Python (the pre-run load estimate and the stability lobes:
+    # virtual_machine/reach/skiving_load.py, processes/skiving/stability.py), first pass and a later one
+    a = setup.final_centre_distance
+    for previous in (None, a + 0.5 * (-1 if setup.gear.internal else 1)):
+        moment = IdealMoment(setup, a, previous)
+        moment.load(0.0, chip, np.empty((1, COLUMNS)))
+        moment.chips(0.0, 0.5, -0.5)
     # and an engagement's load from its chip (the edge at 3 x 5 instants, 4 points)
     t = np.linspace(0.0, 1e-3, 5)
     engagement_sums(place_few(np.zeros((4, 3)), np.zeros((15, 3, 3)), np.zeros((15, 3))), np.ones((5, 4)), t, 1e-6)

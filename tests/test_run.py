@@ -412,3 +412,30 @@ def test_a_synchronism_lost_to_a_growing_vibration_is_called_chatter() -> None:
     assert growing_vibration(300.0 * np.sin(2 * math.pi * 110.0 * t), dt, 1000.0) is None
     assert growing_vibration(400.0 * t**3, dt, 1000.0) is None
     assert growing_vibration(grow * np.sin(2 * math.pi * 8.0 * t), dt, 1000.0) is None
+
+
+def test_the_reference_makes_the_runs_working_angle_maps_beside_the_machine() -> None:
+    """The ideal-cut reference's worker first makes the ideal passes' working-angle maps (they depend on the job
+    alone and cost the run's measurement seconds: 4.9 s of spur_external's): keyed by the edge they were made for,
+    array for array the ones this process makes, and once kept they are what the run's measurement reads."""
+    from cutting.skiving import working_angles as wa
+    from cutting.skiving.edge import make_edge
+    from cutting.skiving.exact_sweep import edge_key
+    from virtual_machine.processes.skiving.machine_added import IdealReference
+
+    job = parse_job(tomllib.loads(small_job(sweep_error=0.02, axial_feed=0.4, face_width=2.0)))
+    ref = IdealReference(job, job.cutter_options.edge)
+    try:
+        key, made = IdealReference.maps(ref)
+    finally:
+        IdealReference.cancel(ref)
+    edge = make_edge(job.skiving, job.cutter_options.edge)
+    assert key == edge_key(edge)
+    wa._MAPS.clear()
+    own = wa.working_angle_maps(job.skiving, edge)
+    assert len(made) == len(own) == len(job.skiving.passes)
+    for a, b in zip(made, own, strict=True):
+        for field in ("t", "rake", "clearance", "thickness"):
+            np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    wa.keep_maps(job.skiving, edge, made)
+    assert all(x is y for x, y in zip(wa.working_angle_maps(job.skiving, edge), made, strict=True))

@@ -538,6 +538,16 @@ def working_angle_maps(
     return list(_MAPS[key])
 
 
+def keep_maps(
+    setup: SkivingSetup, edge: CuttingEdge, maps: list[PassageAngles], stride: tuple[int, int] = THICKNESS_STRIDE
+) -> None:
+    """Keep ``maps``, made elsewhere (a worker process) for ``setup`` and ``edge``, as :func:`working_angle_maps`
+    would make them: it returns them from then on."""
+    _MAPS[(setup, edge.kind, edge_key(edge), tuple(stride))] = list(maps)
+    while len(_MAPS) > MAPS_KEPT:
+        _MAPS.pop(next(iter(_MAPS)))
+
+
 #: the working-angle maps kept (a few setups' worth: each pass's map holds ~10k points x 8 fields)
 MAPS_KEPT = 4
 _MAPS: dict[tuple, list[PassageAngles]] = {}

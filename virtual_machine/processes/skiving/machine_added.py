@@ -27,9 +27,26 @@ def ideal_measurement(job, edge_kind: str) -> dict[str, Any]:
     return measure_gear(exact, job.gear)
 
 
-def _measure_into(conn, job, edge_kind: str) -> None:
-    """The worker's body: the ideal cut's measurement (or the error) sent back through ``conn``."""
+def tool_maps(job, edge_kind: str) -> tuple[bytes, list] | None:
+    """The working-angle maps of the job's ideal passes (cutting.skiving.working_angles.working_angle_maps: they
+    depend on the job alone, and cost the run's measurement seconds) with the key of the edge they were made for;
+    None if they cannot be made (the run makes them itself and says why)."""
+    from cutting.skiving.edge import make_edge
+    from cutting.skiving.exact_sweep import edge_key
+    from cutting.skiving.working_angles import working_angle_maps
+
     try:
+        edge = make_edge(job.skiving, edge_kind)
+        return edge_key(edge), working_angle_maps(job.skiving, edge)
+    except Exception:
+        return None
+
+
+def _measure_into(conn, job, edge_kind: str) -> None:
+    """The worker's body: the tool's working-angle maps first (the run's measurement needs them), then the ideal cut's
+    measurement (or the error), sent back through ``conn``."""
+    try:
+        conn.send(("maps", tool_maps(job, edge_kind)))
         conn.send(("ok", ideal_measurement(job, edge_kind)))
     except Exception as exc:
         conn.send(("error", f"{type(exc).__name__}: {exc}"))
@@ -39,7 +56,7 @@ def _measure_into(conn, job, edge_kind: str) -> None:
 
 class IdealReference:
     """The ideal cut's measurement, made in a worker process (a daemon: it dies with the run) from :meth:`start` on;
-    :meth:`added` waits for it."""
+    :meth:`added` waits for it. The worker makes the ideal passes' working-angle maps first (:meth:`maps`)."""
 
     def __init__(self, job, edge_kind: str):
         ctx = multiprocessing.get_context("spawn")
@@ -48,6 +65,30 @@ class IdealReference:
         self._process.start()
         child.close()
         self.error: str | None = None
+        self._messages: dict[str, Any] = {}  # what the worker sent, by kind ("maps", "ok", "error")
+
+    def _until(self, *kinds: str) -> tuple[str, Any]:
+        """The first message of one of ``kinds`` (waiting for it; the ones before it kept); ("error", why) if the
+        worker ended first."""
+        while not any(k in self._messages for k in kinds):
+            try:
+                kind, value = self._conn.recv()
+            except EOFError:
+                kind, value = "error", f"the worker ended without a result (exit code {self._process.exitcode})"
+            self._messages[kind] = value
+            if kind == "error":
+                break
+        kind = next((k for k in kinds if k in self._messages), "error")
+        return kind, self._messages.get(kind)
+
+    @staticmethod
+    def maps(ref: IdealReference | None) -> tuple[bytes, list] | None:
+        """The worker's working-angle maps and their edge's key (waiting for them; :func:`tool_maps`), None without
+        a reference or if the worker could not make them."""
+        if ref is None:
+            return None
+        kind, value = ref._until("maps", "ok")
+        return value if kind == "maps" else None
 
     @classmethod
     def start(cls, job) -> IdealReference | None:
@@ -61,9 +102,7 @@ class IdealReference:
     def result(self) -> dict[str, Any] | None:
         """The ideal cut's measurement (waiting for it), None if it failed (:attr:`error` says why)."""
         try:
-            status, value = self._conn.recv()
-        except EOFError:
-            status, value = "error", f"the worker ended without a result (exit code {self._process.exitcode})"
+            status, value = self._until("ok", "error")
         finally:
             self._process.join(timeout=5)
         if status == "ok":

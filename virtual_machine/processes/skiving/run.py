@@ -22,14 +22,14 @@ from cutting.gear_file import GearFile, write_gear_stl
 from cutting.materials import material
 from cutting.parallel import default_workers
 from cutting.skiving.edge import CuttingEdge
-from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.exact_sweep import SweptVolumes, edge_key
 from cutting.skiving.interference import body_interference
 from cutting.skiving.passages import CutResult
 from cutting.skiving.sampled_motion import sampled_passes
 from cutting.skiving.tool_load import tool_load
 from cutting.skiving.tooling import tooling_summary
 from cutting.skiving.trajectory import PassMotion
-from cutting.skiving.working_angles import working_angle_maps, working_angle_summaries
+from cutting.skiving.working_angles import keep_maps, working_angle_maps, working_angle_summaries
 from metrology.charts import finite, write_charts
 from metrology.cut_measurement import measure_cut, unmeasured_mesh
 from metrology.datum import check_mesh
@@ -172,6 +172,9 @@ def _measure(job: Job, plan: SkivingPlan, sim: CoSimulation, out: Path, path: Pa
     t0 = time.perf_counter()
     stl = write_gear_stl(sim.cut.gear, out / "gear.stl", job.process.stl_tolerance)
     motions = sampled_passes(plan.setup, sim.record.passes)
+    made = IdealReference.maps(ideal)  # the tool's working-angle maps, made beside the machine by the reference
+    if made is not None and made[0] == edge_key(sim.edge):
+        keep_maps(job.skiving, sim.edge, made[1])
     measurement = None
     try:  # a workpiece the measuring machine cannot take (its datum or a ball seat fails) is the cut's fault
         measurement = measure_written_cut(job, sim.edge, motions, sim.cut, stl, out / "gear.stl")
