@@ -117,3 +117,15 @@ def test_check_setup_reports_what_cannot_cut():
     deep = check_setup(setup(passes=(3.0, 2.0)))
     assert deep[0].key == "process.passes" and "4.5000" in deep[0].hint
     assert check_setup(setup(passes=(2.0, 1.0))) == []  # shallower than full depth is allowed
+
+
+@pytest.mark.parametrize(
+    "args", [(60, 0, 50, 20, True), (60, 0, 52, 0, True), (60, 0, 40, 20, True), (20, 0, 17, 20, False)]
+)
+def test_the_intrusion_looks_closely_only_at_the_teeth_that_can_hold_the_deepest_point(args):
+    """edge_intrusion samples every tooth coarsely and only the teeth near the mesh at every angle: the same
+    maximum as every tooth at every angle (interfering and clear setups, internal and external)."""
+    st = setup(*args)
+    phi0 = np.linspace(0.0, 2 * np.pi / st.cutter.teeth, 720, endpoint=False)
+    every, _ = st._depth(st.edge_in_work_frame(st.edge_points(), phi0).reshape(-1, 3), 0.0)
+    assert st.edge_intrusion() == pytest.approx(float(every.max()), abs=1e-12)
