@@ -3,6 +3,7 @@ after install should not take twice the next)
 
     python benchmarks/bench_first_run.py                 # the default job
     python benchmarks/bench_first_run.py --job assets/jobs/spur_external.toml
+    python benchmarks/bench_first_run.py --job assets/jobs/form_milled_helical.toml   # any kind of job
 
 Runs what the editable install runs (``cutting.warmup`` then ``metrology.mesh_bvh``'s warm-up), notes every numba
 kernel's compiled signatures in the project's packages, runs the job, and lists each kernel the run had to compile
@@ -22,8 +23,8 @@ from numba.core.registry import CPUDispatcher
 
 import cutting.warmup
 import metrology.mesh_bvh
+from virtual_machine.api import run
 from virtual_machine.job import default_job_path
-from virtual_machine.processes.skiving.run import run_job
 
 PACKAGES = ("cutting", "metrology", "virtual_machine", "machine_models")
 
@@ -51,7 +52,7 @@ def main() -> None:
     before = {k: set(d.signatures) for k, d in kernels().items()}
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        run_job(a.job, Path(tmp), None)
+        run(a.job, Path(tmp), quiet=True)  # any kind of job: skiving, form milling, face contour, turning
         print(f"skive run {a.job}: {time.perf_counter() - t0:.1f} s")
     missed = []
     for k, d in sorted(kernels().items()):

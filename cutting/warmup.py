@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 from cutting.forces import engagement_sums
+from cutting.form_milling.sweep_kernels import interp_guide, milled_margins
 from cutting.gear import Gear
 from cutting.skiving.chip_of_the_moment import COLUMNS, machine_tick
 from cutting.skiving.dexel_cut import cut_dexel
@@ -69,7 +70,22 @@ def warm() -> float:
     # and an engagement's load from its chip (the edge at 3 x 5 instants, 4 points)
     t = np.linspace(0.0, 1e-3, 5)
     engagement_sums(place_few(np.zeros((4, 3)), np.zeros((15, 3, 3)), np.zeros((15, 3))), np.ones((5, 4)), t, 1e-6)
+    _form_mill()
     return time.perf_counter() - t0
+
+
+def _form_mill() -> None:
+    """The form mill's swept-gear margins (cutting/form_milling/sweep_kernels.py, 5 s to compile): one pass of
+    three poses across one of two tooth spaces, a mill profile of three points, both of the kernel's modes."""
+    u = np.array([0.0, 1.0, 2.0])
+    guide, scale = interp_guide(u)
+    centre = np.zeros((3, 3))
+    centre[:, 2] = [-1.0, 0.0, 1.0]
+    axis = np.tile([1.0, 0.0, 0.0], (3, 1))
+    one = np.array([0, 3], np.int64), np.array([[1, 1]], np.int64), np.array([0, 1, 1], np.int64)
+    packed = (centre, axis, *one, np.array([0], np.int64), u, np.ones(3), guide, scale, 1.0)
+    for sign_only in (False, True):
+        milled_margins(np.array([[10.0, 0.0, 0.0], [0.5, 0.2, 0.0]]), sign_only, 2, 0.0, (-100.0, 100.0), packed)
 
 
 if __name__ == "__main__":
