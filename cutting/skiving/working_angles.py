@@ -420,7 +420,24 @@ def contact_angles(
     ``pass_index``: the envelope method of :mod:`cutting.skiving.edge` run for the gear that pass leaves (the
     gear's profile shifted by the pass's centre distance) gives, per edge radius, the cutter angle at which it
     touches that flank; the tip's middle point generates the root at the mesh (cutter angle 0). Nan elsewhere. The
-    feed's share of the velocity (under 1 %) is left out, as in the envelope."""
+    feed's share of the velocity (under 1 %) is left out, as in the envelope. Kept for the last few setups, edges
+    and passes (a run's clearance check, its working-angle maps and the tool's summaries ask for the same)."""
+    key = (setup, edge.kind, edge_key(edge), relief, frames.points.tobytes(), pass_index)
+    if key not in _CONTACTS:
+        _CONTACTS[key] = _contact_angles(setup, edge, frames, pass_index)
+        while len(_CONTACTS) > 4 * MAPS_KEPT:
+            _CONTACTS.pop(next(iter(_CONTACTS)))
+    rake, clearance = _CONTACTS[key]
+    return rake.copy(), clearance.copy()
+
+
+_CONTACTS: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _contact_angles(
+    setup: SkivingSetup, edge: CuttingEdge, frames: EdgeFrames, pass_index: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`contact_angles`, computed."""
     st = pass_setup(setup, pass_index)
     g = st.gear
     rake, out = np.full(len(frames.part), np.nan), np.full(len(frames.part), np.nan)
