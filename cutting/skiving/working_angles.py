@@ -424,9 +424,7 @@ def contact_angles(
     and passes (a run's clearance check, its working-angle maps and the tool's summaries ask for the same)."""
     key = (setup, edge.kind, edge_key(edge), relief, frames.points.tobytes(), pass_index)
     if key not in _CONTACTS:
-        _CONTACTS[key] = _contact_angles(setup, edge, frames, pass_index)
-        while len(_CONTACTS) > 4 * MAPS_KEPT:
-            _CONTACTS.pop(next(iter(_CONTACTS)))
+        _kept(_CONTACTS, key, _contact_angles(setup, edge, frames, pass_index), 4 * MAPS_KEPT)
     rake, clearance = _CONTACTS[key]
     return rake.copy(), clearance.copy()
 
@@ -545,13 +543,12 @@ def working_angle_maps(
     """:func:`passage_angles` of every pass (the middle passage of the ideal motion), with the job's relief; the chip
     thickness on every ``stride`` = (instants, edge points) of the map. Kept for the last few setups and edges (a
     setting sheet per machine structure, a cut and its run ask for the same maps; the maps are not changed)."""
-    key = (setup, edge.kind, edge_key(edge), tuple(stride))  # each tooth's own flanks too: they cut the stock
+    key = _maps_key(setup, edge, stride)
     if key not in _MAPS:
         motions = ideal_passes(setup)
         relief = Relief.of(setup)
-        _MAPS[key] = [passage_angles(setup, edge, relief, k, motions, stride=stride) for k in range(len(setup.passes))]
-        while len(_MAPS) > MAPS_KEPT:
-            _MAPS.pop(next(iter(_MAPS)))
+        maps = [passage_angles(setup, edge, relief, k, motions, stride=stride) for k in range(len(setup.passes))]
+        _kept(_MAPS, key, maps, MAPS_KEPT)
     return list(_MAPS[key])
 
 
@@ -560,9 +557,19 @@ def keep_maps(
 ) -> None:
     """Keep ``maps``, made elsewhere (a worker process) for ``setup`` and ``edge``, as :func:`working_angle_maps`
     would make them: it returns them from then on."""
-    _MAPS[(setup, edge.kind, edge_key(edge), tuple(stride))] = list(maps)
-    while len(_MAPS) > MAPS_KEPT:
-        _MAPS.pop(next(iter(_MAPS)))
+    _kept(_MAPS, _maps_key(setup, edge, stride), list(maps), MAPS_KEPT)
+
+
+def _maps_key(setup: SkivingSetup, edge: CuttingEdge, stride: tuple[int, int]) -> tuple:
+    """What tells the maps apart: the setup, the edge (each tooth's own flanks too: they cut the stock), the stride."""
+    return (setup, edge.kind, edge_key(edge), tuple(stride))
+
+
+def _kept(store: dict, key: tuple, value, limit: int) -> None:
+    """``store[key] = value``, the oldest entries dropped beyond ``limit``."""
+    store[key] = value
+    while len(store) > limit:
+        store.pop(next(iter(store)))
 
 
 #: the working-angle maps kept (a few setups' worth: each pass's map holds ~10k points x 8 fields)
