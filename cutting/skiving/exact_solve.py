@@ -50,12 +50,15 @@ def compiled_pose(motion) -> tuple[int, np.ndarray] | None:
 def _compiled_pose(motion) -> tuple[int, np.ndarray] | None:
     if isinstance(motion, PassMotion) and type(motion).pose is PassMotion.pose:
         st = motion.setup
-        if type(st).cutter_pose is not SkivingSetup.cutter_pose:
+        own = type(st).cutter_pose, type(st).machine_pose
+        if own != (SkivingSetup.cutter_pose, SkivingSetup.machine_pose):
             return None
+        g = st.geometry
         a = st.final_centre_distance if motion.centre_distance is None else motion.centre_distance
-        params = [motion.omega0, motion.s_start, motion.v_s, a, st.speed_ratio, st.differential_rotation_per_mm]
-        params += [st.work_phase, math.cos(st.tilt), math.sin(st.tilt), st.cutter_phase]
-        return IDEAL, np.array(params, dtype=float)
+        params = [motion.omega0, motion.s_start, motion.v_s, a + g.centre_distance_offset, st.speed_ratio]
+        tilt = st.tilt + g.shaft_angle_error
+        params += [st.differential_rotation_per_mm, st.work_phase, math.cos(tilt), math.sin(tilt), st.cutter_phase]
+        return IDEAL, np.array(params + g.compiled(), dtype=float)
     if isinstance(motion, SampledMotion) and type(motion).pose is SampledMotion.pose:
         return SAMPLED, _sampled_parameters(motion)
     return None
@@ -211,9 +214,12 @@ def _rz(c, s):
 
 @njit(cache=True, error_model="numpy")
 def _ideal(w, o, t, full):
-    """SkivingSetup.cutter_pose at phi0 = omega0 t, s = s_start + v_s t: (rotation 9-tuple, origin). Unless
+    """SkivingSetup.machine_pose at phi0 = omega0 t, s = s_start + v_s t: (rotation 9-tuple, origin). Unless
     ``full``, only the rotation's third column (the rake plane's normal) is right: the turn about the cutter axis
-    leaves it as it is (bit for bit: it adds products with zero), so it is skipped."""
+    leaves it as it is (bit for bit: it adds products with zero), so it is skipped. The machine's geometry
+    (cutting.skiving.machine_geometry): its centre distance and shaft angle in w[o + 3], w[o + 7:9], the cutter
+    centre's offset from w[o + 10:16] (y offset, squareness x and y, the screw's periodic error, 2 pi / pitch,
+    phase)."""
     phi0 = w[o] * t
     s = w[o + 1] + w[o + 2] * t
     phi2 = w[o + 4] * phi0 + w[o + 5] * s + w[o + 6]
@@ -223,8 +229,10 @@ def _ideal(w, o, t, full):
     if full:
         phi = phi0 + w[o + 9]
         rot = _mm(rot, _rz(math.cos(phi), math.sin(phi)))
-    a = w[o + 3]
-    return rot, (c * a, sn * a, s)
+    x = w[o + 3] + w[o + 11] * s
+    y = w[o + 10] + w[o + 12] * s
+    z = s + w[o + 13] * math.sin(w[o + 14] * s + w[o + 15])
+    return rot, (c * x - sn * y, sn * x + c * y, z)
 
 
 @njit(cache=True, error_model="numpy")

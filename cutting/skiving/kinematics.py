@@ -27,7 +27,17 @@ import numpy as np
 from cutting.errors import Problem
 from cutting.flank import SIDES, flank_points
 from cutting.gear import MIN_TIP_THICKNESS, Gear
-from cutting.skiving.tooling import Clamping, CutterErrors, RakeFace, blank_frame, rake_frame, tooth_frames
+from cutting.skiving.machine_geometry import MachineGeometry
+from cutting.skiving.tooling import (
+    Clamping,
+    CutterErrors,
+    RakeFace,
+    blank_frame,
+    chain,
+    inverse,
+    rake_frame,
+    tooth_frames,
+)
 
 #: Below this shaft angle the sliding speed is under ~3.5 % of the cutter's peripheral speed:
 #: the edge rubs instead of cutting. Modern practice is 10-30 deg (domain.md section 1).
@@ -73,6 +83,8 @@ class SkivingSetup:
         (a typical arbor nut); the cutter body width behind the rake face is ``cutter.face_width``
     rake, cutter_errors, clamping: the rake face, the cutter's deviations and the blank's clamping
         (:mod:`cutting.skiving.tooling`); the edge is designed for the rake face of a cutter without deviations
+    geometry: the machine's geometric errors (:mod:`cutting.skiving.machine_geometry`): the poses a machine makes
+        (:meth:`machine_pose`) carry them; the kinematics it is set for (:meth:`cutter_pose`) do not
     """
 
     gear: Gear
@@ -86,6 +98,7 @@ class SkivingSetup:
     rake: RakeFace = field(default_factory=RakeFace)
     cutter_errors: CutterErrors = field(default_factory=CutterErrors)
     clamping: Clamping = field(default_factory=Clamping)
+    geometry: MachineGeometry = field(default_factory=MachineGeometry)
     _cutter_tip: float | None = field(default=None, repr=False)
 
     @property
@@ -294,6 +307,23 @@ class SkivingSetup:
         centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1)
         return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
 
+    def machine_pose(self, phi0: np.ndarray, s: np.ndarray | float = 0.0, centre_distance: float | None = None):
+        """:meth:`cutter_pose` as the machine as built makes it from the same commanded axes: the shaft angle, the
+        centre distance, the cutter's offset, the carriage's squareness and the screw's periodic error of
+        :attr:`geometry` (:mod:`cutting.skiving.machine_geometry`; the spindle's error motion is the blank's, in
+        :attr:`blank_frame`). The nominal pose where the machine is exact."""
+        g = self.geometry
+        if g.exact:
+            return self.cutter_pose(phi0, s, centre_distance)
+        phi0 = np.atleast_1d(np.asarray(phi0, dtype=float))
+        s_arr = np.broadcast_to(np.asarray(s, dtype=float), phi0.shape)
+        a = self.final_centre_distance if centre_distance is None else centre_distance
+        phi2 = self.speed_ratio * phi0 + self.differential_rotation_per_mm * s_arr + self.work_phase
+        back = rot_z(-phi2)
+        rot = back @ rot_x(self.tilt + g.shaft_angle_error) @ rot_z(phi0 + self.cutter_phase)
+        centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1) + g.head_offset(s_arr)
+        return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
+
     def new_tool(self) -> SkivingSetup:
         """This setup with the tool as it was new (no regrind): the edge is designed for it. A regrind of depth d
         along the axis took d tan(alpha_a) off the tip radius and d tan(alpha_a) / mn off the profile shift (the
@@ -377,8 +407,13 @@ class SkivingSetup:
 
     @cached_property
     def blank_frame(self) -> np.ndarray:
-        """The work spindle's frame in the blank's, (3, 4): the clamping's eccentricity and tilt undone."""
-        return blank_frame(self.clamping, self.gear.reference_radius)
+        """The work spindle's frame in the blank's, (3, 4): the clamping's eccentricity and tilt undone, and the
+        spindle's synchronous error motion (:meth:`MachineGeometry.spindle_placement`: the clamped blank turns with
+        the rotor)."""
+        clamped = blank_frame(self.clamping, self.gear.reference_radius)
+        if not (self.geometry.work_spindle_radial_error or self.geometry.work_spindle_tilt_error):
+            return clamped
+        return chain(clamped, inverse(self.geometry.spindle_placement()))
 
     def passage_frames(self, m: np.ndarray) -> np.ndarray:
         """The rake frames of the teeth at the mesh at cutter pitches ``m`` (tooth (-m) mod z0), (n, 3, 4)."""

@@ -19,7 +19,8 @@ from cutting.skiving.kinematics import SkivingSetup
 
 @dataclass(frozen=True)
 class PassMotion:
-    """The ideal motion of one pass: phi0 = omega0 t, s = s_start + v_s t, centre distance fixed.
+    """The ideal motion of one pass: phi0 = omega0 t, s = s_start + v_s t, centre distance fixed; the poses those
+    axes give on the machine as built (:meth:`SkivingSetup.machine_pose`: the nominal ones on an exact machine).
 
     t runs from 0 to ``duration`` [s]; phi2 follows from the kinematics in :class:`SkivingSetup`.
     """
@@ -34,7 +35,7 @@ class PassMotion:
 
     def pose(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        return self.setup.cutter_pose(self.omega0 * t, self.s_start + self.v_s * t, self.centre_distance)
+        return self.setup.machine_pose(self.omega0 * t, self.s_start + self.v_s * t, self.centre_distance)
 
     def cutter_angle(self, t: np.ndarray) -> np.ndarray:
         return self.omega0 * np.asarray(t, dtype=float)

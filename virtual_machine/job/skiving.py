@@ -21,6 +21,7 @@ from cutting.errors import InputError, Problem
 from cutting.gear import Gear, check_gear
 from cutting.modification import Modification, design_problems
 from cutting.skiving.kinematics import SkivingSetup, check_setup, reground
+from cutting.skiving.machine_geometry import MachineGeometry
 from cutting.skiving.tooling import Clamping, CutterErrors, RakeFace
 from virtual_machine.job.cutter_sections import (
     RAKE_KEYS,
@@ -31,6 +32,7 @@ from virtual_machine.job.cutter_sections import (
     regrind_problems,
 )
 from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, helix, parse_optional_sections
+from virtual_machine.job.geometry_section import parse_geometry, without_geometry
 from virtual_machine.job.head import MACHINE_KEYS, Job, MachineSection, model_problems
 from virtual_machine.job.keys import (
     MATERIAL,
@@ -129,6 +131,8 @@ class SkivingJob(Job):
     rake: RakeFace = field(default_factory=RakeFace)
     cutter_errors: CutterErrors = field(default_factory=CutterErrors)
     clamping: Clamping = field(default_factory=Clamping)
+    #: [machine.model.geometry]: the machine's geometric errors (virtual_machine/job/geometry_section.py)
+    geometry: MachineGeometry = field(default_factory=MachineGeometry)
 
     @cached_property
     def skiving(self) -> SkivingSetup:
@@ -151,6 +155,7 @@ class SkivingJob(Job):
             rake=dataclasses.replace(self.rake, regrind=0.0),
             cutter_errors=self.cutter_errors,
             clamping=self.clamping,
+            geometry=self.geometry,
         )
 
 
@@ -167,7 +172,11 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
     parsed = parse_sections(data, SECTIONS_GEAR, problems)
     measurement, modification = parse_optional_sections(data, problems)
     machine = parsed["machine"]
-    problems += model_problems(machine.get("model"), _skiving_machine)
+    model, geometry_table = without_geometry(machine.get("model"))
+    if geometry_table is not None:
+        machine = {**machine, "model": model}
+    problems += model_problems(model, _skiving_machine)
+    geometry = parse_geometry(geometry_table, machine.get("lead_screw_pitch", 10.0), problems)
 
     # Geometry checks run as soon as their own keys are sound, so they are reported beside key errors.
     g, c = parsed["gear"], parsed["cutter"]
@@ -217,6 +226,7 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
         rake_face(c),
         cutter_errors,
         clamping,
+        geometry,
     )
     problems += regrind_problems(job.new_tool, job.rake.regrind, job.cutter.face_width)
     if problems:

@@ -531,12 +531,18 @@ def relative_pose(setup, q: np.ndarray, deflection: np.ndarray | None = None) ->
 
     The axes' part is the forward kinematics of the model (blank_frame = Rz(B2 + work_phase); cutter_frame at
     (X, 0, P3), Rx(tilt) Rz(B1 + cutter_phase)); the loop's modes move the cutter frame further, by the recorded
-    small rotation and translation in the blank frame (MuJoCo's own site poses; tests check both)."""
+    small rotation and translation in the blank frame (MuJoCo's own site poses; tests check both). The machine as
+    built (``setup.geometry``, cutting/skiving/machine_geometry.py) places the head by its geometric errors: the
+    same terms as the ideal kinematics' :meth:`SkivingSetup.machine_pose` (its spindle's error motion is the blank's,
+    in ``setup.blank_frame``)."""
     from cutting.skiving.kinematics import rot_x, rot_z
 
+    g = setup.geometry
     back = rot_z(-(q[:, 1] + setup.work_phase))
-    rot = back @ rot_x(setup.tilt) @ rot_z(q[:, 0] + setup.cutter_phase)
+    rot = back @ rot_x(setup.tilt + g.shaft_angle_error) @ rot_z(q[:, 0] + setup.cutter_phase)
     centre = np.stack([q[:, 3], np.zeros(len(q)), q[:, 2]], -1)
+    if not g.exact:
+        centre = centre + g.head_offset(q[:, 2])
     trans = np.matmul(back, centre[:, :, None])[:, :, 0]
     if deflection is None:
         return rot, trans

@@ -1,0 +1,223 @@
+"""The machine's geometric errors (cutting/skiving/machine_geometry.py, [machine.model.geometry]; issue 43): the job's
+section, the one forward kinematics the ideal cut and the simulated machine share, and the known answers on the gear."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from small_jobs import small_job
+
+from cutting.errors import InputError
+from cutting.skiving.edge import make_edge
+from cutting.skiving.exact_solve import _poses, compiled_pose
+from cutting.skiving.exact_sweep import SweptVolumes
+from cutting.skiving.tooling import Clamping
+from cutting.skiving.trajectory import ideal_passes
+from metrology.measure import measure_gear
+from virtual_machine.job import parse_job
+from virtual_machine.runtime.machine_run import relative_pose
+from virtual_machine.setting.machine_layout import machine_params
+
+JOBS = Path(__file__).resolve().parent.parent / "assets" / "jobs"
+EVERY_ERROR = """
+[machine.model]
+radial_stiffness = 1.0e8
+
+[machine.model.geometry]
+shaft_angle_error = 0.01
+centre_distance_offset = 0.004
+cutter_offset_error = -0.02
+carriage_squareness_x = 0.01
+carriage_squareness_y = -0.02
+lead_screw_periodic_error = 0.003
+lead_screw_periodic_phase = 30.0
+work_spindle_radial_error = 0.005
+work_spindle_radial_phase = 60.0
+work_spindle_tilt_error = 0.02
+work_spindle_tilt_phase = -45.0
+"""
+
+
+def job_with(extra: str, face_width: float = 4.0):
+    return parse_job(tomllib.loads(small_job(edge=None, face_width=face_width) + extra))
+
+
+def test_the_section_gives_every_error_in_the_jobs_units() -> None:
+    job = job_with(EVERY_ERROR)
+    g = job.skiving.geometry
+    assert g.shaft_angle_error == pytest.approx(math.radians(0.01))
+    assert (g.centre_distance_offset, g.cutter_offset_error) == (0.004, -0.02)
+    assert (g.carriage_squareness_x, g.carriage_squareness_y) == pytest.approx((1e-4, -2e-4))  # per 100 mm -> per mm
+    assert g.lead_screw_periodic_phase == pytest.approx(math.radians(30.0))
+    assert g.lead_screw_pitch == job.machine.lead_screw_pitch  # one period a screw turn
+    assert g.work_spindle_tilt_error == pytest.approx(2e-4) and not g.exact
+    # the machine model's own parameters beside it are untouched
+    assert machine_params(job).radial_stiffness == 1.0e8
+    assert job_with("").skiving.geometry.exact
+
+
+@pytest.mark.parametrize(
+    ("line", "key", "words"),
+    [
+        ("centre_distance_offset = 2.0", "centre_distance_offset", "set-up error"),
+        ("shaft_angle_error = 5.0", "shaft_angle_error", "beyond +-1 deg"),
+        ('cutter_offset_error = "0.01"', "cutter_offset_error", ""),
+        ("shaft_angle = 0.01", "shaft_angle", "did you mean 'shaft_angle_error'"),
+        ("lead_screw_periodic_error = nan", "lead_screw_periodic_error", "finite"),
+    ],
+)
+def test_bad_geometry_is_refused_naming_the_key(line: str, key: str, words: str) -> None:
+    with pytest.raises(InputError) as err:
+        job_with(f"\n[machine.model.geometry]\n{line}\n")
+    text = str(err.value)
+    assert f"machine.model.geometry.{key}" in text and words in text, text
+
+
+def test_the_cut_and_the_run_place_the_tool_by_the_same_geometry() -> None:
+    """One forward kinematics: the ideal motion's poses (numpy), the compiled pose the removal and the measurement
+    solve on, and the run's poses from its axes (relative_pose) agree to rounding with every error set; the spindle's
+    synchronous error motions place the blank as a clamping eccentricity and tilt of the same vector and angle do (so
+    their signatures on the gear are those tests/test_cutter_errors.py proves: F_r = 2 e, the pitch's sinusoid, the
+    helix slope turning round the gear)."""
+    st = job_with(EVERY_ERROR).skiving
+    motion = ideal_passes(st)[-1]
+    t = np.linspace(0.0, motion.duration, 41)
+    rot, trans = motion.pose(t)
+    kind, w = compiled_pose(motion)
+    r2, o2 = np.empty((len(t), 9)), np.empty((len(t), 3))
+    _poses(0, len(t), kind, w, t, r2, o2)
+    assert np.abs(r2.reshape(-1, 3, 3) - rot).max() < 1e-12 and np.abs(o2 - trans).max() < 1e-9
+    phi0, s = motion.cutter_angle(t), motion.carriage(t)
+    q = np.stack(
+        [phi0, st.speed_ratio * phi0 + st.differential_rotation_per_mm * s, s, np.full_like(t, motion.centre_distance)],
+        -1,
+    )
+    r3, o3 = relative_pose(st, q)
+    assert np.abs(r3 - rot).max() < 1e-12 and np.abs(o3 - trans).max() < 1e-9
+    # the nominal kinematics stay the CNC's (the edge is designed for them): the machine's pose differs by the errors
+    _, o0 = st.cutter_pose(phi0, s, motion.centre_distance)
+    assert np.abs(o0 - trans).max() > 0.01
+    spindle = job_with(
+        "\n[machine.model.geometry]\nwork_spindle_radial_error = 0.005\nwork_spindle_radial_phase = 60.0\n"
+    )
+    clamped = job_with("\n[workpiece]\neccentricity = 0.005\neccentricity_phase = 60.0\n")
+    assert clamped.skiving.clamping == Clamping(0.005, math.radians(60.0))
+    assert np.abs(spindle.skiving.blank_frame - clamped.skiving.blank_frame).max() < 1e-15
+    # and its tilt error motion (mm per 100 mm: an angle) as the clamping's tilt (a runout at the reference diameter)
+    d = spindle.gear.reference_diameter
+    wobble = job_with("\n[machine.model.geometry]\nwork_spindle_tilt_error = 0.02\nwork_spindle_tilt_phase = 30.0\n")
+    tilted = job_with(f"\n[workpiece]\ntilt = {0.02 / 100 * d}\ntilt_phase = 30.0\n")
+    assert np.abs(wobble.skiving.blank_frame - tilted.skiving.blank_frame).max() < 1e-15
+
+
+def spur_external(extra: str = ""):
+    """assets/jobs/spur_external.toml (z 40, mn 2) on a 4 mm face: its flanks in the steady cut are those of the full
+    face (the same profile and pitch figures, measured) at a fifth of the measurement."""
+    text = (JOBS / "spur_external.toml").read_text().replace("face_width = 20.0", "face_width = 4.0")
+    return parse_job(tomllib.loads(text + extra))
+
+
+def _measured(st):
+    """The exact swept surface of the finishing pass (it passes through the whole space at full depth: the flanks
+    are its own), measured."""
+    exact = SweptVolumes(st.gear, make_edge(st, "conjugate"), ideal_passes(st)[-1:])
+    return measure_gear(exact, st.gear)
+
+
+def test_a_centre_distance_offset_thickens_the_teeth_by_its_span_signature() -> None:
+    """Known answer (docs/machine_geometry.md; domain.md section 8): the axes 10 um farther apart than commanded make
+    the span 2 delta_a sin(alpha_n) = 6.84 um larger, within 5 % (measured 6.84 um); the profile and the pitch do not
+    change, within 0.3 um (measured: f_Halpha +0.17 um on both flanks, the crossed axes' second order: the edge is
+    conjugate at the commanded centre distance only; F_p +0.02 um)."""
+    nominal = _measured(spur_external().skiving)
+    offset = _measured(spur_external("\n[machine.model.geometry]\ncentre_distance_offset = 0.010\n").skiving)
+    change = (offset["thickness"]["span"]["W_k_mm"] - nominal["thickness"]["span"]["W_k_mm"]) * 1e3
+    expected = 2 * 10.0 * math.sin(math.radians(20.0))
+    assert change == pytest.approx(expected, rel=0.05), (change, expected)
+    for side in ("left", "right"):
+        for key in ("F_alpha", "f_Halpha", "f_falpha"):
+            assert abs(offset["profile"][side][key] - nominal["profile"][side][key]) < 0.3, (side, key)
+        for key in ("f_p", "F_p"):
+            assert abs(offset["pitch"][side][key] - nominal["pitch"][side][key]) < 0.3, (side, key)
+
+
+def small(extra: str = "", helix: float = 0.0, face_width: float = 8.0):
+    """The small job (z 18, mn 1) on an 8 mm face, spur or with a helix [deg]; its finishing pass measured."""
+    text = small_job(edge=None, face_width=face_width).replace(
+        "normal_module = 1.0\n", f"normal_module = 1.0\nhelix_angle = {helix}\n"
+    )
+    return parse_job(tomllib.loads(text + extra))
+
+
+def _helix_change(extra: str, helix: float = 0.0, machine: str = ""):
+    """(nominal, with the errors) measurements of the small job and its transverse pressure angle and base helix."""
+    nominal = _measured(small(machine, helix).skiving)
+    job = small(machine + "\n[machine.model.geometry]\n" + extra, helix)
+    g = job.gear
+    alpha_t = math.atan(math.tan(g.alpha_n) / math.cos(g.beta))
+    return nominal, _measured(job.skiving), alpha_t, math.atan(math.tan(g.beta) * math.cos(alpha_t))
+
+
+@pytest.mark.parametrize(("axis", "flank_part"), [("x", "sin"), ("y", "cos")])
+def test_the_carriages_squareness_tapers_or_twists_the_helix(axis: str, flank_part: str) -> None:
+    """Known answer (docs/machine_geometry.md): the carriage off parallel to the work axis by c per mm moves the cutter
+    by c s at carriage position s. Along x (the centre distance) each flank moves out by c s sin(alpha_t) along its
+    base tangent: the same helix slope c L_beta sin(alpha_t) on both flanks (a taper); along y (tangential at the
+    mesh) by -+c s cos(alpha_t): the slope c L_beta cos(alpha_t), opposite on the two flanks (the teeth twisted).
+    And the profile: a section's points are generated at carriage positions that differ by L_alpha cos(alpha_t)
+    tan(Sigma) along the roll (the contact runs up the rake face, tilted by the shaft angle), so the profile slope
+    is c L_alpha cos(alpha_t) tan(Sigma) times sin(alpha_t) (x, opposite on the flanks) or cos(alpha_t) (y, the
+    same on both). Each within 10 % on the spur small job at 0.3 mm per 100 mm (helix 7.4 and 20.3 um, profile
+    1.73 and 4.75 um; measured 0.91 and 0.93 of the profile's)."""
+    c = 0.3  # mm per 100 mm
+    nominal, errored, alpha_t, _ = _helix_change(f"carriage_squareness_{axis} = {c}")
+    lo, hi = errored["evaluation"]["helix_z_mm"]
+    part = math.sin(alpha_t) if flank_part == "sin" else math.cos(alpha_t)
+    expected = c / 100 * (hi - lo) * part * 1e3
+    change = {s: errored["helix"][s]["f_Hbeta_mean"] - nominal["helix"][s]["f_Hbeta_mean"] for s in ("left", "right")}
+    assert abs(change["left"]) == pytest.approx(expected, rel=0.10), (change, expected)
+    assert abs(change["right"]) == pytest.approx(expected, rel=0.10), (change, expected)
+    assert (change["left"] * change["right"] > 0) == (axis == "x"), change
+    lo, hi = errored["evaluation"]["profile_roll_mm"]
+    shaft = small().skiving.shaft_angle
+    expected = c / 100 * (hi - lo) * math.cos(alpha_t) * math.tan(shaft) * part * 1e3
+    slope = {
+        s: errored["profile"][s]["f_Halpha_mean"] - nominal["profile"][s]["f_Halpha_mean"] for s in ("left", "right")
+    }
+    assert abs(slope["left"]) == pytest.approx(expected, rel=0.10), (slope, expected)
+    assert abs(slope["right"]) == pytest.approx(expected, rel=0.10), (slope, expected)
+    assert (slope["left"] * slope["right"] > 0) == (axis == "y"), slope
+
+
+def _sine(z: np.ndarray, y: np.ndarray, wavelength: float) -> float:
+    """The amplitude of the sine of ``wavelength`` in y(z) beside a straight line (least squares)."""
+    k = 2 * math.pi / wavelength
+    a = np.stack([np.ones_like(z), z, np.sin(k * z), np.cos(k * z)], -1)
+    coef = np.linalg.lstsq(a, y, rcond=None)[0]
+    return float(np.hypot(coef[2], coef[3]))
+
+
+def test_the_screws_periodic_error_waves_a_helical_flank_and_leaves_a_spur_one() -> None:
+    """Known answer: the carriage e sin(2 pi z / p) off along the work axis moves a helical flank along its base
+    tangent by e tan(beta_b) sin(2 pi z / p) (the helix term: an axial shift is a turn of the work, domain.md
+    section 8): the helix traces wave with the screw's pitch at that amplitude, within 10 %; a spur flank's normal
+    has no axial part: no wave (below 0.1 um) and its slope within 0.3 um. Screw pitch 2 mm, e = 10 um, the small
+    job at 15 deg."""
+    e, pitch = 0.010, 2.0
+    screw = f"\n[machine]\nlead_screw_pitch = {pitch}\n"
+    nominal, errored, _, beta_b = _helix_change(f"lead_screw_periodic_error = {e}", 15.0, screw)
+    z = errored["_traces"]["z_mm"]
+    for side in ("left", "right"):
+        d = (np.asarray(errored["_traces"]["helix"][side]) - np.asarray(nominal["_traces"]["helix"][side])) * 1e3
+        amplitude = np.mean([_sine(z, row, pitch) for row in d])  # um, per tooth's trace
+        assert amplitude == pytest.approx(e * math.tan(beta_b) * 1e3, rel=0.10), (side, amplitude)
+    # on a spur gear the feed marks move with the carriage (up to 0.6 um at a point), but no wave and no slope appear
+    spur0, spur1, _, _ = _helix_change(f"lead_screw_periodic_error = {e}", 0.0, screw)
+    for side in ("left", "right"):
+        d = (np.asarray(spur1["_traces"]["helix"][side]) - np.asarray(spur0["_traces"]["helix"][side])) * 1e3
+        assert np.mean([_sine(z, row, pitch) for row in d]) < 0.1, side
+        assert abs(spur1["helix"][side]["f_Hbeta_mean"] - spur0["helix"][side]["f_Hbeta_mean"]) < 0.3, side
