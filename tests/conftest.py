@@ -30,6 +30,7 @@ LONG_FIRST = (
     "test_rake_face.py",
     "test_chatter_in_the_run.py",
     "test_cut_measurement.py",
+    "test_machine_geometry.py",
     "test_cutter_errors.py",
     "test_one_run_outputs.py",
     "test_measure.py",

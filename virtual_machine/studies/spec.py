@@ -43,6 +43,7 @@ DISTRIBUTIONS = ("normal", "uniform")
 STUDY_KEYS = ("base", "method", "samples", "seed", "cache", "vary")
 VARY_KEYS = ("key", "label", "values", "range", "steps", "distribution", "mean", "std", "lo", "hi", "tolerance")
 MODEL_PREFIX = "machine.model."
+GEOMETRY_PREFIX = "machine.model.geometry."
 
 
 @dataclass(frozen=True)
@@ -131,6 +132,14 @@ def base_value(data: dict[str, Any], key: str) -> Any:
         from virtual_machine.setting.machine_layout import machine_size
 
         return machine_size(parse_job(data))
+    if key.startswith(GEOMETRY_PREFIX):  # the machine's geometric errors: job keys of their own (0 by default)
+        from virtual_machine.job.geometry_section import GEOMETRY_KEYS
+
+        name = key[len(GEOMETRY_PREFIX) :]
+        if name not in GEOMETRY_KEYS:
+            valid = ", ".join(GEOMETRY_PREFIX + k for k in GEOMETRY_KEYS)
+            raise InputError(Problem(key, None, "unknown machine geometry key", f"valid keys: {valid}"))
+        return GEOMETRY_KEYS[name].default
     if key.startswith(MODEL_PREFIX):
         from machine_models.parameters import SkivingMachineParams, parameter
         from virtual_machine.setting.machine_layout import machine_params
