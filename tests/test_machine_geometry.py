@@ -326,3 +326,26 @@ def test_a_study_varies_the_geometry_as_any_job_key(tmp_path) -> None:
     with pytest.raises(InputError) as err:
         load_study(study_file(tmp_path, '[[vary]]\nkey = "machine.model.geometry.centre_offset"\nvalues = [0.01]\n'))
     assert "unknown machine geometry key" in str(err.value) and key in str(err.value)
+
+
+def test_the_model_scope_lists_each_source_with_its_value_in_the_jobs_units() -> None:
+    """measurement.json's model_scope (virtual_machine/output/model_scope.py): the run's sources with their values as
+    the job gives them (deg, mm, mm per 100 mm), the cutter's errors and the clamping; what it leaves out with why;
+    `skive cut` says the machine's dynamics are not in it."""
+    from virtual_machine.output.model_scope import model_scope, scope_lines
+    from virtual_machine.setting.machine_layout import machine_params
+
+    extra = EVERY_ERROR + "\n[workpiece]\neccentricity = 0.004\n\n[cutter.errors]\nradial_runout = 0.003\n"
+    job = job_with(extra)
+    scope = model_scope(job, machine_params(job), "run")
+    values = {it["key"]: (it["value"], it["unit"]) for it in scope["included"]}
+    assert values["machine.model.geometry.shaft_angle_error"] == (pytest.approx(0.01), "deg")
+    assert values["machine.model.geometry.carriage_squareness_y"] == (pytest.approx(-0.02), "mm/100 mm")
+    assert values["machine.model.geometry.work_spindle_tilt_error"] == (pytest.approx(0.02), "mm/100 mm")
+    assert values["workpiece.eccentricity"] == (0.004, "mm") and values["cutter.errors.radial_runout"] == (0.003, "mm")
+    left_out = {it["source"] for it in scope["not_included"]}
+    assert not any("geometry" in s for s in left_out) and any("encoder" in s for s in left_out)
+    assert "  not included" in scope_lines(scope)
+    cut = model_scope(job_with(""), None, "cut")
+    assert any("dynamics" in it["source"] for it in cut["not_included"])
+    assert any("geometry" in it["source"] for it in cut["not_included"])

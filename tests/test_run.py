@@ -94,6 +94,13 @@ def test_run_writes_every_file(runs) -> None:
     assert {t["tooth"] for p in doc["tool_load"] for t in p["teeth"]} <= set(range(job.cutter.teeth))
     assert doc["run"]["cutter"]["clearance_angle_deg"] == pytest.approx(6.0)
     assert doc["run"]["cutter"]["rake_angle_deg"] == 0.0
+    # the model's scope: what the verdict holds (the controllers, the drives, the forces, the rake face) and not
+    scope = doc["model_scope"]
+    keys = {it["key"] for it in scope["included"]}
+    assert {"machine.structure", "machine.size", "process.material", "cutter.rake_face"} <= keys
+    left_out = " ".join(it["source"] for it in scope["not_included"])
+    assert "thermal drift" in left_out and "structural modes" in left_out and "machine geometry" in left_out
+    assert "The model's scope" in (out / "report.html").read_text()
     body = doc["body_interference"]  # the relieved tooth off the finished teeth by about the side clearance
     assert -0.0005 < body["body_intrusion_max_mm"] < 0 and body["depth_mm"] == pytest.approx(0.01)
     # the run's figures are the co-simulation's: its stages' times, its machine time, its passages and chips
@@ -277,6 +284,7 @@ def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_pa
     classes = doc["iso1328"]["class"]
     over = {k for k, c in classes.items() if k != "overall" and (c is None or c > 1)}
     assert not verdict["pass"] and {f["parameter"] for f in verdict["failures"]} == over and over
+    assert verdict["model_scope"] == doc["model_scope"]  # the verdict says what it holds
     for f in verdict["failures"]:
         assert f["measured_um"] == pytest.approx(doc["iso1328"]["measured"][f["parameter"]])
     gear = load_job(job).gear

@@ -262,10 +262,15 @@ def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
         click.echo(f"FAIL {job}: {exc}", err=True)
         sys.exit(1)
     verdict = class_verdict(doc, j.gear, max_class)
+    scope = doc.get("model_scope")
     if as_json:
-        click.echo(json.dumps({"job": str(job), **verdict}, indent=2))
+        click.echo(json.dumps({"job": str(job), **verdict, "model_scope": scope}, indent=2))
     else:
         click.echo(format_verdict(verdict, str(job)))
+        if scope:  # what the verdict holds and what it does not
+            from virtual_machine.output.model_scope import scope_lines
+
+            click.echo("\n".join(scope_lines(scope)))
     if not verdict["pass"]:
         sys.exit(1)
 

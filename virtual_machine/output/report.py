@@ -167,6 +167,7 @@ def write_report(
         "<h2>Size</h2>",
         html_table(["", "measured", "nominal"], thickness),
         *_added_rows(run.get("machine_added")),
+        *_scope_rows(doc.get("model_scope")),
         "<h2>Profile, helix and pitch</h2>",
         *[image_tag(c) for c in charts],
         "<h2>Synchronisation error, cutting force and chips over time</h2>",
@@ -180,6 +181,21 @@ def write_report(
         f"<pre>{html.escape(job_text)}</pre>",
     ]
     return write_page(path, title, body)
+
+
+def _scope_rows(scope: dict | None) -> list[str]:
+    """The model's scope: the error sources the verdict holds (with their values) and the known ones it does not."""
+    if not scope:
+        return []
+    included = [[it["source"], f"{it['value']} {it['unit']}".strip(), it["key"]] for it in scope["included"]]
+    left_out = [[it["source"], it["why"]] for it in scope["not_included"]]
+    return [
+        "<h2>The model's scope</h2>",
+        "<p>The class above holds these error sources, with their values in this job:</p>",
+        html_table(["source", "value", "job key"], included),
+        "<p>and not these:</p>",
+        html_table(["source", "why"], left_out),
+    ]
 
 
 def _added_rows(added: dict | None) -> list[str]:

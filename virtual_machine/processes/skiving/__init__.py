@@ -19,6 +19,7 @@ from typing import ClassVar
 from metrology.charts import finite
 from virtual_machine.job import Job
 from virtual_machine.output.json_file import write_json
+from virtual_machine.output.model_scope import model_scope
 from virtual_machine.output.progress import Reporter
 from virtual_machine.processes.base import Process, Product, reporter_or_default, run_identity, written
 from virtual_machine.processes.options import (
@@ -155,6 +156,7 @@ class Skiving(Process):
         result = measure_written_cut(job, report.edge, motions, report.result, stl, out / "gear.stl")
         motion = "ideal" if path is None else "ideal, finishing pass along the modification's path"
         result["cut"] = _cut_summary(report, stl, kind, motion if trajectory is None else str(trajectory), workers, st)
+        result["model_scope"] = model_scope(job, None, "cut")
         if path is not None:
             from virtual_machine.processes.skiving.modification_path import path_summary
 

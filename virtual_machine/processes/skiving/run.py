@@ -39,6 +39,7 @@ from virtual_machine.job import Job, load_job
 from virtual_machine.output.cutter_charts import write_cutter_charts
 from virtual_machine.output.formatting import format_sheet
 from virtual_machine.output.json_file import write_json
+from virtual_machine.output.model_scope import model_scope
 from virtual_machine.output.motion_io import summary
 from virtual_machine.output.report import run_chart, write_report
 from virtual_machine.processes.base import run_identity
@@ -51,6 +52,7 @@ from virtual_machine.processes.skiving.machine_effect import (
     pass_deflection,
     pass_forces,
 )
+from virtual_machine.setting.machine_layout import machine_params
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.version import versions
 
@@ -146,6 +148,7 @@ def run_job(
     _flank_marks(doc["run"]["vibration"], measurement, len(job.skiving.passes), job.skiving.axial_feed)
     if added is not None:
         doc["run"]["machine_added"] = finite(added)
+    doc["model_scope"] = model_scope(job, machine_params(job), "run")
     write_json(out / "measurement.json", doc)
     sheet = format_sheet(plan.sheet(), str(path))
     title = f"skive run: {Path(path).name}"
