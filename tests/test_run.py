@@ -280,6 +280,12 @@ def test_check_fails_a_gear_worse_than_the_class_and_names_the_parameters(tmp_pa
     res = CliRunner().invoke(main, ["check", str(job), "--max-class", "1", "--json", "--out", str(out)])
     assert res.exit_code == 1, res.output
     verdict = json.loads(res.output[res.output.index("{") :])
+    # several jobs: a folder each, a list of verdicts, the JUnit report (a job file that does not parse fails
+    # before any job runs)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(GRADABLE_JOB.replace("teeth = 18", "teeth = 2"))
+    res = CliRunner().invoke(main, ["check", str(job), str(bad), "--max-class", "1", "--out", str(tmp_path / "two")])
+    assert res.exit_code != 0 and not (tmp_path / "two").exists()
     doc = json.loads((out / "measurement.json").read_text())
     classes = doc["iso1328"]["class"]
     over = {k for k, c in classes.items() if k != "overall" and (c is None or c > 1)}
@@ -328,6 +334,35 @@ def test_check_verdicts_on_known_documents() -> None:
     assert class_verdict({"iso1328": {"error": "b = 2.0 is outside"}}, gear, 11)["failures"][0]["reason"]
     with pytest.raises(ValueError):
         class_verdict(doc, gear, 12)
+    # the JUnit XML report of skive check --junit: one case per job, a failure per parameter (its measured value,
+    # tolerance and class) or the reason; the unmeasurable gear's error; the model's scope as the case's output
+    import xml.etree.ElementTree as ET
+
+    from virtual_machine.output.check import junit_xml
+
+    scope = {"included": [{"source": "s", "key": "k", "value": 1, "unit": "mm"}], "not_included": []}
+    graded = {**v, "model_scope": scope}
+    ungraded = {**class_verdict({"iso1328": {"error": "b = 2.0 is outside"}}, gear, 7), "model_scope": None}
+    ok = {"max_class": 7, "class": 5, "failures": [], "pass": True, "model_scope": None}
+    root = ET.fromstring(
+        junit_xml(
+            [
+                ("a.toml", graded, 1.0, None),
+                ("b.toml", ungraded, 2.0, None),
+                ("c.toml", None, 0.5, "torn"),
+                ("d.toml", ok, 1.5, None),
+            ],
+            7,
+        )
+    )
+    assert root.tag == "testsuite" and root.get("tests") == "4" and root.get("failures") == "3"
+    cases = {c.get("name"): c for c in root.iter("testcase")}
+    texts = [f.get("message") for f in cases["a.toml"].iter("failure")]
+    assert texts[0] == "F_alpha: measured 15.00 um, tolerance 14 um (class 7); the gear's F_alpha is class 8"
+    assert "worse than class 11" in texts[1] and "k" in cases["a.toml"].find("system-out").text
+    assert "b = 2.0 is outside" in cases["b.toml"].find("failure").get("message")
+    assert cases["c.toml"].find("failure").get("type") == "UnmeasurableGear"
+    assert cases["d.toml"].find("failure") is None
 
 
 def test_the_jobs_motor_torques_are_the_amplifiers_current_limits(tmp_path) -> None:
@@ -447,3 +482,43 @@ def test_the_reference_makes_the_runs_working_angle_maps_beside_the_machine() ->
             np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
     wa.keep_maps(job.skiving, edge, made)
     assert all(x is y for x, y in zip(wa.working_angle_maps(job.skiving, edge), made, strict=True))
+
+
+def test_check_takes_several_jobs_and_writes_their_junit_report(tmp_path) -> None:
+    """skive check JOB... --junit: each job run into a folder of its own, a list of verdicts, one JUnit test case
+    per job, exit 1 when one fails (the runs stubbed with known documents: the plumbing, not the machine)."""
+    import xml.etree.ElementTree as ET
+    from types import SimpleNamespace
+
+    import virtual_machine.cli as cli
+
+    good, bad = tmp_path / "good.toml", tmp_path / "bad.toml"
+    for p in (good, bad):
+        p.write_text(GRADABLE_JOB)
+    measured = {"F_alpha": 3.0, "f_p": 1.0}
+    docs = {
+        "good": {
+            "iso1328": {"class": {"F_alpha": 5, "f_p": 4, "overall": 5}, "measured": measured},
+            "model_scope": None,
+        },
+        "bad": {
+            "iso1328": {"class": {"F_alpha": 9, "f_p": 4, "overall": 9}, "measured": measured},
+            "model_scope": None,
+        },
+    }
+    where = []
+
+    def perform(kind, job, out, reporter=None):
+        where.append(out)
+        return SimpleNamespace(data=docs[out.name])
+
+    with mock.patch.object(cli, "process_for", lambda job: SimpleNamespace(perform=perform)):
+        args = ["check", str(good), str(bad), "--max-class", "6", "--json", "--out", str(tmp_path / "o")]
+        res = CliRunner().invoke(main, [*args, "--junit", str(tmp_path / "junit.xml")])
+    assert res.exit_code == 1, res.output
+    assert where == [tmp_path / "o" / "good", tmp_path / "o" / "bad"]
+    verdicts = json.loads(res.output[res.output.index("[") :])
+    assert [v["pass"] for v in verdicts] == [True, False] and verdicts[1]["failures"][0]["parameter"] == "F_alpha"
+    root = ET.parse(tmp_path / "junit.xml").getroot()
+    assert root.get("tests") == "2" and root.get("failures") == "1"
+    assert [c.get("name") for c in root.iter("testcase")] == [str(good), str(bad)]

@@ -243,35 +243,56 @@ def format_study(outcome, out: Path) -> str:
     return "\n".join(lines)
 
 
-@main.command(help="Run JOB and fail (exit 1) when its gear is worse than ISO 1328-1 class N, naming the parameters.")
-@click.argument("job", type=click.Path(path_type=Path))
+@main.command(
+    help="Run each JOB and fail (exit 1) when a gear is worse than ISO 1328-1 class N, naming the parameters; with "
+    "--junit a JUnit XML report (one test case per job) for CI dashboards."
+)
+@click.argument("jobs", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--max-class", "max_class", type=click.IntRange(1, 11), required=True, help="Worst class accepted.")
-@click.option("--json", "as_json", is_flag=True, help="Print the verdict as JSON.")
-@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
-def check(job: Path, max_class: int, as_json: bool, out: Path) -> None:
-    from virtual_machine.output.check import class_verdict, format_verdict
+@click.option("--json", "as_json", is_flag=True, help="Print the verdict as JSON (a list for several jobs).")
+@click.option(
+    "--out",
+    type=click.Path(path_type=Path),
+    default=Path("out"),
+    show_default=True,
+    help="Output folder (several jobs: one folder each beneath it, named by the job file).",
+)
+@click.option("--junit", type=click.Path(path_type=Path), help="Write the verdicts as JUnit XML to this file.")
+def check(jobs: tuple[Path, ...], max_class: int, as_json: bool, out: Path, junit: Path | None) -> None:
+    import time
 
-    j = load_job(job)
-    if j.kind not in GRADED:
-        raise InputError(
-            Problem("job", j.kind, "skive check grades gears by ISO 1328-1", "use `skive run` for this job")
-        )
-    try:
-        doc = process_for(j).perform("run", j, out, reporter=Reporter(quiet=True)).data
-    except UnmeasurableGearError as exc:  # a gear that cannot be measured fails any class
-        click.echo(f"FAIL {job}: {exc}", err=True)
-        sys.exit(1)
-    verdict = class_verdict(doc, j.gear, max_class)
-    scope = doc.get("model_scope")
+    from virtual_machine.output.check import class_verdict, format_verdict, junit_xml
+    from virtual_machine.output.model_scope import scope_lines
+
+    loaded = [load_job(job) for job in jobs]  # every job parses before any runs: a bad one costs no run
+    for job, j in zip(jobs, loaded, strict=True):
+        if j.kind not in GRADED:
+            raise InputError(
+                Problem(str(job), j.kind, "skive check grades gears by ISO 1328-1", "use `skive run` for this job")
+            )
+    results, verdicts = [], []
+    for job, j in zip(jobs, loaded, strict=True):
+        where = out if len(jobs) == 1 else out / job.stem
+        t0 = time.perf_counter()
+        try:
+            doc = process_for(j).perform("run", j, where, reporter=Reporter(quiet=True)).data
+        except UnmeasurableGearError as exc:  # a gear that cannot be measured fails any class
+            click.echo(f"FAIL {job}: {exc}", err=True)
+            results.append((str(job), None, time.perf_counter() - t0, str(exc)))
+            continue
+        verdict = {**class_verdict(doc, j.gear, max_class), "model_scope": doc.get("model_scope")}
+        results.append((str(job), verdict, time.perf_counter() - t0, None))
+        verdicts.append({"job": str(job), **verdict})
+        if not as_json:
+            click.echo(format_verdict(verdict, str(job)))
+            if verdict["model_scope"]:  # what the verdict holds and what it does not
+                click.echo("\n".join(scope_lines(verdict["model_scope"])))
     if as_json:
-        click.echo(json.dumps({"job": str(job), **verdict, "model_scope": scope}, indent=2))
-    else:
-        click.echo(format_verdict(verdict, str(job)))
-        if scope:  # what the verdict holds and what it does not
-            from virtual_machine.output.model_scope import scope_lines
-
-            click.echo("\n".join(scope_lines(scope)))
-    if not verdict["pass"]:
+        click.echo(json.dumps(verdicts[0] if len(jobs) == 1 and verdicts else verdicts, indent=2))
+    if junit is not None:
+        junit.parent.mkdir(parents=True, exist_ok=True)
+        junit.write_text(junit_xml(results, max_class))
+    if any(err is not None or not v["pass"] for _, v, _, err in results):
         sys.exit(1)
 
 
