@@ -219,15 +219,16 @@ def _ideal(w, o, t, full):
     leaves it as it is (bit for bit: it adds products with zero), so it is skipped. The machine's geometry
     (cutting.skiving.machine_geometry): its centre distance and shaft angle in w[o + 3], w[o + 7:9], the cutter
     centre's offset from w[o + 10:16] (y offset, squareness x and y, the screw's periodic error, 2 pi / pitch,
-    phase)."""
+    phase), the encoders' readings from w[o + 16:20] (tool, its phase, work, its phase)."""
     phi0 = w[o] * t
     s = w[o + 1] + w[o + 2] * t
-    phi2 = w[o + 4] * phi0 + w[o + 5] * s + w[o + 6]
+    b2 = w[o + 4] * phi0 + w[o + 5] * s
+    phi2 = b2 - w[o + 18] * math.sin(b2 + w[o + 19]) + w[o + 6]  # the work encoder's reading held
     c, sn = math.cos(-phi2), math.sin(-phi2)
     tilt = (1.0, 0.0, 0.0, 0.0, w[o + 7], -w[o + 8], 0.0, w[o + 8], w[o + 7])
     rot = _mm(_rz(c, sn), tilt)
     if full:
-        phi = phi0 + w[o + 9]
+        phi = phi0 - w[o + 16] * math.sin(phi0 + w[o + 17]) + w[o + 9]  # and the tool encoder's
         rot = _mm(rot, _rz(math.cos(phi), math.sin(phi)))
     x = w[o + 3] + w[o + 11] * s
     y = w[o + 10] + w[o + 12] * s

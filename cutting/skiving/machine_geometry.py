@@ -13,6 +13,10 @@ in the blank frame (ISO 230-1 names what each one is and how it is tested):
                         one period a screw turn, its phase at mid face)
     head <- cutter:     Rx(shaft angle + shaft_angle_error) Rz(B1 + cutter phase)
 
+and the spindles' encoders: the ideal kinematics take the axes as the CNC holds them, at their encoders' readings,
+so each spindle stands behind its command by what its encoder reads ahead (``skive run`` reads them in each
+structure's controllers instead: a chain of gears reads none).
+
 Both the ideal kinematics (`skive cut`: :meth:`cutting.skiving.kinematics.SkivingSetup.machine_pose`, compiled in
 :func:`cutting.skiving.exact_solve._ideal`) and the simulated machine (`skive run`:
 :func:`virtual_machine.runtime.machine_run.relative_pose`) go through these same terms. The signatures each leaves
@@ -47,6 +51,9 @@ class MachineGeometry:
         blank's frame as the clamping's: 0 is the centre of space 0)
     work_spindle_tilt_error: its once-per-revolution tilt error motion [rad]: the turning blank's axis tilted about
         its mid-face point, its face lifted most at ``work_spindle_tilt_phase`` [rad]
+    tool_encoder_eccentricity, work_encoder_eccentricity: the spindles' encoders read their shafts e sin(B + phase)
+        ahead [rad] (a graduation off its shaft's centre: once per turn), B the spindle's angle; the axes held at the
+        encoders' readings stand that much behind (:meth:`encoder_turns`; in `skive run` the controllers read them)
     """
 
     shaft_angle_error: float = 0.0
@@ -61,6 +68,10 @@ class MachineGeometry:
     work_spindle_radial_phase: float = 0.0
     work_spindle_tilt_error: float = 0.0
     work_spindle_tilt_phase: float = 0.0
+    tool_encoder_eccentricity: float = 0.0
+    tool_encoder_phase: float = 0.0
+    work_encoder_eccentricity: float = 0.0
+    work_encoder_phase: float = 0.0
 
     @property
     def exact(self) -> bool:
@@ -83,10 +94,22 @@ class MachineGeometry:
             -1,
         )
 
+    @property
+    def encoders(self) -> bool:
+        """Whether an encoder reads its shaft off."""
+        return bool(self.tool_encoder_eccentricity or self.work_encoder_eccentricity)
+
+    def encoder_errors(self, b1: np.ndarray, b2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """What the tool's and the work's encoders read ahead of their shafts at spindle angles ``b1``, ``b2`` [rad]."""
+        return (
+            self.tool_encoder_eccentricity * np.sin(b1 + self.tool_encoder_phase),
+            self.work_encoder_eccentricity * np.sin(b2 + self.work_encoder_phase),
+        )
+
     def compiled(self) -> list[float]:
         """What :func:`cutting.skiving.exact_solve._ideal` reads beyond the nominal pose: the offset's terms (y
-        offset, cx, cy, e, 2 pi / p, phi); the centre distance's offset and the shaft angle's error go into the
-        nominal ones."""
+        offset, cx, cy, e, 2 pi / p, phi) and the encoders' (tool e, phase, work e, phase); the centre distance's
+        offset and the shaft angle's error go into the nominal ones."""
         return [
             self.cutter_offset_error,
             self.carriage_squareness_x,
@@ -94,6 +117,10 @@ class MachineGeometry:
             self.lead_screw_periodic_error,
             2 * math.pi / self.lead_screw_pitch,
             self.lead_screw_periodic_phase,
+            self.tool_encoder_eccentricity,
+            self.tool_encoder_phase,
+            self.work_encoder_eccentricity,
+            self.work_encoder_phase,
         ]
 
     def spindle_placement(self) -> np.ndarray:

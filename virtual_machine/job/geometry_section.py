@@ -31,6 +31,7 @@ def within(limit: float, unit: str) -> Check:
 
 
 SQ = "mm/100 mm"
+ARCSEC = math.pi / 180 / 3600
 
 
 def _phase(what: str) -> Key:
@@ -63,7 +64,16 @@ GEOMETRY_KEYS: dict[str, Key] = {
         float, 0.0, SQ, "the work spindle's once-per-revolution tilt error motion", within(0.5, SQ)
     ),
     "work_spindle_tilt_phase": _phase("where the blank's face is lifted most"),
-}
+    "tool_encoder_eccentricity": Key(
+        float, 0.0, "arcsec", "the tool spindle's encoder's once-per-turn error (its graduation off centre)",
+        within(60.0, "arcsec"),
+    ),
+    "tool_encoder_phase": _phase("its phase against the tool spindle's angle"),
+    "work_encoder_eccentricity": Key(
+        float, 0.0, "arcsec", "the work spindle's encoder's once-per-turn error", within(60.0, "arcsec")
+    ),
+    "work_encoder_phase": _phase("its phase against the work spindle's angle"),
+}  # fmt: skip
 
 
 def without_geometry(model: dict[str, Any] | None) -> tuple[dict[str, Any] | None, Any]:
@@ -97,4 +107,8 @@ def parse_geometry(table: Any, lead_screw_pitch: float, problems: list[Problem])
         work_spindle_radial_phase=math.radians(v["work_spindle_radial_phase"]),
         work_spindle_tilt_error=v["work_spindle_tilt_error"] * per_mm,
         work_spindle_tilt_phase=math.radians(v["work_spindle_tilt_phase"]),
+        tool_encoder_eccentricity=v["tool_encoder_eccentricity"] * ARCSEC,
+        tool_encoder_phase=math.radians(v["tool_encoder_phase"]),
+        work_encoder_eccentricity=v["work_encoder_eccentricity"] * ARCSEC,
+        work_encoder_phase=math.radians(v["work_encoder_phase"]),
     )

@@ -21,11 +21,12 @@ GEOMETRY_UNITS = {
     "lead_screw_periodic_error": ("mm", float),
     "work_spindle_radial_error": ("mm", float),
     "work_spindle_tilt_error": ("mm/100 mm", lambda v: v * 100),
+    "tool_encoder_eccentricity": ("arcsec", lambda v: math.degrees(v) * 3600),
+    "work_encoder_eccentricity": ("arcsec", lambda v: math.degrees(v) * 3600),
 }
 
 #: known sources skive does not model yet, and why (each names what would hold it)
 NOT_MODELLED = (
-    ("encoder eccentricity (tool and work)", "not modelled yet (issue 43): the encoders read their shafts exactly"),
     ("thermal drift of the head, the spindles and the structure", "not modelled yet (issue 43): the machine is at a "
      "steady temperature"),
     ("carriage straightness and angular errors (pitch, yaw, roll)", "only the carriage's squareness is modelled"),

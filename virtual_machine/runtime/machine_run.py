@@ -311,6 +311,17 @@ class MachineRun:
         self._qpos, self._qvel, self._ctrl = data.qpos, data.qvel, data.ctrl
         self._qa = [phys.qadr[a] for a in AXES]
         self._sensors = [phys.qadr[j] for j in machine.sensors]
+        # the spindles' encoders as built (cutting/skiving/machine_geometry.py): what each reads ahead of its shaft
+        g = setup.geometry
+        self._encoders = [
+            (k, e, phase)
+            for k, joint in enumerate(machine.sensors)
+            for name, e, phase in (
+                ("B1", g.tool_encoder_eccentricity, g.tool_encoder_phase),
+                ("B2", g.work_encoder_eccentricity, g.work_encoder_phase),
+            )
+            if joint == name and e
+        ]
         self._speeds = [phys.vadr[j] for j in machine.speeds]
         self._acts = [phys.act[a] for a in machine.actuators]
         self._radial = phys.act["X"]
@@ -353,9 +364,10 @@ class MachineRun:
                     self.phys.engage(tendon, on)
                     self._clutch_state[tendon] = on
         qpos = self._qpos
-        self._torques = torques = self.machine.tick(
-            self.dt, tick.cnc, qpos.take(self._sensors).tolist(), self._qvel.take(self._speeds).tolist()
-        )
+        angles = qpos.take(self._sensors).tolist()
+        for k, e, phase in self._encoders:  # a graduation off its shaft's centre reads e sin(angle + phase) ahead
+            angles[k] += e * math.sin(angles[k] + phase)
+        self._torques = torques = self.machine.tick(self.dt, tick.cnc, angles, self._qvel.take(self._speeds).tolist())
         self._ctrl[self._acts] = torques
         return True
 
