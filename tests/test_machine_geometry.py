@@ -17,7 +17,6 @@ from cutting.errors import InputError
 from cutting.skiving.edge import make_edge
 from cutting.skiving.exact_solve import _poses, compiled_pose
 from cutting.skiving.exact_sweep import SweptVolumes
-from cutting.skiving.machine_geometry import MachineGeometry
 from cutting.skiving.signatures import flank_deviation_first_order
 from cutting.skiving.tooling import Clamping
 from cutting.skiving.trajectory import ideal_passes
@@ -161,7 +160,7 @@ def predicted_profile_slope(job, side: str, roll: tuple[float, float], points: i
     """The first-order profile slope [um] the job's machine geometry leaves on ``side`` (cutting/skiving/signatures.py:
     the envelope theorem at the generating points of the mid section, its mean line over the evaluation range)."""
     st = job.skiving
-    nominal = dataclasses.replace(st, geometry=MachineGeometry(lead_screw_pitch=st.geometry.lead_screw_pitch))
+    nominal = dataclasses.replace(st, geometry=st.geometry.without_errors())
     L = np.linspace(*roll, points)
     d = flank_deviation_first_order(nominal, st, side, L, 0.0) * 1e3
     return float(np.polyfit(L, d, 1)[0] * (L[-1] - L[0]))
@@ -420,3 +419,14 @@ def test_the_run_reads_the_encoders_in_its_controllers() -> None:
     full = job.gear.reference_radius * 60 * ARCSEC * 1e3
     assert 0.5 * full < amplitude < 1.05 * full, (amplitude, full)
     assert np.abs(d - basis @ coef).max() < 0.2 * amplitude
+
+
+def test_what_the_machine_added_holds_its_geometry() -> None:
+    """The ideal-cut reference of `skive run`'s "what the machine added" is the exact kinematics on the machine as
+    designed: a job's geometric errors are the machine's, so its reference is the same job's without them (the same
+    span to the nanometre), and the run's difference from it shows them."""
+    from virtual_machine.processes.skiving.machine_added import ideal_measurement
+
+    offset = ideal_measurement(job_with("\n[machine.model.geometry]\ncentre_distance_offset = 0.010\n"), "conjugate")
+    exact = ideal_measurement(job_with(""), "conjugate")
+    assert offset["thickness"]["span"]["W_k_mm"] == pytest.approx(exact["thickness"]["span"]["W_k_mm"], abs=1e-9)

@@ -53,7 +53,7 @@ class MachineGeometry:
         its mid-face point, its face lifted most at ``work_spindle_tilt_phase`` [rad]
     tool_encoder_eccentricity, work_encoder_eccentricity: the spindles' encoders read their shafts e sin(B + phase)
         ahead [rad] (a graduation off its shaft's centre: once per turn), B the spindle's angle; the axes held at the
-        encoders' readings stand that much behind (:meth:`encoder_turns`; in `skive run` the controllers read them)
+        encoders' readings stand that much behind (:meth:`encoder_errors`; in `skive run` the controllers read them)
     """
 
     shaft_angle_error: float = 0.0
@@ -94,11 +94,6 @@ class MachineGeometry:
             -1,
         )
 
-    @property
-    def encoders(self) -> bool:
-        """Whether an encoder reads its shaft off."""
-        return bool(self.tool_encoder_eccentricity or self.work_encoder_eccentricity)
-
     def encoder_errors(self, b1: np.ndarray, b2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """What the tool's and the work's encoders read ahead of their shafts at spindle angles ``b1``, ``b2`` [rad]."""
         return (
@@ -131,5 +126,6 @@ class MachineGeometry:
         turn = _tilt(self.work_spindle_tilt_error, self.work_spindle_tilt_phase)
         return frame(turn, (e * math.cos(phase), e * math.sin(phase), 0.0))
 
-
-EXACT = MachineGeometry()
+    def without_errors(self) -> MachineGeometry:
+        """The machine as designed (its screw's pitch kept)."""
+        return MachineGeometry(lead_screw_pitch=self.lead_screw_pitch)
