@@ -7,6 +7,7 @@ A study file names a base job and a list of ``[[vary]]`` entries::
     samples = 50                             # monte-carlo only
     seed = 1                                 # monte-carlo only: the same seed draws the same cases
     cache = "../cases"                       # optional: a case store shared with other studies (study/cache.py)
+    cutter_class = "A"                       # monte-carlo only: the cutters drawn from a tolerance class (AA, A, B)
     [[vary]]
     key = "machine.model.work_drive.backlash"  # any job key, dotted
     label = "work-drive backlash"            # the part's name in the report (default: the key)
@@ -40,7 +41,7 @@ from virtual_machine.job.skiving import SKIVING_OPTIONAL
 
 METHODS = ("one-at-a-time", "grid", "monte-carlo")
 DISTRIBUTIONS = ("normal", "uniform")
-STUDY_KEYS = ("base", "method", "samples", "seed", "cache", "vary")
+STUDY_KEYS = ("base", "method", "samples", "seed", "cache", "vary", "cutter_class")
 VARY_KEYS = ("key", "label", "values", "range", "steps", "distribution", "mean", "std", "lo", "hi", "tolerance")
 MODEL_PREFIX = "machine.model."
 GEOMETRY_PREFIX = "machine.model.geometry."
@@ -199,7 +200,13 @@ def load_study(path: str | Path) -> Study:
         problems.append(Problem("cache", cache, "must be a directory path", 'e.g. cache = "../cases"'))
         cache = None
     base_path, base_data = _base_job(path, data, problems, source)
-    varies = _varies(data.get("vary", []), method, base_data, problems)
+    entries = data.get("vary", [])
+    if "cutter_class" in data:
+        entries = [
+            *(entries if isinstance(entries, list) else []),
+            *_cutter_class(data["cutter_class"], method, base_data, problems),
+        ]
+    varies = _varies(entries, method, base_data, problems)
     if problems:
         raise InputError(problems, source)
     return Study(
@@ -212,6 +219,48 @@ def load_study(path: str | Path) -> Study:
         seed,
         (path.parent / cache).resolve() if cache else None,
     )
+
+
+def _cutter_class(cls: Any, method: str, base_data: dict[str, Any], problems: list[Problem]) -> list[dict]:
+    """[[vary]] tables that draw the study's cutters from a tolerance class (cutting/skiving/cutter_classes.py, the
+    base job's module): each deviation uniform within its tolerance (the runouts from 0 to it at any phase, the
+    profile slopes within +-half of it, the form up to half of it: FfS bounds their sum), the single pitch
+    deviations a random cutter within +-its tolerance (a fresh seed per case). An assumption on how a class's
+    cutters spread, not a published distribution: a class says only what no cutter of it exceeds."""
+    from cutting.skiving.cutter_classes import CLASSES, cutter_tolerances
+
+    if method != "monte-carlo":
+        problems.append(Problem("cutter_class", cls, "draws cutters: a Monte-Carlo study's", 'method = "monte-carlo"'))
+        return []
+    if cls not in CLASSES:
+        problems.append(Problem("cutter_class", cls, "unknown class", "use one of " + ", ".join(map(repr, CLASSES))))
+        return []
+    if isinstance(base_data.get("cutter", {}).get("errors", {}).get("pitch"), list):
+        problems.append(
+            Problem("cutter_class", cls, "the base job's cutter has its own pitch deviations", "remove them")
+        )
+        return []
+    t = cutter_tolerances(cls, parse_job(base_data).gear.mn)
+    e = "cutter.errors."
+    out = [
+        {"key": e + "radial_runout", "distribution": "uniform", "lo": 0.0, "hi": t["radial_runout"],
+         "tolerance": t["radial_runout"]},
+        {"key": e + "radial_runout_phase", "distribution": "uniform", "lo": 0.0, "hi": 360.0},
+        {"key": e + "axial_runout", "distribution": "uniform", "lo": 0.0, "hi": t["axial_runout"],
+         "tolerance": t["axial_runout"]},
+        {"key": e + "axial_runout_phase", "distribution": "uniform", "lo": 0.0, "hi": 360.0},
+        {"key": e + "pitch_tolerance", "values": [t["pitch"]]},
+        {"key": e + "seed", "distribution": "uniform", "lo": 0.0, "hi": 1.0e6},
+    ]  # fmt: skip
+    for side in ("left", "right"):
+        half = t["profile"] / 2
+        out.append({"key": f"{e}profile_slope_{side}", "distribution": "uniform", "lo": -half, "hi": half,
+                    "tolerance": half})  # fmt: skip
+        out.append({"key": f"{e}profile_form_{side}", "distribution": "uniform", "lo": 0.0, "hi": half,
+                    "tolerance": half})  # fmt: skip
+    for entry in out:
+        entry["label"] = f"cutter class {cls}: {entry['key'][len(e) :].replace('_', ' ')}"
+    return out
 
 
 def _base_job(path: Path, data: dict[str, Any], problems: list[Problem], source: str) -> tuple[Path, dict[str, Any]]:
