@@ -20,7 +20,7 @@ from virtual_machine.cli import main
 from virtual_machine.job import load_job
 from virtual_machine.setting.sheet import setup_sheet
 from virtual_machine.studies import pipeline
-from virtual_machine.studies.budget import column_sensitivity, error_budget
+from virtual_machine.studies.budget import column_sensitivity, error_budget, graded
 from virtual_machine.studies.design import cases, design
 from virtual_machine.studies.spec import load_study
 
@@ -509,3 +509,27 @@ def test_the_shipped_study_files_load_and_design_their_cases(name) -> None:
     made = cases(study)
     assert len(made) >= 2 and len({c.job_hash for c in made}) == len(made)  # distinct cases
     assert all(v.key for v in study.varies) and len(study.varies) >= 2
+
+
+def test_a_studys_cases_give_the_class_distribution(tmp_path) -> None:
+    """The budget counts each case's ISO 1328-1 class (its worst parameter's) and the share at or better than a
+    class: with F_p the only parameter that varies, the class of each case is F_p's class, graded by the standard."""
+    study = load_study(
+        study_file(
+            tmp_path,
+            'method = "monte-carlo"\nsamples = 12\nseed = 1\n[[vary]]\nkey = "machine.model.lead_screw_pitch_error"\n'
+            'distribution = "normal"\nmean = 0.0\nstd = 1e-3\n',
+        )
+    )
+    rows = design(study)
+    fp = np.linspace(2.0, 40.0, len(rows))  # um: from class 1 to beyond class 8 on the default gear
+    records = {f"c{i:03d}": record(f"c{i:03d}", r, 0.5, float(fp[i])) for i, r in enumerate(rows)}
+    budget = error_budget(study, records, GEAR, target=6)
+    expected: dict[int, int] = {}
+    for v in fp:
+        grades = [iso.grade(x, n, *GEAR) for n, x in graded(record("c", {}, 0.5, float(v))["measured"]).items()]
+        c = max(g if g is not None else 12 for g in grades)
+        expected[c] = expected.get(c, 0) + 1
+    assert budget.class_counts == dict(sorted(expected.items())) and sum(budget.class_counts.values()) == 12
+    assert budget.p_at_most(6) == pytest.approx(sum(k for c, k in expected.items() if c <= 6) / 12)
+    assert len(budget.class_counts) >= 3  # a spread, not one class

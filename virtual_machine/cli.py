@@ -236,6 +236,12 @@ def format_study(outcome, out: Path) -> str:
         cls = f"class {p.stacked_class}" if p.stacked_class else "worse than class 11"
         by = f"; largest contribution: {part.label} {part.contribution:.2f} um" if part else ""
         lines.append(f"  limiting: {p.name} {p.stacked:.2f} um ({cls}){by}")
+    if budget.class_counts:  # the cases' classes: a population's distribution (Monte Carlo)
+        shown = ", ".join(f"{'>11' if c > 11 else c}: {k}" for c, k in budget.class_counts.items())
+        line = f"  the cases' classes: {shown}"
+        if budget.target is not None:
+            line += f"; P(class <= {budget.target}) = {budget.p_at_most(budget.target):.2f}"
+        lines.append(line)
     for p in budget.parameters:
         if p.answer is not None and not p.answer.meets:
             lines.append(f"  class {p.answer.target} {p.name} (<= {p.answer.tolerance:g} um): {p.answer.note}")

@@ -68,6 +68,13 @@ class Budget:
     parameters: list[ParameterBudget]
     target: int | None
     iso_error: str | None = None  # the gear is outside ISO 1328-1's range: no classes
+    #: the cases' ISO 1328-1 classes (the worst parameter's; 12: worse than class 11): how many cases made each
+    class_counts: dict[int, int] = field(default_factory=dict)
+
+    def p_at_most(self, n: int) -> float | None:
+        """The share of the cases whose gear is class ``n`` or better (None without classes)."""
+        total = sum(self.class_counts.values())
+        return sum(k for c, k in self.class_counts.items() if c <= n) / total if total else None
 
     def limiting(self) -> tuple[ParameterBudget, PartEffect | None] | None:
         """The parameter with the worst class at the stacked values and its largest contributor."""
@@ -138,7 +145,14 @@ def error_budget(
                 tol = iso.tolerances(target, *gear_data)[name]
                 budget.answer = (_answer_mc if study.method == "monte-carlo" else _answer_stack)(budget, tol, target, y)
         params.append(budget)
-    return Budget(study.method, len(ok), failed, params, target, iso_error)
+    counts: dict[int, int] = {}
+    if iso_error is None:  # each case's class: its worst parameter's
+        for vals in values.values():
+            grades = [iso.grade(v, name, *gear_data) for name, v in vals.items()]
+            if grades:
+                c = max(g if g is not None else 12 for g in grades)
+                counts[c] = counts.get(c, 0) + 1
+    return Budget(study.method, len(ok), failed, params, target, iso_error, dict(sorted(counts.items())))
 
 
 def _one_at_a_time(name, varies: tuple[Vary, ...], ids, x, y) -> ParameterBudget | None:

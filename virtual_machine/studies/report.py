@@ -101,10 +101,26 @@ def _limiting(study: Study, budget: Budget) -> list[str]:
             f"<p>{_e(budget.iso_error)}</p>",
         ]
     else:
-        out = [_limiting_text(study, budget)]
+        out = [_limiting_text(study, budget), *_class_counts(study, budget)]
     if budget.target is not None:
         out += _target_table(study, budget)
     return out
+
+
+def _class_counts(study: Study, budget: Budget) -> list[str]:
+    """The cases' classes (a Monte-Carlo study's population of machines and cutters): how many made each, and the
+    share at or better than the target class."""
+    if study.method != "monte-carlo" or not budget.class_counts:
+        return []
+    n = sum(budget.class_counts.values())
+    rows = "".join(
+        f"<tr><td>{'worse than 11' if c > 11 else c}</td><td>{k}</td><td>{budget.p_at_most(c):.2f}</td></tr>"
+        for c, k in budget.class_counts.items()
+    )
+    return [
+        f"<h3>The cases' classes ({n} cases)</h3>",
+        f"<table><tr><th>ISO 1328-1 class</th><th>cases</th><th>share at this class or better</th></tr>{rows}</table>",
+    ]
 
 
 def _limiting_text(study: Study, budget: Budget) -> str:
