@@ -313,17 +313,17 @@ def test_a_study_varies_the_geometry_as_any_job_key(tmp_path) -> None:
     from virtual_machine.studies.design import cases
     from virtual_machine.studies.spec import load_study
 
-    def study_file(_, text: str) -> Path:
+    def study_file(text: str) -> Path:
         path = tmp_path / "study.toml"
         path.write_text(f'base = "{JOBS / "default.toml"}"\n' + text)
         return path
 
     key = "machine.model.geometry.centre_distance_offset"
-    study = load_study(study_file(tmp_path, f'[[vary]]\nkey = "{key}"\nvalues = [0.0, 0.01]\ntolerance = 0.005\n'))
+    study = load_study(study_file(f'[[vary]]\nkey = "{key}"\nvalues = [0.0, 0.01]\ntolerance = 0.005\n'))
     made = [parse_job(tomllib.loads(c.job_text)).skiving.geometry.centre_distance_offset for c in cases(study)]
     assert made == [0.0, 0.01]
     with pytest.raises(InputError) as err:
-        load_study(study_file(tmp_path, '[[vary]]\nkey = "machine.model.geometry.centre_offset"\nvalues = [0.01]\n'))
+        load_study(study_file('[[vary]]\nkey = "machine.model.geometry.centre_offset"\nvalues = [0.01]\n'))
     assert "unknown machine geometry key" in str(err.value) and key in str(err.value)
 
 

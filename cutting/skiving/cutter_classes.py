@@ -33,6 +33,7 @@ TABLE: dict[str, dict[str, tuple[int, ...]]] = {
         "A": (3, 3, 3, 5, 5, 8, 8, 10, 10),
         "B": (4, 4, 4, 6, 6, 10, 10, 12, 12),
     },
+    # the table prints the same series for the cutting faces' adjacent spacing as for the tips' radial runout
     "pitch": {
         "AA": (10, 10, 12, 16, 20, 25, 32, 40, 50),
         "A": (12, 16, 20, 25, 32, 40, 50, 63, 80),

@@ -298,31 +298,30 @@ class SkivingSetup:
         ``R @ p + t`` in the work frame, for cutter angles ``phi0`` [rad] and carriage positions ``s`` [mm].
         phi2 = speed_ratio * phi0 + differential_rotation_per_mm * s + work_phase.
         """
-        phi0 = np.atleast_1d(np.asarray(phi0, dtype=float))
-        s_arr = np.broadcast_to(np.asarray(s, dtype=float), phi0.shape)
-        a = self.final_centre_distance if centre_distance is None else centre_distance
-        phi2 = self.speed_ratio * phi0 + self.differential_rotation_per_mm * s_arr + self.work_phase
-        back = rot_z(-phi2)
-        rot = back @ rot_x(self.tilt) @ rot_z(phi0 + self.cutter_phase)
-        centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1)
-        return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
+        return self._pose(phi0, s, centre_distance, None)
 
     def machine_pose(self, phi0: np.ndarray, s: np.ndarray | float = 0.0, centre_distance: float | None = None):
         """:meth:`cutter_pose` as the machine as built makes it from the same commanded axes: the shaft angle, the
         centre distance, the cutter's offset, the carriage's squareness, the screw's periodic error and the spindles'
         encoders of :attr:`geometry` (:mod:`cutting.skiving.machine_geometry`; the spindle's error motion is the
         blank's, in :attr:`blank_frame`). The nominal pose where the machine is exact."""
-        g = self.geometry
-        if g.exact:
-            return self.cutter_pose(phi0, s, centre_distance)
+        return self._pose(phi0, s, centre_distance, None if self.geometry.exact else self.geometry)
+
+    def _pose(self, phi0, s, centre_distance, g: MachineGeometry | None):
+        """The poses of :meth:`cutter_pose` (``g`` None: the nominal chain, bit for bit) or :meth:`machine_pose`."""
         phi0 = np.atleast_1d(np.asarray(phi0, dtype=float))
         s_arr = np.broadcast_to(np.asarray(s, dtype=float), phi0.shape)
         a = self.final_centre_distance if centre_distance is None else centre_distance
         b2 = self.speed_ratio * phi0 + self.differential_rotation_per_mm * s_arr
-        e1, e2 = g.encoder_errors(phi0, b2)  # the spindles held at their encoders' readings stand behind by these
-        back = rot_z(-(b2 - e2 + self.work_phase))
-        rot = back @ rot_x(self.tilt + g.shaft_angle_error) @ rot_z(phi0 - e1 + self.cutter_phase)
-        centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1) + g.head_offset(s_arr)
+        centre = np.stack([np.full_like(phi0, a), np.zeros_like(phi0), s_arr], -1)
+        if g is None:
+            back = rot_z(-(b2 + self.work_phase))
+            rot = back @ rot_x(self.tilt) @ rot_z(phi0 + self.cutter_phase)
+        else:
+            e1, e2 = g.encoder_errors(phi0, b2)  # the spindles held at their encoders' readings stand behind by these
+            back = rot_z(-(b2 - e2 + self.work_phase))
+            rot = back @ rot_x(self.tilt + g.shaft_angle_error) @ rot_z(phi0 - e1 + self.cutter_phase)
+            centre = centre + g.head_offset(s_arr)
         return rot, np.matmul(back, centre[:, :, None])[:, :, 0]
 
     def new_tool(self) -> SkivingSetup:

@@ -17,8 +17,8 @@ from virtual_machine.job.keys import Check, Key, parse_section
 
 def within(limit: float, unit: str) -> Check:
     """A signed error no larger than ``limit``: beyond it the value is a slip of units or a set-up error, not a
-    machine's geometry (the limits are guards at ten to a hundred times the ISO 230-1 tolerances of a gear-cutting
-    machine, not tolerance figures)."""
+    machine's geometry (the limits are guards against a slip of units, chosen (a guess, not a cited figure) well
+    beyond any machine's geometric errors; they are not tolerances)."""
 
     def check(v: float) -> tuple[str, str] | None:
         if not math.isfinite(v):

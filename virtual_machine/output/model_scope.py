@@ -63,7 +63,7 @@ def _tooling(job) -> list[dict[str, Any]]:
     errors = st.cutter_errors
     for f in fields(errors):
         value = getattr(errors, f.name)
-        if f.name.endswith("_phase") or value in (0, 0.0, (), None) or not _nonzero(value):
+        if f.name.endswith("_phase") or not _nonzero(value):
             continue
         out.append(_item(f"cutter error: {f.name.replace('_', ' ')}", f"cutter.errors.{f.name}", _plain(value), "mm"))
     c = st.clamping
