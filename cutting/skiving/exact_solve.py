@@ -219,7 +219,8 @@ def _ideal(w, o, t, full):
     leaves it as it is (bit for bit: it adds products with zero), so it is skipped. The machine's geometry
     (cutting.skiving.machine_geometry): its centre distance and shaft angle in w[o + 3], w[o + 7:9], the cutter
     centre's offset from w[o + 10:16] (y offset, squareness x and y, the screw's periodic error, 2 pi / pitch,
-    phase), the encoders' readings from w[o + 16:20] (tool, its phase, work, its phase)."""
+    phase), the encoders' readings from w[o + 16:20] (tool, its phase, work, its phase), the axial drift from
+    w[o + 20:22] (offset, rate: cutting.skiving.thermal_drift)."""
     phi0 = w[o] * t
     s = w[o + 1] + w[o + 2] * t
     b2 = w[o + 4] * phi0 + w[o + 5] * s
@@ -232,7 +233,7 @@ def _ideal(w, o, t, full):
         rot = _mm(rot, _rz(math.cos(phi), math.sin(phi)))
     x = w[o + 3] + w[o + 11] * s
     y = w[o + 10] + w[o + 12] * s
-    z = s + w[o + 13] * math.sin(w[o + 14] * s + w[o + 15])
+    z = s + w[o + 20] + w[o + 21] * s + w[o + 13] * math.sin(w[o + 14] * s + w[o + 15])
     return rot, (c * x - sn * y, sn * x + c * y, z)
 
 

@@ -28,6 +28,7 @@ from cutting.errors import Problem
 from cutting.flank import SIDES, flank_points
 from cutting.gear import MIN_TIP_THICKNESS, Gear
 from cutting.skiving.machine_geometry import MachineGeometry
+from cutting.skiving.thermal_drift import ThermalDrift
 from cutting.skiving.tooling import (
     Clamping,
     CutterErrors,
@@ -85,6 +86,9 @@ class SkivingSetup:
         (:mod:`cutting.skiving.tooling`); the edge is designed for the rake face of a cutter without deviations
     geometry: the machine's geometric errors (:mod:`cutting.skiving.machine_geometry`): the poses a machine makes
         (:meth:`machine_pose`) carry them; the kinematics it is set for (:meth:`cutter_pose`) do not
+    thermal: the machine's thermal drift over the job (:mod:`cutting.skiving.thermal_drift`; None: none): each pass
+        of the ideal kinematics takes its own share into its geometry (:func:`cutting.skiving.trajectory.ideal_passes`),
+        the simulated machine its drift at each instant
     """
 
     gear: Gear
@@ -99,6 +103,7 @@ class SkivingSetup:
     cutter_errors: CutterErrors = field(default_factory=CutterErrors)
     clamping: Clamping = field(default_factory=Clamping)
     geometry: MachineGeometry = field(default_factory=MachineGeometry)
+    thermal: ThermalDrift | None = None
     _cutter_tip: float | None = field(default=None, repr=False)
 
     @property

@@ -54,6 +54,9 @@ class MachineGeometry:
     tool_encoder_eccentricity, work_encoder_eccentricity: the spindles' encoders read their shafts e sin(B + phase)
         ahead [rad] (a graduation off its shaft's centre: once per turn), B the spindle's angle; the axes held at the
         encoders' readings stand that much behind (:meth:`encoder_errors`; in `skive run` the controllers read them)
+    axial_offset, axial_rate: the cutter centre off the commanded carriage position along the work axis [mm], and its
+        change per mm of travel [mm/mm] (zero at mid face): a pass's thermal drift along z
+        (:meth:`cutting.skiving.thermal_drift.ThermalDrift.pass_geometry`; no job key of its own)
     """
 
     shaft_angle_error: float = 0.0
@@ -72,6 +75,8 @@ class MachineGeometry:
     tool_encoder_phase: float = 0.0
     work_encoder_eccentricity: float = 0.0
     work_encoder_phase: float = 0.0
+    axial_offset: float = 0.0
+    axial_rate: float = 0.0
 
     @property
     def exact(self) -> bool:
@@ -89,7 +94,9 @@ class MachineGeometry:
             [
                 self.centre_distance_offset + self.carriage_squareness_x * s,
                 self.cutter_offset_error + self.carriage_squareness_y * s,
-                self.lead_screw_periodic_error * np.sin(wave * s + self.lead_screw_periodic_phase),
+                self.axial_offset
+                + self.axial_rate * s
+                + self.lead_screw_periodic_error * np.sin(wave * s + self.lead_screw_periodic_phase),
             ],
             -1,
         )
@@ -103,8 +110,8 @@ class MachineGeometry:
 
     def compiled(self) -> list[float]:
         """What :func:`cutting.skiving.exact_solve._ideal` reads beyond the nominal pose: the offset's terms (y
-        offset, cx, cy, e, 2 pi / p, phi) and the encoders' (tool e, phase, work e, phase); the centre distance's
-        offset and the shaft angle's error go into the nominal ones."""
+        offset, cx, cy, e, 2 pi / p, phi), the encoders' (tool e, phase, work e, phase) and the axial drift's (offset,
+        rate); the centre distance's offset and the shaft angle's error go into the nominal ones."""
         return [
             self.cutter_offset_error,
             self.carriage_squareness_x,
@@ -116,6 +123,8 @@ class MachineGeometry:
             self.tool_encoder_phase,
             self.work_encoder_eccentricity,
             self.work_encoder_phase,
+            self.axial_offset,
+            self.axial_rate,
         ]
 
     def spindle_placement(self) -> np.ndarray:

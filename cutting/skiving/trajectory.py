@@ -9,7 +9,7 @@ trajectory is the exact kinematics of the job; the simulated machine will provid
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -64,7 +64,12 @@ def ideal_passes(setup: SkivingSetup, reverse_feed: bool | None = None) -> list[
     spans = zip(setup.pass_centre_distances, setup.pass_travel, setup.pass_middles, strict=True)
     for i, (a, travel, mid) in enumerate(spans):
         half = travel / 2
-        out.append(PassMotion(setup, i, a, omega0, mid + (half if down else -half), -v if down else v, travel / v))
+        start, v_s = mid + (half if down else -half), -v if down else v
+        own = setup
+        if setup.thermal is not None:  # the pass's share of the drift as its own geometry (thermal_drift.py)
+            g = setup.thermal.pass_geometry(setup.geometry, i, start, v_s, travel / v)
+            own = replace(setup, geometry=g, thermal=None)
+        out.append(PassMotion(own, i, a, omega0, start, v_s, travel / v))
     return out
 
 

@@ -79,9 +79,15 @@ GEOMETRY_KEYS: dict[str, Key] = {
 def without_geometry(model: dict[str, Any] | None) -> tuple[dict[str, Any] | None, Any]:
     """[machine.model] without its geometry table (the machine model's parameters are the rest), and that table
     (None when absent)."""
-    if not isinstance(model, dict) or "geometry" not in model:
+    return without_table(model, "geometry")
+
+
+def without_table(model: dict[str, Any] | None, name: str) -> tuple[dict[str, Any] | None, Any]:
+    """[machine.model] without its table ``name`` (geometry, thermal: not the MuJoCo model's parameters), and that
+    table (None when absent)."""
+    if not isinstance(model, dict) or name not in model:
         return model, None
-    return {k: v for k, v in model.items() if k != "geometry"}, model["geometry"]
+    return {k: v for k, v in model.items() if k != name}, model[name]
 
 
 def parse_geometry(table: Any, lead_screw_pitch: float, problems: list[Problem]) -> MachineGeometry:

@@ -32,7 +32,7 @@ from virtual_machine.job.cutter_sections import (
     regrind_problems,
 )
 from virtual_machine.job.gear_sections import GEAR_KEYS, OPTIONAL_SECTIONS, gear_from, helix, parse_optional_sections
-from virtual_machine.job.geometry_section import parse_geometry, without_geometry
+from virtual_machine.job.geometry_section import parse_geometry, without_geometry, without_table
 from virtual_machine.job.head import MACHINE_KEYS, Job, MachineSection, model_problems
 from virtual_machine.job.keys import (
     MATERIAL,
@@ -47,6 +47,7 @@ from virtual_machine.job.keys import (
     section_class,
     unknown_sections,
 )
+from virtual_machine.job.thermal_section import ThermalModel, job_drift, parse_thermal
 
 CUTTER_KEYS: dict[str, Key] = {
     "teeth": Key(int, REQUIRED, "", "number of cutter teeth z0", at_least(8)),
@@ -133,11 +134,23 @@ class SkivingJob(Job):
     clamping: Clamping = field(default_factory=Clamping)
     #: [machine.model.geometry]: the machine's geometric errors (virtual_machine/job/geometry_section.py)
     geometry: MachineGeometry = field(default_factory=MachineGeometry)
+    #: [machine.model.thermal] and machine.thermal_state: the thermal model (virtual_machine/job/thermal_section.py)
+    thermal: ThermalModel | None = None
 
     @cached_property
     def skiving(self) -> SkivingSetup:
-        """The setup of the tool as it is: designed new, then reground by ``rake.regrind``."""
-        return reground(self.new_tool, self.rake.regrind)
+        """The setup of the tool as it is: designed new, then reground by ``rake.regrind``; with the machine's
+        thermal drift over the job where the job has a thermal model."""
+        setup = reground(self.new_tool, self.rake.regrind)
+        if self.thermal is None:
+            return setup
+        powers = None
+        if self.thermal.cutting_heat_share and self.thermal.structure_x_per_w:
+            from virtual_machine.reach.skiving_load import pass_loads
+
+            loads = pass_loads(setup, self.process.material, edge_radius=self.cutter_options.edge_radius)
+            powers = [ld.power for ld in loads]
+        return dataclasses.replace(setup, thermal=job_drift(self.thermal, setup, powers))
 
     @cached_property
     def new_tool(self) -> SkivingSetup:
@@ -169,14 +182,19 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
     """Validate a skiving job. Raises :class:`InputError` with every problem."""
     problems = unknown_sections(data, (*SECTIONS_GEAR, *OPTIONAL_SECTIONS, *SKIVING_OPTIONAL), SECTIONS_GEAR)
     data, errors_table = _without_cutter_errors(data)
+    thermal_state = None
+    if isinstance(data.get("machine"), dict) and "thermal_state" in data["machine"]:  # skiving's own [machine] key
+        thermal_state = data["machine"]["thermal_state"]
+        data = {**data, "machine": {k: v for k, v in data["machine"].items() if k != "thermal_state"}}
     parsed = parse_sections(data, SECTIONS_GEAR, problems)
     measurement, modification = parse_optional_sections(data, problems)
     machine = parsed["machine"]
     model, geometry_table = without_geometry(machine.get("model"))
-    if geometry_table is not None:
-        machine = {**machine, "model": model}
+    model, thermal_table = without_table(model, "thermal")
+    machine = {**machine, "model": model}
     problems += model_problems(model, _skiving_machine)
     geometry = parse_geometry(geometry_table, machine.get("lead_screw_pitch", 10.0), problems)
+    thermal = parse_thermal(thermal_table, thermal_state, problems)
 
     # Geometry checks run as soon as their own keys are sound, so they are reported beside key errors.
     g, c = parsed["gear"], parsed["cutter"]
@@ -227,6 +245,7 @@ def parse_skiving_job(data: dict[str, Any], source: str) -> SkivingJob:
         cutter_errors,
         clamping,
         geometry,
+        thermal,
     )
     problems += regrind_problems(job.new_tool, job.rake.regrind, job.cutter.face_width)
     if problems:

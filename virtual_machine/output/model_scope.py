@@ -11,6 +11,8 @@ import math
 from dataclasses import fields
 from typing import Any
 
+from virtual_machine.job.thermal_section import THERMAL_KEYS
+
 #: the machine geometry's keys and their job units (virtual_machine/job/geometry_section.py)
 GEOMETRY_UNITS = {
     "shaft_angle_error": ("deg", math.degrees),
@@ -27,8 +29,8 @@ GEOMETRY_UNITS = {
 
 #: known sources skive does not model yet, and why (each names what would hold it)
 NOT_MODELLED = (
-    ("thermal drift of the head, the spindles and the structure", "not modelled yet (issue 43): the machine is at a "
-     "steady temperature"),
+    ("the surroundings' temperature (ISO 230-3's ETVE)", "the workshop is at a constant temperature; the machine's "
+     "own heat is modelled where the job has a thermal model"),
     ("carriage straightness and angular errors (pitch, yaw, roll)", "only the carriage's squareness is modelled"),
     ("asynchronous spindle error motions", "only the once-per-revolution (synchronous) error motion is modelled"),
     ("tool wear", "the edge stays as ground through the job"),
@@ -48,6 +50,23 @@ def _geometry(geometry) -> list[dict[str, Any]]:
         if value:
             out.append(_item(f"machine geometry: {name.replace('_', ' ')}", f"machine.model.geometry.{name}",
                              to_job(value), unit))  # fmt: skip
+    return out
+
+
+def _thermal(job) -> list[dict[str, Any]]:
+    """The thermal model's state and figures, and the drift it gives at the finishing pass's start (x, y, z [um],
+    tilt [urad])."""
+    model = getattr(job, "thermal", None)
+    if model is None:
+        return []
+    drift = job.skiving.thermal
+    x, y, z, tilt = drift.offsets(drift.pass_starts[-1])[0]
+    state = model.state if isinstance(model.state, str) else f"{model.state:g} h since a cold start"
+    out = [_item("thermal drift at the finishing pass (x, y, z um; tilt urad)", "machine.thermal_state",
+                 f"{state}: {x * 1e3:+.2f}, {y * 1e3:+.2f}, {z * 1e3:+.2f} um, {tilt * 1e6:+.1f} urad")]  # fmt: skip
+    units = {k: key.unit for k, key in THERMAL_KEYS.items()}
+    out += [_item(f"thermal model: {k.replace('_', ' ')}", f"machine.model.thermal.{k}", v, units[k])
+            for k, v in model.as_job().items()]  # fmt: skip
     return out
 
 
@@ -124,6 +143,13 @@ def model_scope(job, params=None, kind: str = "run") -> dict[str, Any]:
         not_included.append({"source": "machine geometry errors",
                              "why": "none given: the machine as designed ([machine.model.geometry]; "
                                     "docs/machine_geometry.md)"})  # fmt: skip
+    included += _thermal(job)
+    if getattr(job, "thermal", None) is None:
+        why = ("no thermal model: the machine at its surroundings' temperature (give machine.thermal_state and "
+               "[machine.model.thermal]; docs/machine_geometry.md)")  # fmt: skip
+        not_included.append(
+            {"source": "thermal drift of the tool head, the work spindle and the structure", "why": why}
+        )
     included += _tooling(job)
     not_included += [{"source": s, "why": w} for s, w in NOT_MODELLED]
     return {"included": included, "not_included": not_included}

@@ -488,7 +488,7 @@ def pass_trajectory(
 ) -> PassTrajectory:
     """The pose trajectory of one feed stroke from its recorded axis positions and the loop's deflection (t from
     the stroke's start)."""
-    rot, trans = relative_pose(setup, q, deflection)
+    rot, trans = relative_pose(setup, q, deflection, t)
     return PassTrajectory(index, t - t[0], rot, trans, q[:, 0], q[:, 2], q[:, 3])
 
 
@@ -537,9 +537,12 @@ def growing_vibration(signal: np.ndarray, dt: float, limit: float) -> tuple[floa
     return (frequency, before, after, len(signal) * dt) if frequency >= 20.0 else None
 
 
-def relative_pose(setup, q: np.ndarray, deflection: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def relative_pose(
+    setup, q: np.ndarray, deflection: np.ndarray | None = None, t: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """The cutter frame in the blank frame for recorded axis values ``q`` (rows as MotionRecord.q) and the loop's
-    ``deflection`` (rows as MotionRecord.deflection; None: a rigid loop).
+    ``deflection`` (rows as MotionRecord.deflection; None: a rigid loop) at machine times ``t`` [s] (what the
+    machine's thermal drift, ``setup.thermal``, needs; None: no drift).
 
     The axes' part is the forward kinematics of the model (blank_frame = Rz(B2 + work_phase); cutter_frame at
     (X, 0, P3), Rx(tilt) Rz(B1 + cutter_phase)); the loop's modes move the cutter frame further, by the recorded
@@ -551,8 +554,14 @@ def relative_pose(setup, q: np.ndarray, deflection: np.ndarray | None = None) ->
 
     g = setup.geometry
     back = rot_z(-(q[:, 1] + setup.work_phase))
-    rot = back @ rot_x(setup.tilt + g.shaft_angle_error) @ rot_z(q[:, 0] + setup.cutter_phase)
     centre = np.stack([q[:, 3], np.zeros(len(q)), q[:, 2]], -1)
+    if setup.thermal is not None and t is not None:  # the drift at each instant (cutting/skiving/thermal_drift.py)
+        drift = setup.thermal.offsets(t)
+        tilt = np.array([rot_x(setup.tilt + g.shaft_angle_error + d) for d in drift[:, 3]])
+        rot = back @ tilt @ rot_z(q[:, 0] + setup.cutter_phase)
+        centre = centre + drift[:, :3]
+    else:
+        rot = back @ rot_x(setup.tilt + g.shaft_angle_error) @ rot_z(q[:, 0] + setup.cutter_phase)
     if not g.exact:
         centre = centre + g.head_offset(q[:, 2])
     trans = np.matmul(back, centre[:, :, None])[:, :, 0]

@@ -60,11 +60,19 @@ def program_duration(
 
     settings = settings or ProgramSettings()
     passes = ideal_passes(setup) if passes is None else passes
-    total = runup_time(setup, settings) + settings.settle + sum(p.duration for p in passes)
+    return pass_start_times(setup, settings, passes)[-1] + passes[-1].duration
+
+
+def pass_start_times(setup: SkivingSetup, settings: ProgramSettings, passes: Sequence[PassMotion]) -> list[float]:
+    """Machine time at which each pass's feed stroke starts [s] (as :func:`program` makes them: the run-up and the
+    settle, then per pass the stroke, the retract, the return at the rapid speed, the infeed and its dwell)."""
+    t = runup_time(setup, settings) + settings.settle
+    out = [t]
     for i in range(len(passes) - 1):
         travel = abs(passes[i + 1].s_start - passes[i].s_start - passes[i].v_s * passes[i].duration)
-        total += 3 * settings.radial_move + travel / settings.rapid_speed
-    return total
+        t += passes[i].duration + 3 * settings.radial_move + travel / settings.rapid_speed
+        out.append(t)
+    return out
 
 
 def program(

@@ -45,6 +45,7 @@ STUDY_KEYS = ("base", "method", "samples", "seed", "cache", "vary", "cutter_clas
 VARY_KEYS = ("key", "label", "values", "range", "steps", "distribution", "mean", "std", "lo", "hi", "tolerance")
 MODEL_PREFIX = "machine.model."
 GEOMETRY_PREFIX = "machine.model.geometry."
+THERMAL_PREFIX = "machine.model.thermal."
 
 
 @dataclass(frozen=True)
@@ -133,6 +134,16 @@ def base_value(data: dict[str, Any], key: str) -> Any:
         from virtual_machine.setting.machine_layout import machine_size
 
         return machine_size(parse_job(data))
+    if key == "machine.thermal_state":  # no thermal model in the base job: the machine is cold
+        return "cold"
+    if key.startswith(THERMAL_PREFIX):  # the thermal model's figures: job keys of their own (the defaults' figures)
+        from virtual_machine.job.thermal_section import THERMAL_KEYS
+
+        name = key[len(THERMAL_PREFIX) :]
+        if name not in THERMAL_KEYS:
+            valid = ", ".join(THERMAL_PREFIX + k for k in THERMAL_KEYS)
+            raise InputError(Problem(key, None, "unknown thermal model key", f"valid keys: {valid}"))
+        return THERMAL_KEYS[name].default
     if key.startswith(GEOMETRY_PREFIX):  # the machine's geometric errors: job keys of their own (0 by default)
         from virtual_machine.job.geometry_section import GEOMETRY_KEYS
 

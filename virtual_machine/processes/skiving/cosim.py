@@ -437,6 +437,6 @@ def _ready_passages(stroke: _Stroke, setup, pitch: float):
         t = rows[lo:hi, 0]
         q = rows[lo:hi, 1:6].copy()
         q[:, 2:4] /= 1e-3  # carriage P3 and radial X in mm
-        rot, trans = relative_pose(setup, q, rows[lo:hi, 6:12] if rows.shape[1] > 6 else None)
+        rot, trans = relative_pose(setup, q, rows[lo:hi, 6:12] if rows.shape[1] > 6 else None, t)
         stroke.next_m += 1
         yield m, (t - rows[0, 0], rot, trans, q[:, 0], q[:, 2], q[:, 3]), float(rows[0, 0])

@@ -18,16 +18,16 @@ from virtual_machine.output.formatting import class_table
 
 def ideal_measurement(job, edge_kind: str) -> dict[str, Any]:
     """The measurement document of the job's ideal cut (runs in a worker process: picklable in and out): the exact
-    kinematics on the machine as designed (its geometric errors, cutting/skiving/machine_geometry.py, are the
-    machine's and show in what the machine added)."""
+    kinematics on the machine as designed (its geometric errors, cutting/skiving/machine_geometry.py, and its thermal
+    drift are the machine's and show in what the machine added)."""
     from cutting.skiving.edge import make_edge
     from cutting.skiving.exact_sweep import SweptVolumes
     from cutting.skiving.trajectory import ideal_passes
     from metrology.measure import measure_gear
 
     setup = job.skiving
-    if not setup.geometry.exact:  # the machine's geometry is the machine's: what it added, not the ideal cut's
-        setup = dataclasses.replace(setup, geometry=setup.geometry.without_errors())
+    if not setup.geometry.exact or setup.thermal is not None:  # the machine's geometry and drift are the machine's:
+        setup = dataclasses.replace(setup, geometry=setup.geometry.without_errors(), thermal=None)  # what it added
     exact = SweptVolumes(job.gear, make_edge(setup, edge_kind), ideal_passes(setup))
     return measure_gear(exact, job.gear)
 

@@ -78,8 +78,8 @@ def generating_point_displacement(rec: MotionRecord, setup) -> tuple[np.ndarray,
     ideal[:, 1] -= rec.sync_um[feed] / (r2 * 1e3)  # the work where the cutter and the carriage imply it
     centre = np.array(setup.pass_centre_distances)
     ideal[:, 3] = centre[np.clip(index, 0, len(centre) - 1)]
-    rot_a, t_a = relative_pose(setup, q, defl)
-    rot_i, t_i = relative_pose(setup, ideal)
+    rot_a, t_a = relative_pose(setup, q, defl, rec.t[feed])
+    rot_i, t_i = relative_pose(setup, ideal, None, rec.t[feed])
     turn = ideal[:, 1] + setup.work_phase
     c, s = np.cos(turn), np.sin(turn)
     pitch = np.stack([np.full(len(q), r2), np.zeros(len(q)), q[:, 2]], -1)  # machine frame [mm]
