@@ -44,6 +44,9 @@ class MeasureOptions:
     profile_points: int = 240
     helix_points: int = 200
     design: Modification | None = None  # the designed flank topography: deviations are evaluated against it
+    # the flanks alone: the datum, profiles, helices, pitch and the traces (no runout, thickness, topography nor
+    # class: what a fit of the flanks' signatures reads, `skive diagnose`'s study, in half the probing)
+    flanks_only: bool = False
 
     @classmethod
     def from_job(cls, measurement: dict[str, Any] | None, design: Modification | None = None) -> MeasureOptions:
@@ -215,10 +218,11 @@ def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name:
         "helix": helix,
         "pitch": _measure_pitch(wp, gear, datum, r_p, order, k_sector),
     }
-    result["runout"], over_balls = _measure_over_balls(wp, gear, datum, opt, order)
-    result["thickness"] = _thickness_block(wp, gear, datum, opt, over_balls, face)
-    result["topography"] = topography_block(wp, gear, datum, opt, roll, face)
-    result["iso1328"] = iso1328_block(gear, result, k_sector)
+    if not opt.flanks_only:
+        result["runout"], over_balls = _measure_over_balls(wp, gear, datum, opt, order)
+        result["thickness"] = _thickness_block(wp, gear, datum, opt, over_balls, face)
+        result["topography"] = topography_block(wp, gear, datum, opt, roll, face)
+        result["iso1328"] = iso1328_block(gear, result, k_sector)
     result["workpiece"] = {"kind": wp.kind, "name": wp.name}
     result["gear"] = {
         "teeth": gear.teeth,
@@ -229,7 +233,35 @@ def measure_gear(workpiece, gear: Gear, opt: MeasureOptions | None = None, name:
         "datum_rotation_deg": math.degrees(datum.rotation),
     }
     result["_traces"] = {"L_mm": L, "z_mm": zz, "profile": profile_traces, "helix": helix_traces, "order": order}
+    mid = int(np.argmin(np.abs(np.array(opt.sections) - 0.5)))  # the section the profile traces are kept of
+    result["traces"] = traces_block(L, zs[mid], zz, gear.reference_diameter, profile_traces, helix_traces, order)
     return result
+
+
+#: the most points of a trace measurement.json keeps (every trace's own points, evenly picked from the probe's)
+TRACE_POINTS = 61
+
+
+def traces_block(L, z_profile, zz, d_helix, profile, helix, order) -> dict[str, Any]:
+    """The measured traces as measurement.json keeps them (what `skive diagnose` reads; docs/diagnose.md): the mid
+    section's profiles over roll length and the helices over the face on the reference cylinder, each flank's per
+    tooth in tooth-number order, the deviation from the designed flank along its normal [um] (+: material), at no
+    more than :data:`TRACE_POINTS` of the probe's points (picked evenly)."""
+
+    def picked(x: np.ndarray) -> np.ndarray:
+        return np.unique(np.round(np.linspace(0, len(x) - 1, min(TRACE_POINTS, len(x)))).astype(int))
+
+    def rows(t: np.ndarray, keep: np.ndarray) -> list[list[float | None]]:
+        t = np.asarray(t)[np.asarray(order)][:, keep] * UM
+        return [[round(float(v), 4) if np.isfinite(v) else None for v in row] for row in t]
+
+    kp, kh = picked(L), picked(zz)
+    return {
+        "profile": {"z_mm": float(z_profile), "L_mm": [float(v) for v in L[kp]],
+                    **{side: rows(profile[side], kp) for side in SIDES}},
+        "helix": {"diameter_mm": float(d_helix), "z_mm": [float(v) for v in zz[kh]],
+                  **{side: rows(helix[side], kh) for side in SIDES}},
+    }  # fmt: skip
 
 
 def measure_helix(workpiece, gear: Gear, opt: MeasureOptions | None = None, name: str | None = None) -> dict[str, Any]:

@@ -153,3 +153,32 @@ def study(
     return pipeline.run(
         Path(study_file), Path(out), workers, scheduler, target_class, progress, retry_failed=retry_failed
     )
+
+
+def diagnose(
+    measured: str | Path,
+    job: str | Path,
+    out: str | Path = "out",
+    *,
+    cache: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    stage: str = "exact",
+    progress=None,
+):
+    """Which machine-geometry errors most likely made the ``measured`` gear (skive's measurement.json or the CSV of
+    docs/diagnose.md) of ``job``: the sensitivity study around the job (from the case store ``cache`` where it is
+    there; ``workers`` 0: in this process), the fit, and diagnosis.json and diagnosis.png in ``out``. Returns the
+    outcome (``diagnosis.causes`` best first, each with ``key``, ``value``, ``confidence``)."""
+    from virtual_machine.diagnose.pipeline import run_diagnosis
+
+    return run_diagnosis(
+        Path(measured),
+        Path(job),
+        Path(out),
+        None if cache is None else Path(cache),
+        workers,
+        scheduler,
+        stage,
+        progress=progress,
+    )

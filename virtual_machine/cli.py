@@ -302,6 +302,63 @@ def check(jobs: tuple[Path, ...], max_class: int, as_json: bool, out: Path, juni
         sys.exit(1)
 
 
+@main.command(
+    help="Name the machine-geometry errors most likely to have made the MEASURED gear of JOB (skive's "
+    "measurement.json, or a CSV of profile and helix traces and single pitch deviations: docs/diagnose.md), each with "
+    "its estimated value and confidence, from a sensitivity study around the job (kept in a case store)."
+)
+@click.argument("measured", type=click.Path(path_type=Path))
+@click.option("--job", "job_path", type=click.Path(path_type=Path), required=True, help="The job that cut the gear.")
+@click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)
+@click.option("--json", "as_json", is_flag=True, help='Print {"causes": [{"key", "value", "confidence"}, ...]}.')
+@click.option(
+    "--cache",
+    type=click.Path(path_type=Path),
+    help="The case store of the sensitivity studies (default: ~/.cache/skive/cases, or $XDG_CACHE_HOME/skive/cases).",
+)
+@click.option("--workers", type=click.IntRange(0, 64), help="Dask workers for the study (0: in this process).")
+@click.option("--scheduler", help="Run the study on an existing Dask cluster (tcp://host:port).")
+@click.option(
+    "--stage",
+    type=click.Choice(["exact", "cut", "run"]),
+    default="exact",
+    show_default=True,
+    help="What each case of the study runs: the exact swept surface measured, `skive cut` or `skive run`.",
+)
+def diagnose(
+    measured: Path,
+    job_path: Path,
+    out: Path,
+    as_json: bool,
+    cache: Path | None,
+    workers: int | None,
+    scheduler: str | None,
+    stage: str,
+) -> None:
+    from virtual_machine import api
+    from virtual_machine.diagnose.pipeline import diagnosis_json, format_diagnosis
+
+    bar: Progress | None = None
+
+    def progress(done: int, failed: int, total: int) -> None:
+        nonlocal bar
+        if bar is None:
+            bar = Progress("sensitivity study", total, "cases", step=1 / total, value_format="{:.0f}")
+        bar.update_to(done, failed=failed)
+
+    try:
+        outcome = api.diagnose(
+            measured, job_path, out, cache=cache, workers=workers, scheduler=scheduler, stage=stage, progress=progress
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    if as_json:
+        click.echo(json.dumps(diagnosis_json(outcome.diagnosis, outcome.measured, str(job_path)), indent=2))
+    else:
+        click.echo(format_diagnosis(outcome))
+
+
 @main.command(help="Draw each pass's stability lobes (critical radial infeed against tool speed) of a skiving JOB.")
 @click.argument("job", required=False, type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), default=Path("out"), show_default=True)

@@ -39,11 +39,13 @@ def job_content(job_text: str) -> str:
     return tomli_w.dumps(ordered(tomllib.loads(job_text)))
 
 
-def content_key(job_text: str, version: str | None = None) -> str:
+def content_key(job_text: str, version: str | None = None, stage: str = "run") -> str:
     """The store's key of a job run by skive ``version`` (default: this one): the sha256 of the version and the
-    job's canonical content."""
+    job's canonical content (and of the stage, for a case that is not a `skive run`: a cut and a run of one job are
+    two results)."""
     version = skive_version() if version is None else version
-    return hashlib.sha256(f"{version}\n{job_content(job_text)}".encode()).hexdigest()
+    head = version if stage == "run" else f"{version}\nstage {stage}"
+    return hashlib.sha256(f"{head}\n{job_content(job_text)}".encode()).hexdigest()
 
 
 class CaseCache:
@@ -54,12 +56,12 @@ class CaseCache:
         self.directory = Path(directory)
         self.version = skive_version() if version is None else version
 
-    def path(self, job_text: str) -> Path:
-        return self.directory / f"{content_key(job_text, self.version)}.json"
+    def path(self, job_text: str, stage: str = "run") -> Path:
+        return self.directory / f"{content_key(job_text, self.version, stage)}.json"
 
-    def get(self, job_text: str) -> dict[str, Any] | None:
-        """The stored result of this job (status, error, wall_s, measurement), or None."""
-        path = self.path(job_text)
+    def get(self, job_text: str, stage: str = "run") -> dict[str, Any] | None:
+        """The stored result of this job's ``stage`` (status, error, wall_s, measurement), or None."""
+        path = self.path(job_text, stage)
         try:
             entry = json.loads(path.read_text())
         except (FileNotFoundError, json.JSONDecodeError):
@@ -71,12 +73,12 @@ class CaseCache:
             return None
         return result
 
-    def put(self, job_text: str, result: dict[str, Any]) -> bool:
-        """Store a finished case's result (a failed one is not stored: returns False)."""
+    def put(self, job_text: str, result: dict[str, Any], stage: str = "run") -> bool:
+        """Store a finished case's result of ``stage`` (a failed one is not stored: returns False)."""
         if result.get("status") != "ok":
             return False
         self.directory.mkdir(parents=True, exist_ok=True)
-        path = self.path(job_text)
+        path = self.path(job_text, stage)
         kept = {k: result[k] for k in ("status", "error", "wall_s", "measurement")}
         entry = {"key": path.stem, "version": self.version, "job": job_content(job_text), "result": kept}
         tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp")

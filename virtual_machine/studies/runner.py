@@ -56,10 +56,17 @@ MEASURED = (*(f"{name}_{side}" for _, name in FLANK_COLUMNS for side in SIDES), 
 CaseHook = Callable[[str, dict[str, Any], int, int, int], None]
 
 
-def run_case(case_id: str, job_text: str) -> dict[str, Any]:
+#: what a study's case runs: `skive run` (the simulated machine), `skive cut` (the ideal kinematics on the machine as
+#: built), or "exact" (that cut's exact swept surface measured, without the solid: a skiving job's geometric
+#: sensitivities at a tenth of a cut's time; virtual_machine/processes/skiving/machine_added.exact_measurement)
+STAGES = ("run", "cut", "exact")
+
+
+def run_case(case_id: str, job_text: str, stage: str = "run") -> dict[str, Any]:
     """One case on a worker: the job run as `skive run` runs it (its process's run, one removal process, nothing
-    printed), in a scratch directory. Returns status, error, wall time and the measurement document (or, for a gear
-    that could not be measured, the run's facts), never raises for a failing case."""
+    printed; or the ``stage`` of :data:`STAGES`), in a scratch directory. Returns status, error, wall time and the
+    measurement document (or, for a gear that could not be measured, the run's facts), never raises for a failing
+    case."""
     from virtual_machine.job import load_job
     from virtual_machine.output.progress import Reporter
     from virtual_machine.processes import process_for
@@ -71,9 +78,14 @@ def run_case(case_id: str, job_text: str) -> dict[str, Any]:
         out = Path(tmp) / "out"
         try:
             parsed = load_job(job)
-            process = process_for(parsed)
-            one = {"workers": 1} if process.takes("run", "workers") else {}  # a worker runs one removal process
-            doc = process.perform("run", parsed, out, reporter=Reporter(quiet=True), **one).data
+            if stage == "exact":
+                from virtual_machine.processes.skiving.machine_added import exact_measurement
+
+                doc = exact_measurement(parsed)
+            else:
+                process = process_for(parsed)
+                one = {"workers": 1} if process.takes(stage, "workers") else {}  # a worker runs one removal process
+                doc = process.perform(stage, parsed, out, reporter=Reporter(quiet=True), **one).data
             status, error = "ok", ""
         except Exception as exc:  # a failing case is a result of the study, not the end of it
             status, error = "failed", f"{type(exc).__name__}: {exc}"
@@ -128,10 +140,12 @@ def run_study(
     on_case: CaseHook | None = None,
     retry_failed: bool = False,
     cache: CaseCache | None = None,
+    stage: str = "run",
 ) -> StudyRun:
     """Run every case not finished yet on Dask (``retry_failed``: and those that failed before); write the case
     files and results.csv as each case finishes. ``cache``: take the cases it holds from it instead of running
-    them, and store every case that finishes in it."""
+    them, and store every case that finishes in it. ``stage``: what each case runs (:data:`STAGES`); ``workers``
+    0: every case in this process, one after the other (no cluster to start: a handful of short cases)."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     out.mkdir(parents=True, exist_ok=True)
@@ -139,7 +153,7 @@ def run_study(
     pending = [c for c in cases if c.id not in results]
     reused: list[str] = []
     for c in list(pending):
-        stored = cache.get(c.job_text) if cache is not None else None
+        stored = cache.get(c.job_text, stage) if cache is not None else None
         if stored is not None:
             results[c.id] = write_case(out, c, {**stored, "id": c.id}, reused=True)
             reused.append(c.id)
@@ -153,6 +167,21 @@ def run_study(
     if not pending:
         return StudyRun(results, ran, sorted(results), 0.0, 0, path, reused)
     by_id = {c.id: c for c in cases}
+    if workers == 0 and not scheduler:
+        failed = 0
+        for c in pending:
+            result = run_case(c.id, c.job_text, stage)
+            record = write_case(out, c, result)
+            if cache is not None:
+                cache.put(c.job_text, result, stage)
+            results[c.id] = record
+            ran.append(c.id)
+            failed += record["status"] != "ok"
+            write_csv(out, study, cases, results)
+            if on_case is not None:
+                on_case(c.id, record, len(ran), failed, len(pending))
+        skipped = sorted(set(results) - set(ran))
+        return StudyRun(results, ran, skipped, time.perf_counter() - t0, 1, path, reused)
     cluster = None
     if scheduler:
         client = Client(scheduler)
@@ -165,7 +194,8 @@ def run_study(
     try:
         n_workers = len(client.scheduler_info(n_workers=-1)["workers"]) or 1
         futures = {
-            client.submit(run_case, c.id, c.job_text, key=f"skive-case-{c.id}-{c.job_hash[:16]}"): c.id for c in pending
+            client.submit(run_case, c.id, c.job_text, stage, key=f"skive-case-{stage}-{c.id}-{c.job_hash[:16]}"): c.id
+            for c in pending
         }
         failed = 0
         for future in as_completed(futures):
@@ -182,7 +212,7 @@ def run_study(
                 }
             record = write_case(out, by_id[case_id], result)
             if cache is not None:
-                cache.put(by_id[case_id].job_text, result)
+                cache.put(by_id[case_id].job_text, result, stage)
             results[case_id] = record
             ran.append(case_id)
             failed += record["status"] != "ok"

@@ -32,6 +32,27 @@ def ideal_measurement(job, edge_kind: str) -> dict[str, Any]:
     return measure_gear(exact, job.gear)
 
 
+def exact_measurement(job) -> dict[str, Any]:
+    """What `skive cut` measures of a skiving ``job``'s flanks, without its solid: the exact swept surface of every
+    pass on the ideal kinematics of the machine as built (its geometry and thermal drift), its datum, profiles,
+    helices, pitch and traces measured with the job's options, and the model's scope (the study stage "exact": a case
+    of `skive diagnose`'s sensitivity study in a tenth of a cut's time; the solid, the chips, the charts, the runout,
+    the thickness and the class are what it leaves out)."""
+    from cutting.skiving.edge import make_edge
+    from cutting.skiving.exact_sweep import SweptVolumes
+    from cutting.skiving.trajectory import ideal_passes
+    from metrology.charts import finite
+    from metrology.measure import MeasureOptions, measure_gear
+    from virtual_machine.output.model_scope import model_scope
+
+    setup = job.skiving
+    exact = SweptVolumes(job.gear, make_edge(setup, job.cutter_options.edge), ideal_passes(setup))
+    options = dataclasses.replace(MeasureOptions.from_job(job.measurement, job.modification), flanks_only=True)
+    doc = measure_gear(exact, job.gear, options)
+    doc["model_scope"] = model_scope(job, None, "cut")
+    return finite(doc)
+
+
 def tool_maps(job, edge_kind: str) -> tuple[bytes, list] | None:
     """The working-angle maps of the job's ideal passes (cutting.skiving.working_angles.working_angle_maps: they
     depend on the job alone, and cost the run's measurement seconds) with the key of the edge they were made for;
