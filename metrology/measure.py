@@ -37,7 +37,7 @@ class MeasureOptions:
 
     profile_start_diameter: float | None = None  # start of the evaluation range (active profile start)
     profile_end_diameter: float | None = None  # end of the evaluation range
-    sections: tuple[float, float, float] = (0.15, 0.50, 0.85)  # transverse sections, fractions of the face
+    sections: tuple[float, ...] = (0.15, 0.50, 0.85)  # transverse sections, fractions of the face
     sector_teeth: int | None = None  # k of F_pk (default z/8)
     span_teeth: int | None = None  # k of W_k (default DIN 3960/21773)
     ball_diameter: float | None = None  # over-balls and runout ball (default DIN 3977)

@@ -34,8 +34,8 @@ def ideal_measurement(job, edge_kind: str) -> dict[str, Any]:
 
 def exact_measurement(job) -> dict[str, Any]:
     """What `skive cut` measures of a skiving ``job``'s flanks, without its solid: the exact swept surface of every
-    pass on the ideal kinematics of the machine as built (its geometry and thermal drift), its datum, profiles,
-    helices, pitch and traces measured with the job's options, and the model's scope (the study stage "exact": a case
+    pass on the ideal kinematics of the machine as built (its geometry and thermal drift), its datum, profiles (in
+    the mid section), helices, pitch and traces measured with the job's options, and the model's scope (the study stage "exact": a case
     of `skive diagnose`'s sensitivity study in a tenth of a cut's time; the solid, the chips, the charts, the runout,
     the thickness and the class are what it leaves out)."""
     from cutting.skiving.edge import make_edge
@@ -47,7 +47,8 @@ def exact_measurement(job) -> dict[str, Any]:
 
     setup = job.skiving
     exact = SweptVolumes(job.gear, make_edge(setup, job.cutter_options.edge), ideal_passes(setup))
-    options = dataclasses.replace(MeasureOptions.from_job(job.measurement, job.modification), flanks_only=True)
+    options = MeasureOptions.from_job(job.measurement, job.modification)
+    options = dataclasses.replace(options, flanks_only=True, sections=(0.5,))  # the profile traces are the mid's
     doc = measure_gear(exact, job.gear, options)
     doc["model_scope"] = model_scope(job, None, "cut")
     return finite(doc)
