@@ -192,7 +192,8 @@ def study(
     store = CaseCache(spec.cache) if spec.cache is not None else None
     # the cases to run now: not finished before, and not in the study's case store (those are reused)
     todo = sum(
-        finished(out, c, retry_failed) is None and (store is None or store.get(c.job_text) is None) for c in cases(spec)
+        finished(out, c, retry_failed) is None and (store is None or store.get(c.job_text, spec.stage) is None)
+        for c in cases(spec)
     )
     bar = Progress("study", max(todo, 1), "cases", step=1 / todo if 0 < todo <= 100 else 0.01, value_format="{:.0f}")
 
@@ -264,7 +265,42 @@ def format_study(outcome, out: Path) -> str:
     help="Output folder (several jobs: one folder each beneath it, named by the job file).",
 )
 @click.option("--junit", type=click.Path(path_type=Path), help="Write the verdicts as JUnit XML to this file.")
-def check(jobs: tuple[Path, ...], max_class: int, as_json: bool, out: Path, junit: Path | None) -> None:
+@click.option(
+    "--confidence",
+    type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True),
+    help="Answer for a population of machines and cutters: pass when at least this share of a Monte-Carlo study's "
+    "cases makes class N or better (docs/skiving-run.md).",
+)
+@click.option("--samples", type=click.IntRange(2, 100000), default=40, show_default=True, help="--confidence: cases.")
+@click.option("--seed", type=int, default=1, show_default=True, help="--confidence: the draw's seed.")
+@click.option(
+    "--machine-tolerances",
+    type=click.Choice(["job", "small", "medium", "large"]),
+    default="job",
+    show_default=True,
+    help="--confidence: the machine size whose geometric tolerances the machines are drawn from (job: the job's).",
+)
+@click.option("--cutter-class", type=click.Choice(["AA", "A", "B"]), help="--confidence: draw the cutters too.")
+@click.option(
+    "--stage", type=click.Choice(["run", "cut"]), default="run", show_default=True, help="--confidence: each case's."
+)
+@click.option("--workers", type=click.IntRange(0, 64), help="--confidence: Dask workers (0: in this process).")
+@click.option("--scheduler", help="--confidence: run the cases on an existing Dask cluster (tcp://host:port).")
+def check(
+    jobs: tuple[Path, ...],
+    max_class: int,
+    as_json: bool,
+    out: Path,
+    junit: Path | None,
+    confidence: float | None,
+    samples: int,
+    seed: int,
+    machine_tolerances: str,
+    cutter_class: str | None,
+    stage: str,
+    workers: int | None,
+    scheduler: str | None,
+) -> None:
     import time
 
     from virtual_machine.output.check import class_verdict, format_verdict, junit_xml
@@ -280,6 +316,21 @@ def check(jobs: tuple[Path, ...], max_class: int, as_json: bool, out: Path, juni
     for job, j in zip(jobs, loaded, strict=True):
         where = out if len(jobs) == 1 else out / job.stem
         t0 = time.perf_counter()
+        if confidence is not None:  # a population of machines and cutters
+            from virtual_machine.studies import pipeline
+            from virtual_machine.studies.population import format_population, population_verdict, study_text
+
+            folder = where / "population"
+            folder.mkdir(parents=True, exist_ok=True)
+            spec = folder / "study.toml"
+            spec.write_text(study_text(job, samples, seed, machine_tolerances, cutter_class, stage))
+            outcome = pipeline.run(spec, folder, workers, scheduler, max_class)
+            verdict = population_verdict(outcome, max_class, confidence)
+            results.append((str(job), verdict, time.perf_counter() - t0, None))
+            verdicts.append({"job": str(job), **verdict})
+            if not as_json:
+                click.echo(format_population(verdict, str(job)))
+            continue
         try:
             doc = process_for(j).perform("run", j, where, reporter=Reporter(quiet=True)).data
         except UnmeasurableGearError as exc:  # a gear that cannot be measured fails any class

@@ -83,7 +83,12 @@ def junit_xml(results: list[tuple[str, dict[str, Any] | None, float, str | None]
                 )
             ET.SubElement(case, "failure", message=text, type=f"ISO1328-{f['parameter']}").text = text
         scope = verdict.get("model_scope")
-        out = [format_verdict(verdict, job)] + (scope_lines(scope) if scope else [])
+        if "population" in verdict:  # `--confidence`: a population's verdict
+            from virtual_machine.studies.population import format_population
+
+            out = [format_population(verdict, job)]
+        else:
+            out = [format_verdict(verdict, job)] + (scope_lines(scope) if scope else [])
         ET.SubElement(case, "system-out").text = "\n".join(out)
     ET.indent(suite)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(suite, encoding="unicode") + "\n"

@@ -65,7 +65,8 @@ def run(
             on_case(case_id, record, done, failed, total)
 
     store = cache if cache is not None else study.cache
-    result = run_study(study, cases, out, workers, scheduler, hook, retry_failed, CaseCache(store) if store else None)
+    store_ = CaseCache(store) if store else None
+    result = run_study(study, cases, out, workers, scheduler, hook, retry_failed, store_, study.stage)
     budget = error_budget(study, result.results, gear_data(study), target)
     (out / "budget.json").write_text(json.dumps(budget_json(budget), indent=2))
     report = write_study_report(

@@ -8,6 +8,8 @@ A study file names a base job and a list of ``[[vary]]`` entries::
     seed = 1                                 # monte-carlo only: the same seed draws the same cases
     cache = "../cases"                       # optional: a case store shared with other studies (study/cache.py)
     cutter_class = "A"                       # monte-carlo only: the cutters drawn from a tolerance class (AA, A, B)
+    machine_tolerances = "medium"            # monte-carlo only: the machines drawn from a size's geometric tolerances
+    stage = "run"                            # what each case runs: "run" (the simulated machine) or "cut" (ideal)
     [[vary]]
     key = "machine.model.work_drive.backlash"  # any job key, dotted
     label = "work-drive backlash"            # the part's name in the report (default: the key)
@@ -41,7 +43,9 @@ from virtual_machine.job.skiving import SKIVING_OPTIONAL
 
 METHODS = ("one-at-a-time", "grid", "monte-carlo")
 DISTRIBUTIONS = ("normal", "uniform")
-STUDY_KEYS = ("base", "method", "samples", "seed", "cache", "vary", "cutter_class")
+STUDY_KEYS = ("base", "method", "samples", "seed", "cache", "vary", "cutter_class", "machine_tolerances", "stage")
+#: what a study's cases run (virtual_machine/studies/runner.py: STAGES); a study grades classes, so not "exact"
+STUDY_STAGES = ("run", "cut")
 VARY_KEYS = ("key", "label", "values", "range", "steps", "distribution", "mean", "std", "lo", "hi", "tolerance")
 MODEL_PREFIX = "machine.model."
 GEOMETRY_PREFIX = "machine.model.geometry."
@@ -89,6 +93,7 @@ class Study:
     samples: int = 0
     seed: int = 0
     cache: Path | None = None  # the case store shared with other studies (absolute), or none
+    stage: str = "run"  # what each case runs: `skive run` or `skive cut`
 
     @property
     def name(self) -> str:
@@ -210,12 +215,20 @@ def load_study(path: str | Path) -> Study:
     if cache is not None and not (isinstance(cache, str) and cache):
         problems.append(Problem("cache", cache, "must be a directory path", 'e.g. cache = "../cases"'))
         cache = None
+    stage = data.get("stage", "run")
+    if stage not in STUDY_STAGES:
+        problems.append(Problem("stage", stage, "not a stage a study's cases run", 'use "run" or "cut"'))
     base_path, base_data = _base_job(path, data, problems, source)
     entries = data.get("vary", [])
     if "cutter_class" in data:
         entries = [
             *(entries if isinstance(entries, list) else []),
             *_cutter_class(data["cutter_class"], method, base_data, problems),
+        ]
+    if "machine_tolerances" in data:
+        entries = [
+            *(entries if isinstance(entries, list) else []),
+            *machine_tolerance_entries(data["machine_tolerances"], method, base_data, problems),
         ]
     varies = _varies(entries, method, base_data, problems)
     if problems:
@@ -229,6 +242,7 @@ def load_study(path: str | Path) -> Study:
         samples if method == "monte-carlo" else 0,
         seed,
         (path.parent / cache).resolve() if cache else None,
+        stage,
     )
 
 
@@ -271,6 +285,44 @@ def _cutter_class(cls: Any, method: str, base_data: dict[str, Any], problems: li
                     "tolerance": half})  # fmt: skip
     for entry in out:
         entry["label"] = f"cutter class {cls}: {entry['key'][len(e) :].replace('_', ' ')}"
+    return out
+
+
+def machine_tolerance_entries(size: Any, method: str, base_data: dict[str, Any], problems: list[Problem]) -> list[dict]:
+    """[[vary]] tables that draw the study's machines from a size's geometric tolerances
+    (machine_models/geometry_tolerances.py; "job": the base job's own size): each signed error uniform within
+    +-its tolerance, each once-per-turn or periodic error's amplitude uniform in [0, tolerance] at a uniform phase.
+    An assumption on how machines built to a tolerance spread, not a measured distribution."""
+    from machine_models.geometry_tolerances import PHASED, SCALE, SIGNED, geometry_tolerances
+
+    key = "machine_tolerances"
+    if method != "monte-carlo":
+        problems.append(Problem(key, size, "draws machines: a Monte-Carlo study's", 'method = "monte-carlo"'))
+        return []
+    if size == "job":
+        from virtual_machine.setting.machine_layout import machine_size
+
+        size = machine_size(parse_job(base_data))
+    if size not in SCALE:
+        valid = ", ".join(map(repr, [*SCALE, "job"]))
+        problems.append(Problem(key, size, "unknown machine size", f"use one of {valid}"))
+        return []
+    own = base_data.get("machine", {}).get("model", {}).get("geometry", {})
+    if own:
+        fix = "remove it, or vary it yourself"
+        problems.append(Problem(key, size, "the base job has its own machine geometry", fix))
+        return []
+    t = geometry_tolerances(size)
+    out = []
+    for name in SIGNED:
+        out.append({"key": GEOMETRY_PREFIX + name, "distribution": "uniform", "lo": -t[name], "hi": t[name],
+                    "tolerance": t[name]})  # fmt: skip
+    for name, phase in PHASED.items():
+        out.append({"key": GEOMETRY_PREFIX + name, "distribution": "uniform", "lo": 0.0, "hi": t[name],
+                    "tolerance": t[name]})  # fmt: skip
+        out.append({"key": GEOMETRY_PREFIX + phase, "distribution": "uniform", "lo": 0.0, "hi": 360.0})
+    for entry in out:
+        entry["label"] = f"{size} machine: {entry['key'][len(GEOMETRY_PREFIX) :].replace('_', ' ')}"
     return out
 
 

@@ -35,9 +35,9 @@ def ideal_measurement(job, edge_kind: str) -> dict[str, Any]:
 def exact_measurement(job) -> dict[str, Any]:
     """What `skive cut` measures of a skiving ``job``'s flanks, without its solid: the exact swept surface of every
     pass on the ideal kinematics of the machine as built (its geometry and thermal drift), its datum, profiles (in
-    the mid section), helices, pitch and traces measured with the job's options, and the model's scope (the study stage "exact": a case
-    of `skive diagnose`'s sensitivity study in a tenth of a cut's time; the solid, the chips, the charts, the runout,
-    the thickness and the class are what it leaves out)."""
+    the mid section), helices, pitch and traces measured with the job's options, and the model's scope (the study
+    stage "exact": a case of `skive diagnose`'s sensitivity study in a tenth of a cut's time; the solid, the chips,
+    the charts, the runout, the thickness and the class are what it leaves out)."""
     from cutting.skiving.edge import make_edge
     from cutting.skiving.exact_sweep import SweptVolumes
     from cutting.skiving.trajectory import ideal_passes
