@@ -167,3 +167,15 @@ def test_the_thermal_keys_are_study_keys() -> None:
     assert base_value(data, "machine.thermal_state") == "cold"
     with pytest.raises(InputError, match=r"machine\.model\.thermal\.tool_head_tilt"):
         base_value(data, "machine.model.thermal.tool_tilt")
+
+
+def test_the_reports_thermal_chart_draws_the_drift_over_the_job(tmp_path) -> None:
+    """report.html's chart of the drift (virtual_machine/output/report.py: thermal_chart) is drawn from the job's own
+    drift over its program, the strokes shaded."""
+    from virtual_machine.output.report import thermal_chart
+
+    st = job_with('thermal_state = "cold"', ONLY_X.format(growth=200.0, tau_min=10.0 / 60.0)).skiving
+    motion = ideal_passes(st)[-1]
+    start = st.thermal.pass_starts[-1]
+    png = thermal_chart(tmp_path / "thermal.png", st.thermal, [(start, start + motion.duration)], start + 3.0)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 5_000

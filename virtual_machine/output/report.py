@@ -70,6 +70,30 @@ def _run_chart(path: Path, record, load_rows: np.ndarray, chips: list[tuple[floa
     return save_png(fig, path)
 
 
+def thermal_chart(path: Path, drift, strokes: list[tuple[float, float]], end: float) -> Path:
+    """The machine's thermal drift over the job (cutting/skiving/thermal_drift.py): x, y, z [um] and the tilt [urad]
+    against machine time, the feed strokes shaded."""
+    from metrology.charts import agg_figure, light_ticks, paused_gc, save_png
+
+    with paused_gc():
+        t = np.linspace(0.0, end, 400)
+        d = drift.offsets(t)
+        fig, grid = agg_figure((10.0, 4.5), (2, 1), (1.02, 0.79, 0.585, 0.15), (0.0, 0.2), dpi=100, sharex=True)
+        ax = grid[:, 0]
+        for k, (name, colour) in enumerate((("x (centre distance)", "tab:red"), ("y", "tab:green"), ("z", "tab:blue"))):
+            ax[0].plot(t, d[:, k] * 1e3, lw=1.0, color=colour, label=name)
+        ax[1].plot(t, d[:, 3] * 1e6, lw=1.0, color="tab:purple", label="tilt about x (shaft angle)")
+        for a in ax:
+            for t0, t1 in strokes:
+                a.axvspan(t0, t1, color="0.9", lw=0)
+            a.legend(loc="upper left")
+        ax[0].set_ylabel("drift [um]")
+        ax[1].set_ylabel("tilt [urad]")
+        ax[1].set_xlabel("machine time [s] (feed strokes shaded)")
+        light_ticks(*ax)
+        return save_png(fig, path)
+
+
 def html_table(head: list[str], rows: list[list[Any]], fails: set[int] | None = None) -> str:
     """An HTML table, every cell escaped (None as "-", floats to 2 decimals); rows in ``fails`` shaded."""
     out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
@@ -105,7 +129,14 @@ def write_page(path: Path, title: str, body: Sequence[str]) -> Path:
 
 
 def write_report(
-    path: Path, title: str, doc: dict[str, Any], job_text: str, sheet_text: str, charts: list[Path], run_png: Path
+    path: Path,
+    title: str,
+    doc: dict[str, Any],
+    job_text: str,
+    sheet_text: str,
+    charts: list[Path],
+    run_png: Path,
+    thermal_png: Path | None = None,
 ) -> Path:
     """Write the page: verdict, job, class table, charts, run facts, setting sheet."""
     run = doc["run"]
@@ -172,6 +203,7 @@ def write_report(
         *[image_tag(c) for c in charts],
         "<h2>Synchronisation error, cutting force and chips over time</h2>",
         image_tag(run_png),
+        *(["<h2>The machine's thermal drift over the job</h2>", image_tag(thermal_png)] if thermal_png else []),
         "<h2>Run</h2>",
         html_table(["", ""], facts),
         html_table(["stage", "wall time [s]"], stages),

@@ -41,7 +41,7 @@ from virtual_machine.output.formatting import format_sheet
 from virtual_machine.output.json_file import write_json
 from virtual_machine.output.model_scope import model_scope
 from virtual_machine.output.motion_io import summary
-from virtual_machine.output.report import run_chart, write_report
+from virtual_machine.output.report import run_chart, thermal_chart, write_report
 from virtual_machine.processes.base import run_identity
 from virtual_machine.processes.sheets import sheet_product
 from virtual_machine.processes.skiving.cosim import CoSimulation, cosimulate
@@ -52,6 +52,7 @@ from virtual_machine.processes.skiving.machine_effect import (
     pass_deflection,
     pass_forces,
 )
+from virtual_machine.runtime.machine_run import SEGMENTS
 from virtual_machine.setting.machine_layout import machine_params
 from virtual_machine.setting.plan import SkivingPlan, plan_of
 from virtual_machine.version import versions
@@ -133,6 +134,9 @@ def run_job(
     charts = write_charts(out / "charts", measurement) + write_cutter_charts(out / "charts", measurement)
     t_mid, _, volume = engagement_middles(sim)
     run_png = run_chart(out / "charts" / "run.png", sim.record, sim.load_rows, list(zip(t_mid, volume, strict=True)))
+    thermal_png = None
+    if job.skiving.thermal is not None:  # the drift the run's poses carried
+        thermal_png = thermal_chart(out / "charts" / "thermal.png", job.skiving.thermal, *_strokes(sim.record))
     durations["report"] = time.perf_counter() - t0
     if rrd is not None:
         announce("recording")
@@ -152,8 +156,18 @@ def run_job(
     write_json(out / "measurement.json", doc)
     sheet = format_sheet(plan.sheet(), str(path))
     title = f"skive run: {Path(path).name}"
-    write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png)
+    write_report(out / "report.html", title, doc, Path(path).read_text(), sheet, charts, run_png, thermal_png)
     return doc
+
+
+def _strokes(record) -> tuple[list[tuple[float, float]], float]:
+    """The feed strokes' (start, end) machine times of a run's record, and its end."""
+    feed = record.segment == SEGMENTS.index("feed")
+    out = []
+    for k in sorted(set(record.pass_index[feed].tolist())):
+        t = record.t[feed & (record.pass_index == k)]
+        out.append((float(t[0]), float(t[-1])))
+    return out, float(record.t[-1])
 
 
 def _flank_marks(vibration: list[dict], measurement: dict, passes: int, feed: float) -> None:
