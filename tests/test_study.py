@@ -533,3 +533,6 @@ def test_a_studys_cases_give_the_class_distribution(tmp_path) -> None:
     assert budget.class_counts == dict(sorted(expected.items())) and sum(budget.class_counts.values()) == 12
     assert budget.p_at_most(6) == pytest.approx(sum(k for c, k in expected.items() if c <= 6) / 12)
     assert len(budget.class_counts) >= 3  # a spread, not one class
+    from virtual_machine.studies.report import class_histogram_png
+
+    assert class_histogram_png(budget)[:8] == b"\x89PNG\r\n\x1a\n"  # the report's histogram of the classes

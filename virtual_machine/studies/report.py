@@ -120,7 +120,34 @@ def _class_counts(study: Study, budget: Budget) -> list[str]:
     return [
         f"<h3>The cases' classes ({n} cases)</h3>",
         f"<table><tr><th>ISO 1328-1 class</th><th>cases</th><th>share at this class or better</th></tr>{rows}</table>",
+        image_tag(class_histogram_png(budget), "the cases' classes"),
     ]
+
+
+def class_histogram_png(budget: Budget) -> bytes:
+    """The cases' ISO 1328-1 classes as a histogram (bars: cases per class) with the share at each class or better
+    (the line: P(class <= N)), the target class marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    classes = sorted(budget.class_counts)
+    fig, ax = plt.subplots(figsize=(6.5, 3.0))
+    ax.bar([str(c) if c <= 11 else ">11" for c in classes], [budget.class_counts[c] for c in classes], color="0.6")
+    ax.set_xlabel("ISO 1328-1 class")
+    ax.set_ylabel("cases")
+    twin = ax.twinx()
+    twin.plot(range(len(classes)), [budget.p_at_most(c) for c in classes], "o-", color="tab:blue")
+    twin.set_ylim(0, 1.05)
+    twin.set_ylabel("P(class <= N)", color="tab:blue")
+    if budget.target is not None and budget.target in classes:
+        ax.axvline(classes.index(budget.target), color="tab:red", ls="--", lw=1)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    plt.close(fig)
+    return buf.getvalue()
 
 
 def _limiting_text(study: Study, budget: Budget) -> str:
