@@ -47,8 +47,9 @@ def fit_chart(d: Diagnosis, path: Path) -> Path:
         ax.set_xlabel("tooth", fontsize=9)
         ax.set_ylabel("um", fontsize=9)
     axes[0][0].legend(fontsize=8, loc="upper left")
-    causes = "; ".join(f"{c.key.rsplit('.', 1)[-1]} {c.value:.3g} {c.unit}" for c in d.causes[:4]) or "none"
-    fig.suptitle(f"measured against fitted (R^2 {d.r2:.3f}): {causes}", fontsize=11)
+    causes = "; ".join(f"{c.key.rsplit('.', 1)[-1]} {c.value:.3g} {c.unit}" for c in d.causes[:3]) or "none"
+    more = f" and {len(d.causes) - 3} more" if len(d.causes) > 3 else ""
+    fig.suptitle(f"measured against fitted (R^2 {d.r2:.3f})\n{causes}{more}", fontsize=10)
     fig.tight_layout()
     fig.savefig(path)
     return path
