@@ -29,14 +29,15 @@ def main() -> None:
     ap.add_argument("--samples", type=int, default=100)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--stage", choices=("run", "cut"), default="run")
-    ap.add_argument("--cutter-class", default="A")
+    ap.add_argument("--cutter-class", default="A", help='AA, A, B, or "none": the job\'s own cutter')
     ap.add_argument("--target", type=int, default=None, help="P(class <= target) (default: the base's class)")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="skive-bench-mc-") as tmp:
         path = Path(tmp) / "study.toml"
         path.write_text(
             f'base = "{args.job.resolve()}"\nmethod = "monte-carlo"\nsamples = {args.samples}\nseed = 1\n'
-            f'machine_tolerances = "job"\ncutter_class = "{args.cutter_class}"\nstage = "{args.stage}"\n'
+            f'machine_tolerances = "job"\nstage = "{args.stage}"\n'
+            + (f'cutter_class = "{args.cutter_class}"\n' if args.cutter_class != "none" else "")
         )
         t0 = time.perf_counter()
         last = [t0]
