@@ -557,7 +557,12 @@ def relative_pose(
     centre = np.stack([q[:, 3], np.zeros(len(q)), q[:, 2]], -1)
     if setup.thermal is not None and t is not None:  # the drift at each instant (cutting/skiving/thermal_drift.py)
         drift = setup.thermal.offsets(t)
-        tilt = np.array([rot_x(setup.tilt + g.shaft_angle_error + d) for d in drift[:, 3]])
+        a = setup.tilt + g.shaft_angle_error + drift[:, 3]
+        tilt = np.zeros((len(a), 3, 3))
+        tilt[:, 0, 0] = 1.0
+        tilt[:, 1, 1] = tilt[:, 2, 2] = np.cos(a)
+        tilt[:, 2, 1] = np.sin(a)
+        tilt[:, 1, 2] = -tilt[:, 2, 1]  # rot_x of each row's angle
         rot = back @ tilt @ rot_z(q[:, 0] + setup.cutter_phase)
         centre = centre + drift[:, :3]
     else:
