@@ -109,3 +109,9 @@ def test_the_cli_prints_the_causes_as_json_from_the_case_store(store: Path, tmp_
     assert first["value"] == pytest.approx(0.004, rel=0.05) and 0.0 <= first["confidence"] <= 1.0
     again = run_diagnosis(measured, DEFAULT, tmp_path / "again", store, workers=0)
     assert (again.reused, again.ran) == (again.cases, 0)
+    # the same gear as the documented CSV (a measuring machine's export): the same causes and values
+    gear = from_document(json.loads(measured.read_text()), "m")
+    from_csv = run_diagnosis(write_csv(gear, tmp_path / "m.csv"), DEFAULT, tmp_path / "csv", store, workers=0)
+    assert [c.key for c in from_csv.diagnosis.causes] == [c.key for c in again.diagnosis.causes]
+    for c, d in zip(from_csv.diagnosis.causes, again.diagnosis.causes, strict=True):
+        assert c.value == pytest.approx(d.value, rel=1e-6)
