@@ -21,24 +21,21 @@ import bisect
 #: the table's module ranges: (lo, hi] [mm]
 MODULE_EDGES = (0.63, 1.0, 1.6, 2.5, 4.0, 6.3, 10.0, 16.0, 25.0, 40.0)
 CLASSES = ("AA", "A", "B")
+#: the table prints one series for the tips' radial runout (frk) and the cutting faces' adjacent spacing (ftN)
+_TIPS_AND_FACES = {
+    "AA": (10, 10, 12, 16, 20, 25, 32, 40, 50),
+    "A": (12, 16, 20, 25, 32, 40, 50, 63, 80),
+    "B": (25, 32, 40, 50, 63, 80, 100, 125, 160),
+}
 #: per quantity and class, the tolerance [um] in each module range (DIN 3968, via the catalogue cited above)
 TABLE: dict[str, dict[str, tuple[int, ...]]] = {
-    "radial_runout": {
-        "AA": (10, 10, 12, 16, 20, 25, 32, 40, 50),
-        "A": (12, 16, 20, 25, 32, 40, 50, 63, 80),
-        "B": (25, 32, 40, 50, 63, 80, 100, 125, 160),
-    },
+    "radial_runout": _TIPS_AND_FACES,
     "axial_runout": {
         "AA": (3, 3, 3, 3, 3, 4, 5, 5, 6),
         "A": (3, 3, 3, 5, 5, 8, 8, 10, 10),
         "B": (4, 4, 4, 6, 6, 10, 10, 12, 12),
     },
-    # the table prints the same series for the cutting faces' adjacent spacing as for the tips' radial runout
-    "pitch": {
-        "AA": (10, 10, 12, 16, 20, 25, 32, 40, 50),
-        "A": (12, 16, 20, 25, 32, 40, 50, 63, 80),
-        "B": (25, 32, 40, 50, 63, 80, 100, 125, 160),
-    },
+    "pitch": _TIPS_AND_FACES,
     "profile": {
         "AA": (6, 6, 6, 8, 10, 12, 14, 18, 22),
         "A": (10, 11, 12, 14, 16, 20, 25, 32, 40),

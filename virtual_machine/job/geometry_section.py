@@ -15,16 +15,16 @@ from cutting.skiving.machine_geometry import MachineGeometry
 from virtual_machine.job.keys import Check, Key, parse_section
 
 
-def within(limit: float, unit: str) -> Check:
-    """A signed error no larger than ``limit``: beyond it the value is a slip of units or a set-up error, not a
-    machine's geometry (the limits are guards against a slip of units, chosen (a guess, not a cited figure) well
-    beyond any machine's geometric errors; they are not tolerances)."""
+def within(limit: float, unit: str, beyond: str = "a set-up error, not the machine's geometry") -> Check:
+    """A signed error no larger than ``limit``: beyond it the value is a slip of units or ``beyond`` says what (the
+    limits are guards against a slip of units, chosen (a guess, not a cited figure) well beyond any machine's
+    geometric errors or drift; they are not tolerances)."""
 
     def check(v: float) -> tuple[str, str] | None:
         if not math.isfinite(v):
-            return "must be a finite number", f"give the error in {unit}"
+            return "must be a finite number", f"give the value in {unit}"
         if abs(v) > limit:
-            return f"beyond +-{limit:g} {unit}: a set-up error, not the machine's geometry", f"the error in {unit}"
+            return f"beyond +-{limit:g} {unit}: {beyond}", f"the value in {unit}"
         return None
 
     return check

@@ -25,49 +25,43 @@ from dataclasses import dataclass, fields
 from typing import Any
 
 from cutting.errors import Problem
-from cutting.skiving.thermal_drift import ThermalDrift
-from virtual_machine.job.keys import Check, Key, at_least, parse_section, positive
+from cutting.skiving.thermal_drift import Lump, ThermalDrift
+from virtual_machine.job.geometry_section import within
+from virtual_machine.job.keys import Key, at_least, parse_section, positive
 
 STATES = ("cold", "warm")
+
+
+DRIFT = "not a machine's drift"
 
 
 def _share(v: float) -> tuple[str, str] | None:
     return None if 0.0 <= v <= 1.0 else ("must lie in [0, 1]", "the share of the cutting power, e.g. 0.1")
 
 
-def _within(limit: float, unit: str) -> Check:
-    """A growth no larger than ``limit`` (a guard against a slip of units, a guess well beyond any machine's
-    drift; not a tolerance)."""
-
-    def check(v: float) -> tuple[str, str] | None:
-        return None if abs(v) <= limit else (f"beyond +-{limit:g} {unit}: not a machine's drift", f"give it in {unit}")
-
-    return check
-
-
 THERMAL_KEYS: dict[str, Key] = {
     "tool_head_time_constant": Key(float, 20.0, "min", "the tool head's time constant (a guess)", positive),
     "tool_head_growth_axial": Key(
         float, 20.0, "um", "the tool spindle's growth along its axis at its reference speed (a guess)",
-        _within(1000.0, "um"),
+        within(1000.0, "um", DRIFT),
     ),
     "tool_head_growth_x": Key(
         float, 5.0, "um", "the tool head's drift along x at its reference speed, positive: the axes apart (a guess)",
-        _within(1000.0, "um"),
+        within(1000.0, "um", DRIFT),
     ),
     "tool_head_tilt": Key(
         float, 50.0, "urad", "the tool spindle's tilt about x at its reference speed (Grama et al. 2017)",
-        _within(5000.0, "urad"),
+        within(5000.0, "urad", DRIFT),
     ),
     "tool_head_reference_speed": Key(float, 5000.0, "rpm", "the tool spindle's reference speed", positive),
     "work_spindle_time_constant": Key(float, 40.0, "min", "the work spindle's time constant (a guess)", positive),
     "work_spindle_growth_axial": Key(
         float, 10.0, "um", "the work spindle's growth along its axis at its reference speed, lifting the blank "
-        "(a guess)", _within(1000.0, "um"),
+        "(a guess)", within(1000.0, "um", DRIFT),
     ),
     "work_spindle_growth_x": Key(
         float, 3.0, "um", "the work spindle's drift along x at its reference speed, positive: the axes apart "
-        "(a guess)", _within(1000.0, "um"),
+        "(a guess)", within(1000.0, "um", DRIFT),
     ),
     "work_spindle_reference_speed": Key(float, 1000.0, "rpm", "the work spindle's reference speed", positive),
     "speed_exponent": Key(
@@ -77,7 +71,7 @@ THERMAL_KEYS: dict[str, Key] = {
     "structure_time_constant": Key(float, 120.0, "min", "the structure's time constant (a guess)", positive),
     "structure_growth_x": Key(
         float, 10.0, "um/kW", "the centre distance's growth per kW of heat into the structure (a guess)",
-        _within(1000.0, "um/kW"),
+        within(1000.0, "um/kW", DRIFT),
     ),
     "cutting_heat_share": Key(float, 0.1, "", "the share of the cutting power that heats the structure", _share),
 }  # fmt: skip
@@ -145,7 +139,6 @@ def job_drift(model: ThermalModel, setup, powers: list[float] | None = None) -> 
     """The drift of a job on ``setup`` (without drift of its own) from ``model``: the lumps in the machine's axes,
     the state at the start, the heat inputs over the program (the spindles' from the run-up on, the cut's while each
     pass's stroke lasts: ``powers`` [W] per pass, None: no cutting heat) and the passes' start times."""
-    from cutting.skiving.thermal_drift import Lump, ThermalDrift
     from cutting.skiving.trajectory import ideal_passes
     from virtual_machine.runtime.program import ProgramSettings, pass_start_times
 

@@ -29,11 +29,13 @@ def wilson_lower(p: float, n: int, z: float = 1.6449) -> float:
 
 def study_text(job: Path, samples: int, seed: int, machine: str, cutter_class: str | None, stage: str) -> str:
     """The study file of a population check."""
-    lines = [f"base = {str(job.resolve())!r}", 'method = "monte-carlo"', f"samples = {samples}", f"seed = {seed}",
-             f"machine_tolerances = {machine!r}", f"stage = {stage!r}"]  # fmt: skip
+    import tomli_w
+
+    study = {"base": str(job.resolve()), "method": "monte-carlo", "samples": samples, "seed": seed,
+             "machine_tolerances": machine, "stage": stage}  # fmt: skip
     if cutter_class:
-        lines.append(f"cutter_class = {cutter_class!r}")
-    return "\n".join(lines).replace("'", '"') + "\n"
+        study["cutter_class"] = cutter_class
+    return tomli_w.dumps(study)
 
 
 def population_verdict(outcome: StudyOutcome, max_class: int, confidence: float) -> dict[str, Any]:

@@ -167,19 +167,24 @@ def run_study(
     if not pending:
         return StudyRun(results, ran, sorted(results), 0.0, 0, path, reused)
     by_id = {c.id: c for c in cases}
+    failed = 0
+
+    def finish(case: Case, result: dict[str, Any]) -> None:
+        """A case's files, its entry in the store, results.csv and the hook, as it finishes."""
+        nonlocal failed
+        record = write_case(out, case, result)
+        if cache is not None:
+            cache.put(case.job_text, result, stage)
+        results[case.id] = record
+        ran.append(case.id)
+        failed += record["status"] != "ok"
+        write_csv(out, study, cases, results)
+        if on_case is not None:
+            on_case(case.id, record, len(ran), failed, len(pending))
+
     if workers == 0 and not scheduler:
-        failed = 0
         for c in pending:
-            result = run_case(c.id, c.job_text, stage)
-            record = write_case(out, c, result)
-            if cache is not None:
-                cache.put(c.job_text, result, stage)
-            results[c.id] = record
-            ran.append(c.id)
-            failed += record["status"] != "ok"
-            write_csv(out, study, cases, results)
-            if on_case is not None:
-                on_case(c.id, record, len(ran), failed, len(pending))
+            finish(c, run_case(c.id, c.job_text, stage))
         skipped = sorted(set(results) - set(ran))
         return StudyRun(results, ran, skipped, time.perf_counter() - t0, 1, path, reused)
     cluster = None
@@ -197,7 +202,6 @@ def run_study(
             client.submit(run_case, c.id, c.job_text, stage, key=f"skive-case-{stage}-{c.id}-{c.job_hash[:16]}"): c.id
             for c in pending
         }
-        failed = 0
         for future in as_completed(futures):
             case_id = futures[future]
             try:
@@ -210,15 +214,7 @@ def run_study(
                     "wall_s": math.nan,
                     "measurement": {},
                 }
-            record = write_case(out, by_id[case_id], result)
-            if cache is not None:
-                cache.put(by_id[case_id].job_text, result, stage)
-            results[case_id] = record
-            ran.append(case_id)
-            failed += record["status"] != "ok"
-            write_csv(out, study, cases, results)
-            if on_case is not None:
-                on_case(case_id, record, len(ran), failed, len(pending))
+            finish(by_id[case_id], result)
     finally:
         client.close()
         if cluster is not None:
